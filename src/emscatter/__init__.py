@@ -1,0 +1,2 @@
+"""emscatter."""
+__version__ = "0.1.0"

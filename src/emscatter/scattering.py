@@ -1,0 +1,87 @@
+"""The one solver output: bistatic scattering coefficients and coherent reflectivity."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .conventions import POL_INDEX, check_pol_pair
+
+__all__ = ["Scattering"]
+
+
+@dataclass(frozen=True)
+class Scattering:
+    """Result of every solver.
+
+    Attributes
+    ----------
+    sigma0 : ndarray, shape ``(2, 2, *shape)``
+        Incoherent bistatic scattering coefficient σ⁰, linear, indexed ``[pol_s, pol_i]``
+        with 0 = h, 1 = v (``sigma0[0, 1]`` is "hv": scattered h from incident v).
+        Dimensionless; per unit area for 2-D surfaces,
+        ``σ⁰ = 4π R² ⟨|E_s|²⟩_incoh / (A |E_i|²)``, so that the incoherent reflectivity is
+        ``r_p = 1/(4π cosθi) Σ_q ∫ σ⁰_qp dΩs``. For 1-D profiles it is per unit length,
+        ``σ⁰ = 2π ρ ⟨|E_s|²⟩_incoh / (L |E_i|²)`` and ``r_p = 1/(2π cosθi) Σ_q ∫ σ⁰_qp dθs``
+        over signed ``θs ∈ (−π/2, π/2)``.
+    coherent : ndarray, shape ``(2, *shape)``
+        Coherent (specular) power reflectivity for incident h and v [-].
+    method : str
+        The solver that produced it (after ``"auto"`` selection).
+    theta_i, theta_s, phi_s, phi_i : ndarray, broadcast to ``shape`` [rad].
+    k : float, free-space wavenumber [rad/m].
+    dimension : 1 or 2.
+    info : dict of extra details (validity report, series terms, ...).
+    """
+
+    sigma0: np.ndarray
+    coherent: np.ndarray
+    method: str
+    theta_i: np.ndarray
+    theta_s: np.ndarray
+    phi_s: np.ndarray
+    phi_i: np.ndarray
+    k: float
+    dimension: int = 2
+    info: dict = field(default_factory=dict)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.sigma0.shape[2:]
+
+    def pol(self, pair: str) -> np.ndarray:
+        """σ⁰ for one pair, e.g. ``"hv"`` (scattered h, incident v)."""
+        s, i = check_pol_pair(pair)
+        return self.sigma0[s, i]
+
+    hh = property(lambda self: self.sigma0[0, 0])
+    hv = property(lambda self: self.sigma0[0, 1])
+    vh = property(lambda self: self.sigma0[1, 0])
+    vv = property(lambda self: self.sigma0[1, 1])
+
+    def coherent_pol(self, pol: str) -> np.ndarray:
+        return self.coherent[POL_INDEX[pol]]
+
+    def db(self, pair: str, floor: float = 1e-30) -> np.ndarray:
+        """σ⁰ of one pair in dB (``10 log10``, floored at ``floor`` to stay finite)."""
+        return 10.0 * np.log10(np.maximum(self.pol(pair), floor))
+
+    def gamma(self) -> np.ndarray:
+        """``γ = σ⁰ / cosθi``, shape like :attr:`sigma0`."""
+        return self.sigma0 / np.cos(self.theta_i)
+
+    def brdf(self) -> np.ndarray:
+        """BRDF ``f_r = σ⁰ / (4π cosθi cosθs)`` [1/sr] (2-D surfaces), per polarization pair.
+
+        Infinite at grazing angles (cos → 0) by definition; see :mod:`emscatter.brdf`.
+        """
+        if self.dimension != 2:
+            raise ValueError("brdf() is defined for 2-D surfaces (dimension=2)")
+        return self.sigma0 / (4 * math.pi * np.cos(self.theta_i) * np.cos(self.theta_s))
+
+    def unpolarized(self) -> np.ndarray:
+        """σ⁰ for unpolarized incidence summed over received polarizations:
+        ``(hh + vh + hv + vv) / 2``."""
+        return 0.5 * self.sigma0.sum(axis=(0, 1))
