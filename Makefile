@@ -1,5 +1,5 @@
 # emscatter — two commands on a fresh machine:
-#   make demo   set up .venv (and a system libLLVM >= 15 for Mitsuba/Sionna's CPU backend), run the demo into out/
+#   make demo   set up .venv (and a system libLLVM >= 17 for Mitsuba/Sionna's CPU backend), run the demo into out/
 #   make test   the same setup, then the whole test suite
 PYTHON ?= python3
 VENV   ?= .venv
@@ -22,7 +22,7 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e ".[all]"
 	touch $(STAMP)
 
-# Dr.Jit's LLVM backend (used by Mitsuba 3 and Sionna RT on the CPU) needs libLLVM >= 15.
+# Dr.Jit's LLVM backend (used by Mitsuba 3 and Sionna RT on the CPU) needs libLLVM >= 17 (libllvm19 on Debian 12).
 llvm:
 	@bash tools/ensure_llvm.sh
 

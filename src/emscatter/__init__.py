@@ -1,2 +1,58 @@
-"""emscatter."""
+"""emscatter — electromagnetic scattering from rough surfaces, carried to renderers and radio.
+
+A short tour (SI units, radians, ``exp(-iωt)`` so lossy media have ``Im ε ≥ 0``)::
+
+    import numpy as np, emscatter as em
+    rough = em.GaussianCorrelation(sigma=0.01, length=0.1)         # σ, ℓ [m]
+    th = np.radians(np.linspace(0, 89, 90))
+    s = em.bistatic(rough, 17 + 2j, frequency=1e9, theta_i=np.radians(45),
+                    theta_s=th, phi_s=0.0)                           # method="auto"
+    s.hh, s.vv, s.hv, s.method, s.coherent                           # σ⁰ [pol_s, pol_i], linear
+    em.backscatter(rough, 17 + 2j, frequency=1e9, theta_i=th).vv
+    em.emissivity(rough, 17 + 2j, frequency=1e9, theta_i=th).h       # 1 − r_coh − r_incoh
+    surf = em.generate_surface(rough, (512, 512), spacing=0.005, rng=0)  # a realization
+    surf.measure()                                                   # σ, slopes, ℓ, ...
+
+See ``README.md`` for conventions and the command-line tool (``emscatter --help``).
+"""
+
+from __future__ import annotations
+
+from .api import backscatter, bistatic, emissivity
+from .conventions import ConventionError
+from .fresnel import PEC, fresnel
+from .scattering import Scattering
+from .spectra import (
+    ExponentialCorrelation,
+    FractionalBrownian,
+    GaussianCorrelation,
+    PowerLawCorrelation,
+    roughness,
+)
+
 __version__ = "0.1.0"
+
+__all__ = [
+    "bistatic",
+    "backscatter",
+    "emissivity",
+    "generate_surface",
+    "Scattering",
+    "GaussianCorrelation",
+    "ExponentialCorrelation",
+    "PowerLawCorrelation",
+    "FractionalBrownian",
+    "roughness",
+    "fresnel",
+    "PEC",
+    "ConventionError",
+    "__version__",
+]
+
+
+def __getattr__(name):  # lazy: keep `import emscatter` light
+    if name == "generate_surface":
+        from .surfaces.generate import generate_surface
+
+        return generate_surface
+    raise AttributeError(f"module 'emscatter' has no attribute {name!r}")

@@ -1,0 +1,1 @@
+"""Random rough surfaces: generation of profiles and height maps, and their measurement."""
