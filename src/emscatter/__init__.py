@@ -18,9 +18,10 @@ See ``README.md`` for conventions and the command-line tool (``emscatter --help`
 
 from __future__ import annotations
 
+from . import constants, fresnel
 from .api import backscatter, bistatic, emissivity
 from .conventions import ConventionError
-from .fresnel import PEC, fresnel
+from .fresnel import PEC
 from .scattering import Scattering
 from .spectra import (
     ExponentialCorrelation,
@@ -44,6 +45,7 @@ __all__ = [
     "FractionalBrownian",
     "roughness",
     "fresnel",
+    "constants",
     "PEC",
     "ConventionError",
     "__version__",

@@ -20,15 +20,12 @@ The height power spectral density is ``σ² w``. Ulaby's ``W(K)`` (Ulaby, Moore 
 exponential ``ℓ² (1 + K²ℓ²)^(−3/2)``. Tsang et al. (2000, vol. I) write
 ``W(K) = σ² w(K)``.
 
-Closed forms (isotropic, unit correlation length ℓ scaled in):
+Closed forms (isotropic; ℓ is the correlation length):
 
-=============== ======================== ===================================== =============================
-correlation     ρ(r)                      w, 2-D                                w, 1-D
-=============== ======================== ===================================== =============================
-Gaussian        exp(−r²/ℓ²)               ℓ²/(4π) exp(−K²ℓ²/4)                  ℓ/(2√π) exp(−k²ℓ²/4)
-exponential     exp(−r/ℓ)                 ℓ²/(2π) (1+K²ℓ²)^(−3/2)               ℓ/π (1+k²ℓ²)^(−1)
-power law (H)   Matérn ν=H                Hℓ²/π (1+K²ℓ²)^(−(H+1))              Γ(H+½)/(√πΓ(H)) ℓ (1+k²ℓ²)^(−(H+½))
-=============== ======================== ===================================== =============================
+* Gaussian ``ρ = exp(−r²/ℓ²)``: ``w₂ = ℓ²/(4π) exp(−K²ℓ²/4)``, ``w₁ = ℓ/(2√π) exp(−k²ℓ²/4)``
+* exponential ``ρ = exp(−r/ℓ)``: ``w₂ = ℓ²/(2π) (1+K²ℓ²)^(−3/2)``, ``w₁ = ℓ/π (1+k²ℓ²)^(−1)``
+* power law (von Kármán / Matérn ν = H): ``w₂ = Hℓ²/π (1+K²ℓ²)^(−(H+1))``,
+  ``w₁ = Γ(H+½)/(√π Γ(H)) ℓ (1+k²ℓ²)^(−(H+½))``
 
 Anisotropic forms (seed eqs. 2.4–2.5) replace ``r/ℓ`` by ``√((x/ℓx)² + (y/ℓy)²)`` and
 ``Kℓ`` by ``√((kx ℓx)² + (ky ℓy)²)``, with the prefactor ``ℓ²`` becoming ``ℓx ℓy``.
@@ -210,9 +207,7 @@ class Roughness(ABC):
         gx = integrate.quad(lambda kr: radial(kr, wxx), 0, k_max, limit=200)[0]
         if self.is_isotropic:
             return s2 * gx, s2 * gx
-        swapped = type(self)(
-            **{**self._params(), "length": self.length_y, "length_y": self.length}
-        )
+        swapped = type(self)(**{**self._params(), "length": self.length_y, "length_y": self.length})
         gy = integrate.quad(
             lambda kr: radial(kr, lambda k, p: swapped.spectrum(k * np.cos(p), k * np.sin(p))),
             0,
@@ -311,9 +306,7 @@ class PowerLawCorrelation(Roughness):
 
     def __post_init__(self):
         super().__post_init__()
-        object.__setattr__(
-            self, "hurst", check_in_range("hurst", self.hurst, 0.0, 1.0)
-        )
+        object.__setattr__(self, "hurst", check_in_range("hurst", self.hurst, 0.0, 1.0))
 
     def _params(self):
         return {**super()._params(), "hurst": self.hurst}
@@ -412,9 +405,13 @@ def _numeric_nfold(rough: Roughness, n, kx, ky=0.0) -> np.ndarray:
         q = np.abs(kx) * rough.length
         for idx in np.ndindex(out.shape):
             nn, qq = n_arr[idx], q[idx]
-            val = integrate.quad(
-                lambda u, nn=nn: rough._rho_unit(u) ** nn, 0, np.inf, weight="cos", wvar=qq
-            )[0] if qq > 0 else integrate.quad(lambda u, nn=nn: rough._rho_unit(u) ** nn, 0, np.inf)[0]
+            val = (
+                integrate.quad(
+                    lambda u, nn=nn: rough._rho_unit(u) ** nn, 0, np.inf, weight="cos", wvar=qq
+                )[0]
+                if qq > 0
+                else integrate.quad(lambda u, nn=nn: rough._rho_unit(u) ** nn, 0, np.inf)[0]
+            )
             out[idx] = rough.length * val / math.pi
         return out
     q = np.hypot(kx * rough.length, ky * rough.length_y)

@@ -1,0 +1,79 @@
+"""Atomic file output: a failed run leaves nothing half-written.
+
+Every writer goes to a temporary file in the destination folder and is moved into place with
+:func:`os.replace` (atomic on POSIX) only once it is complete.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import tempfile
+from collections.abc import Callable, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["atomic_path", "write_json", "write_csv", "save_figure"]
+
+
+@contextmanager
+def atomic_path(path: str | os.PathLike, suffix: str = ""):
+    """Yield a temporary path beside ``path``; on success move it onto ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{path.name}.", suffix=suffix or path.suffix, dir=path.parent
+    )
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _jsonable(obj):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, complex):
+        return {"re": obj.real, "im": obj.imag}
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serializable: {type(obj).__name__}")
+
+
+def write_json(path, data) -> Path:
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(data, indent=2, default=_jsonable, allow_nan=False) + "\n")
+    return Path(path)
+
+
+def write_csv(path, header: Sequence[str], columns: Sequence[np.ndarray]) -> Path:
+    """Columns of equal length under a header row."""
+    cols = [np.asarray(c).ravel() for c in columns]
+    if len({c.size for c in cols}) > 1:
+        raise ValueError(f"CSV columns differ in length: {[c.size for c in cols]}")
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for row in zip(*cols, strict=True):
+            w.writerow([f"{v:.10g}" if isinstance(v, float | np.floating) else v for v in row])
+    return Path(path)
+
+
+def save_figure(fig, path, *, dpi: int = 130, close: Callable | None = None) -> Path:
+    """Save a matplotlib figure atomically (PNG by default) and close it."""
+    import matplotlib.pyplot as plt
+
+    with atomic_path(path) as tmp:
+        fig.savefig(
+            tmp, dpi=dpi, format=Path(path).suffix.lstrip(".") or "png", bbox_inches="tight"
+        )
+    plt.close(fig)
+    return Path(path)

@@ -1,0 +1,58 @@
+"""The command-line tool, run for real (in-process through main(), and one subprocess)."""
+
+import csv
+import json
+import subprocess
+import sys
+
+import pytest
+
+from emscatter.cli import main
+
+
+def test_surface_command_draws_and_measures(tmp_path, capsys):
+    png, js = tmp_path / "surface.png", tmp_path / "surface.json"
+    rc = main(["surface", "--kind", "fbm", "--hurst", "0.7", "--size", "256",
+               "--png", str(png), "--json", str(js)])
+    assert rc == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    stats = json.loads(js.read_text())
+    assert stats["target_hurst"] == 0.7
+    assert abs(stats["measured_hurst_variogram"] - 0.7) < 0.1
+    assert "measured_hurst_variogram" in capsys.readouterr().out
+
+
+def test_curves_bistatic_writes_png_csv_json(tmp_path):
+    out = {ext: tmp_path / f"c.{ext}" for ext in ("png", "csv", "json")}
+    rc = main(["curves", "--sigma", "0.02", "--length", "1", "--wavelength", "1",
+               "--theta-s-deg", "0:89:10", "--png", str(out["png"]), "--csv", str(out["csv"]),
+               "--json", str(out["json"])])
+    assert rc == 0
+    rows = list(csv.DictReader(out["csv"].read_text().splitlines()))
+    assert len(rows) == 10 and float(rows[5]["sigma0_hh"]) > 0
+    assert json.loads(out["json"].read_text())["method"] == "spm"
+
+
+def test_curves_emissivity(tmp_path):
+    csv_path = tmp_path / "e.csv"
+    rc = main(["curves", "--quantity", "emissivity", "--sigma", "0.02", "--wavelength", "1",
+               "--theta-i-deg", "0:60:4", "--csv", str(csv_path)])
+    assert rc == 0
+    rows = list(csv.DictReader(csv_path.read_text().splitlines()))
+    assert all(0 < float(r["e_h"]) < 1 for r in rows)
+
+
+def test_bad_input_is_a_clear_error_and_writes_nothing(tmp_path, capsys):
+    png = tmp_path / "bad.png"
+    rc = main(["curves", "--sigma", "-1", "--png", str(png)])
+    assert rc == 2
+    assert "sigma must be > 0" in capsys.readouterr().err
+    assert not png.exists() and not list(tmp_path.iterdir())
+    with pytest.raises(SystemExit):
+        main(["curves", "--eps", "seventeen"])
+
+
+def test_console_script_runs(tmp_path):
+    exe = [sys.executable, "-m", "emscatter.cli", "--version"]
+    out = subprocess.run(exe, capture_output=True, text=True, check=True)
+    assert out.stdout.startswith("emscatter ")
