@@ -56,3 +56,19 @@ def test_console_script_runs(tmp_path):
     exe = [sys.executable, "-m", "emscatter.cli", "--version"]
     out = subprocess.run(exe, capture_output=True, text=True, check=True)
     assert out.stdout.startswith("emscatter ")
+
+
+def test_atomic_writer_leaves_nothing_on_failure(tmp_path):
+    from emscatter.io import atomic_path, write_json
+
+    target = tmp_path / "x.json"
+    with pytest.raises(RuntimeError), atomic_path(target) as tmp:
+        tmp.write_text("half")
+        raise RuntimeError("boom")
+    assert not list(tmp_path.iterdir())
+    with pytest.raises(ValueError):  # NaN is refused, not written as invalid JSON
+        write_json(target, {"a": float("nan")})
+    assert not list(tmp_path.iterdir())
+    write_json(target, {"a": 1})
+    assert json.loads(target.read_text()) == {"a": 1}
+    assert oct(target.stat().st_mode & 0o777) != oct(0o600)

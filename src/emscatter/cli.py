@@ -168,7 +168,7 @@ def cmd_demo(a) -> int:
 
 
 def cmd_validate(a) -> int:
-    from .validation import run_validation
+    from .validity_maps import run_validation
 
     written = run_validation(Path(a.out), full=a.full)
     for p in written:

@@ -11,7 +11,7 @@ Figure 5.3 of the seed (ch. 5.4): Gaussian surface with correlation length τ = 
 permittivity ε = 17 + 2i, TE (h) incidence at θi = 45°, rms height σ varied, curves over
 θs ∈ (0°, 90°) in the plane φ = 0. The seed gives no wavelength; we take **λ = τ = 1 m**
 (kℓ = 2π): the specular lobe is then a BRDF-like lobe of width ~2/(kℓ) in sinθ (≈ 18°), and
-σ ≤ 0.05 λ keeps kσ ≤ 0.31, inside the small-perturbation method's validity.
+σ ≤ 0.045 λ keeps kσ ≤ 0.28, inside the small-perturbation method's validity.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-FIG53_SIGMAS = (0.01, 0.02, 0.03, 0.04, 0.05)  # [m], with λ = τ = 1 m
+FIG53_SIGMAS = (0.005, 0.01, 0.02, 0.03, 0.045)  # [m], with λ = τ = 1 m: kσ ≤ 0.28
 FIG53_EPS = 17 + 2j
 FIG53_THETA_I = math.radians(45.0)
 
@@ -172,7 +172,7 @@ def emissivity_curves(out: Path, *, n_theta: int = 18) -> list[Path]:
     flat = 1.0 - reflectivity(FIG53_EPS, th)
     series = {"flat (Fresnel)": (flat[0], flat[1])}
     cols, labels = [th_deg, flat[0], flat[1]], ["theta_deg", "e_h_flat", "e_v_flat"]
-    for s in (0.02, 0.05):
+    for s in (0.02, 0.045):
         e = api.emissivity(
             GaussianCorrelation(s, 1.0), FIG53_EPS, wavelength=1.0, theta_i=th, method="spm"
         )

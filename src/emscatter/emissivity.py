@@ -144,8 +144,8 @@ def hemispherical_reflectivity(
     dimension: int = 2,
     finest: float = 0.05,
     tol: float = 1e-4,
-    order: int = 8,
-    n_alpha: int = 32,
+    order: int | None = None,
+    n_alpha: int | None = None,
     max_refinements: int = 4,
 ):
     """Incoherent reflectivity ``r_p(θi)`` of a bistatic σ⁰ by the graded quadrature above.
@@ -158,12 +158,17 @@ def hemispherical_reflectivity(
     dimension : 2 (surface, solid angle) or 1 (profile, in-plane angle).
     finest : width of the finest panel [in units of sinθ], ~ the narrowest lobe.
     tol : absolute tolerance on ``r`` [-] between successive refinements.
+    order, n_alpha : starting Gauss–Legendre order per panel and number of azimuths; by
+        default chosen from ``tol`` (coarser start for looser tolerances).
 
     Returns ``(r, error, evaluations)`` with ``r`` and ``error`` of shape ``(2, *S)``.
     """
     theta_i = np.asarray(theta_i, dtype=float)
     phi_i = np.broadcast_to(np.asarray(phi_i, dtype=float), theta_i.shape)
     finest = float(np.clip(finest, 1e-4, 0.25))
+    default_order, default_alpha = (4, 16) if tol >= 1e-3 else (6, 24) if tol >= 1e-5 else (8, 32)
+    order = order or default_order
+    n_alpha = n_alpha or default_alpha
     evals = 0
 
     def estimate(o, na):
