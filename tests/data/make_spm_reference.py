@@ -62,12 +62,26 @@ def main():
         rows.append((th, eps.real, eps.imag, ks, kl, acf, *vals, same))
     out = pathlib.Path(__file__).with_name("spm_backscatter_reference.csv")
     with out.open("w", newline="") as fh:
-        fh.write(f"# SMRT {smrt.__version__ if hasattr(smrt, '__version__') else '1.7'} "
-                 f"iem_fung92 small-roughness limit = first-order SPM; f = {FREQ:g} Hz\n")
+        fh.write(
+            f"# SMRT {smrt.__version__ if hasattr(smrt, '__version__') else '1.7'} "
+            f"iem_fung92 small-roughness limit = first-order SPM; f = {FREQ:g} Hz\n"
+        )
         wr = csv.writer(fh)
-        wr.writerow(["theta_deg", "eps_re", "eps_im", "ksigma", "kl", "acf", "sigma0_hh",
-                     "sigma0_vv",
-                     "iem_hh", "iem_vv", "iem_equals_spm"])
+        wr.writerow(
+            [
+                "theta_deg",
+                "eps_re",
+                "eps_im",
+                "ksigma",
+                "kl",
+                "acf",
+                "sigma0_hh",
+                "sigma0_vv",
+                "iem_hh",
+                "iem_vv",
+                "iem_equals_spm",
+            ]
+        )
         for row in rows:
             wr.writerow([f"{v:.10g}" if isinstance(v, float) else v for v in row])
     print(f"wrote {len(rows)} rows to {out}")
