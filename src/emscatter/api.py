@@ -174,12 +174,11 @@ def emissivity(
     name, module, report, make_nan = resolve_method(rough, k, method, out_of_range)
     dims = (Ellipsis,) + (None,) * (1 if rough.dimension == 1 else 2)
     # σ⁰ only inside the integral: skip a solver's coherent part when it offers to.
-    skip = {"coherent": False} if "coherent" in inspect.signature(module.bistatic).parameters else {}
+    takes_flag = "coherent" in inspect.signature(module.bistatic).parameters
+    skip = {"coherent": False} if takes_flag else {}
 
     def sigma0_fn(theta_s, phi_s):
-        res = module.bistatic(
-            rough, eps, k, ti[dims], theta_s, phi_s, pi_[dims], **skip, **options
-        )
+        res = module.bistatic(rough, eps, k, ti[dims], theta_s, phi_s, pi_[dims], **skip, **options)
         return res.sigma0
 
     r_inc, err, evals = hemispherical_reflectivity(
