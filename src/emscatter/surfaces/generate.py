@@ -310,22 +310,27 @@ def _edge_factor(amp: np.ndarray, n_last: int) -> None:
         amp[..., -1] *= math.sqrt(2.0)
 
 
-def _rows_of(amp, idx: np.ndarray) -> np.ndarray:
-    """Amplitude rows for |ky| indices ``idx``: from a stored quarter array or a callable."""
+def _rows_of(amp, m0: int, m1: int) -> np.ndarray:
+    """Amplitude rows for |ky| indices ``m0..m1−1``: a stored quarter array or a callable."""
     if callable(amp):
-        return amp(idx)
-    return amp[idx]
+        return amp(m0, m1)
+    return amp[m0:m1]
 
 
-def _synthesize(amp, full: tuple[int, ...], rng: np.random.Generator) -> np.ndarray:
+def _synthesize(
+    amp, full: tuple[int, ...], rng: np.random.Generator, keep_rows: int | None = None
+) -> np.ndarray:
     """Real Gaussian field on the periodic grid ``full``: ``h = irfftn(a · ζ)``.
 
     ``ζ``: complex noise with independent N(0, 1) real and imaginary parts, drawn directly
     in the half spectrum (rows ky, columns kx = 0..nx//2). ``a``: mode amplitudes, even in
     ky, given for ``|ky| = 0..ny//2`` only, as an array (1-D: the whole half spectrum) or a
-    callable ``rows(|ky| indices) → (len, nx//2 + 1)`` array, edge columns already corrected
-    (:func:`_edge_factor`). Large grids are filled in ``_NOISE_BLOCKS`` row blocks, each from
-    its own child generator, noise and filter fused, in threads (numpy releases the GIL);
+    callable ``rows(m0, m1) → (m1 − m0, nx//2 + 1)`` array for ``|ky|`` indices ``m0..m1−1``,
+    edge columns already corrected
+    (:func:`_edge_factor`). ``keep_rows``: only the first rows of the field are returned
+    (2-D), computed with a pruned inverse transform. Large grids are filled in
+    ``_NOISE_BLOCKS`` row blocks, each from its own child generator, noise and filter fused,
+    in threads (numpy releases the GIL);
     the block split does not depend on the number of cores, so results are reproducible.
     """
     rows = full[0] if len(full) == 2 else 1
@@ -338,18 +343,25 @@ def _synthesize(amp, full: tuple[int, ...], rng: np.random.Generator) -> np.ndar
         z *= amp
         return sfft.irfft(z, n=full[0], overwrite_x=True, workers=-1)
     ny = rows
+    half = ny // 2 + 1  # |ky| indices 0..ny//2 are stored; row ny − m holds −m
+    last_mirrored = (ny + 1) // 2  # m < ny/2 has a distinct negative row
 
-    def fill(gen, r0, r1):
-        gen.standard_normal(out=buf[r0:r1].reshape(-1))
-        idx = np.arange(r0, r1)
-        np.minimum(idx, ny - idx, out=idx)
-        z[r0:r1] *= _rows_of(amp, idx)
+    def fill(gen, m0, m1):
+        """Noise and filter for |ky| ∈ [m0, m1): rows m0..m1−1 and their mirrors."""
+        gen.standard_normal(out=buf[m0:m1].reshape(-1))
+        rows_amp = _rows_of(amp, m0, m1)
+        z[m0:m1] *= rows_amp
+        a2, b2 = max(m0, 1), min(m1, last_mirrored)
+        if b2 > a2:
+            lo, hi = ny - b2 + 1, ny - a2 + 1
+            gen.standard_normal(out=buf[lo:hi].reshape(-1))
+            z[lo:hi] *= rows_amp[a2 - m0 : b2 - m0][::-1]
 
-    if buf.size < _THREADED_NOISE_MIN or ny < _NOISE_BLOCKS:
-        fill(rng, 0, ny)
+    if buf.size < _THREADED_NOISE_MIN or half < _NOISE_BLOCKS:
+        fill(rng, 0, half)
     else:
         seeds = np.random.SeedSequence(rng.integers(0, 2**63, size=4)).spawn(_NOISE_BLOCKS)
-        edges = np.linspace(0, ny, _NOISE_BLOCKS + 1).astype(int)
+        edges = np.linspace(0, half, _NOISE_BLOCKS + 1).astype(int)
         jobs = [
             (np.random.default_rng(sq), int(edges[i]), int(edges[i + 1]))
             for i, sq in enumerate(seeds)
@@ -361,7 +373,12 @@ def _synthesize(amp, full: tuple[int, ...], rng: np.random.Generator) -> np.ndar
         else:
             with ThreadPoolExecutor(max_workers=workers) as ex:
                 list(ex.map(lambda j: fill(*j), jobs))
-    return sfft.irfft2(z, s=full, overwrite_x=True, workers=-1)
+    if keep_rows is None or keep_rows >= ny:
+        return sfft.irfft2(z, s=full, overwrite_x=True, workers=-1)
+    # pruned inverse: the ky transform on every column, then the kx (c2r) transform only on
+    # the rows kept — the same numbers as irfft2(...)[:keep_rows], fewer operations.
+    t = sfft.ifft(z, axis=0, overwrite_x=True, workers=-1)
+    return sfft.irfft(t[:keep_rows], n=full[1], axis=1, workers=-1)
 
 
 def _amp_from_eigenvalues(lam_q: np.ndarray, full: tuple[int, ...]) -> np.ndarray:
@@ -407,7 +424,7 @@ class _Plan:
     post: object = None  # callable(field, rng) -> heights, or None (crop only)
 
     def realize(self, rng: np.random.Generator) -> np.ndarray:
-        f = _synthesize(self.amp, self.full, rng)
+        f = _synthesize(self.amp, self.full, rng, self.shape[0] if len(self.shape) == 2 else None)
         if f.shape != self.shape:
             f = np.ascontiguousarray(f[tuple(slice(0, n) for n in self.shape)])
         if self.post is not None:
@@ -422,7 +439,10 @@ def _stationary_eigs(rough: Roughness, full, spacing) -> np.ndarray:
     if isinstance(rough, GaussianCorrelation):
         # separable: exp(−x²/ℓx² − y²/ℓy²) → outer product of 1-D DCT-I transforms
         ells = (rough.length,) if len(full) == 1 else (rough.length_y, rough.length)
-        vecs = [sfft.dct(np.exp(-((lag / ell) ** 2)), type=1) for lag, ell in zip(lags, ells)]
+        vecs = [
+            sfft.dct(np.exp(-((lag / ell) ** 2)), type=1)
+            for lag, ell in zip(lags, ells, strict=True)
+        ]
         if len(full) == 1:
             return s2 * vecs[0]
         return s2 * np.multiply.outer(vecs[0], vecs[1])
@@ -491,7 +511,8 @@ def _plan_davies_harte(fbm: FractionalBrownian, n: int, dx: float) -> _Plan:
     }
     if ratio < -_EIG_TOL:  # pragma: no cover - fGn embeddings are nonnegative (Craigmile 2003)
         warnings.warn(
-            f"Davies–Harte embedding indefinite (ratio {ratio:.2e}); clipped", RuntimeWarning,
+            f"Davies–Harte embedding indefinite (ratio {ratio:.2e}); clipped",
+            RuntimeWarning,
             stacklevel=3,
         )
     amp = _amp_from_eigenvalues(lam, (full_n,))
@@ -518,16 +539,21 @@ def _stein_coeffs(alpha: float, big_r: float) -> tuple[float, float, float]:
     return c0, c2, beta
 
 
-def _stein_psi(r: np.ndarray, alpha: float, big_r: float) -> np.ndarray:
+def _stein_psi(r2: np.ndarray, alpha: float, big_r: float) -> np.ndarray:
+    """Stein's ψ at squared distance ``r2`` (in place on ``r2``)."""
     c0, c2, beta = _stein_coeffs(alpha, big_r)
-    out = np.zeros_like(r)
-    inner = r <= 1.0
-    ri = r[inner]
-    out[inner] = c0 - ri**alpha + c2 * ri * ri
+    mid = None
     if beta > 0:
-        mid = (r > 1.0) & (r < big_r)
-        rm = r[mid]
-        out[mid] = beta * (big_r - rm) ** 3 / rm
+        mid = (r2 > 1.0) & (r2 < big_r * big_r)
+        rm = np.sqrt(r2[mid])
+        vm = beta * (big_r - rm) ** 3 / rm
+    outer = r2 > 1.0
+    out = np.power(r2, alpha / 2.0)
+    np.subtract(c2 * r2, out, out=out)
+    out += c0
+    out[outer] = 0.0
+    if mid is not None:
+        out[mid] = vm
     return out
 
 
@@ -543,7 +569,7 @@ def _plan_stein(fbm: FractionalBrownian, shp, spacing) -> _Plan:
             continue
         full = tuple(_even_len(math.ceil(2 * big_r / d - 1e-9)) for d in du)
         ly, lx = _lag_axes(full, du)
-        psi = _stein_psi(np.hypot(ly[:, None], lx[None, :]), alpha, big_r)
+        psi = _stein_psi(np.add.outer(ly * ly, lx * lx), alpha, big_r)
         lam = sfft.dctn(psi, type=1, workers=-1)
         ratio, neg_mass = _check_eigs(lam)
         last = (big_r, full, lam, ratio, neg_mass)
@@ -552,7 +578,8 @@ def _plan_stein(fbm: FractionalBrownian, shp, spacing) -> _Plan:
     big_r, full, lam, ratio, neg_mass = last
     if ratio < -_EIG_TOL:  # pragma: no cover - R = 2 is nonnegative (Stein 2002, Thm. 1)
         warnings.warn(
-            f"Stein embedding indefinite (ratio {ratio:.2e}); clipped", RuntimeWarning,
+            f"Stein embedding indefinite (ratio {ratio:.2e}); clipped",
+            RuntimeWarning,
             stacklevel=3,
         )
     _, c2, _ = _stein_coeffs(alpha, big_r)
@@ -618,21 +645,24 @@ def _plan_periodic(rough, shp, spacing) -> _Plan:
             amp[0] = 0.0
             _edge_factor(amp, shp[-1])
             return _Plan("fft-periodic", shp, amp, shp, info)
-        kx2 = kx * kx
-        ky2 = ky * ky
-        expo = -(rough.hurst + 1.0) / 2.0
+        # float32 for the power law: the filter needs no more than 1e-7 relative precision
+        # (noise and transform stay float64) and float32 pow is ~2.5× faster
+        kx2 = (kx * kx).astype(np.float32)
+        ky2 = (ky * ky).astype(np.float32)
+        expo = np.float32(-(rough.hurst + 1.0) / 2.0)
         edge_nyq = shp[-1] % 2 == 0
 
-        def amp_rows(idx):
-            out = np.add.outer(ky2[idx], kx2)
-            dc = idx == 0
-            out[dc, 0] = 1.0
+        def amp_rows(m0, m1):
+            out = np.add.outer(ky2[m0:m1], kx2)
+            if m0 == 0:
+                out[0, 0] = 1.0
             np.power(out, expo, out=out)
-            out *= const
-            out[dc, 0] = 0.0
-            out[:, 0] *= math.sqrt(2.0)
+            out *= np.float32(const)
+            if m0 == 0:
+                out[0, 0] = 0.0
+            out[:, 0] *= np.float32(math.sqrt(2.0))
             if edge_nyq:
-                out[:, -1] *= math.sqrt(2.0)
+                out[:, -1] *= np.float32(math.sqrt(2.0))
             return out
 
         return _Plan("fft-periodic", shp, amp_rows, shp, info)
@@ -737,7 +767,9 @@ def generate_batch(
     elif isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed >= 0:
         ss = np.random.SeedSequence(int(seed))
     else:
-        raise TypeError(f"seed must be a nonnegative int or a numpy.random.SeedSequence, got {seed!r}")
+        raise TypeError(
+            f"seed must be a nonnegative int or a numpy.random.SeedSequence, got {seed!r}"
+        )
     plan, sp = _plan(roughness, shape, spacing, periodic)
     out = []
     for i, child in enumerate(ss.spawn(int(count))):
