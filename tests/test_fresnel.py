@@ -27,7 +27,7 @@ def test_lossless_energy_balance():
     np.testing.assert_allclose(np.abs(rv) ** 2 + np.abs(tv) ** 2 * root / c, 1, rtol=1e-12)
 
 
-@pytest.mark.parametrize("eps", [1e7j, -50 + 2j, -50.0, 17 + 2j, 1.01])
+@pytest.mark.parametrize("eps", [1e7j, -50 + 2j, -50.0, 17 + 2j, 1.01, 1.0])
 def test_bounded_and_finite(eps):
     th = np.radians(np.linspace(0, 90, 91))
     r = reflectivity(eps, th)

@@ -53,8 +53,11 @@ def fresnel_cos(eps, cos_theta):
     eps = np.asarray(eps, dtype=complex)
     s2 = 1.0 - c * c
     root = _sqrt_branch(eps - s2)
-    rh = (c - root) / (c + root)
-    rv = (eps * c - root) / (eps * c + root)
+    den_h, den_v = c + root, eps * c + root
+    # Both denominators vanish only for ε = 1 at grazing incidence: no interface, R = 0.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rh = np.where(den_h == 0, 0.0, (c - root) / np.where(den_h == 0, 1.0, den_h))
+        rv = np.where(den_v == 0, 0.0, (eps * c - root) / np.where(den_v == 0, 1.0, den_v))
     return rh, rv
 
 

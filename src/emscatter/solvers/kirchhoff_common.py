@@ -34,12 +34,13 @@ unpolarized Fresnel factor of the Cook–Torrance model. At exact backscatter ``
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 from scipy import special
 
-from ..conventions import broadcast_angles, check_angle, check_finite, check_positive
-from ..fresnel import check_eps, fresnel_cos, is_pec
+from ..conventions import check_angle, check_finite, check_positive
+from ..fresnel import PEC, check_eps, is_pec
 from ..spectra import Roughness
 
 __all__ = [
@@ -49,7 +50,7 @@ __all__ = [
     "fresnel_factors",
     "slope_variances",
     "smith_lambda",
-    "shadowing",
+    "shadowing_factor",
     "check_roughness",
     "validity_report",
 ]
@@ -67,19 +68,74 @@ def check_roughness(roughness) -> Roughness:
 
 
 class Geometry:
-    """Broadcast angles and the derived dimensionless vectors (units of ``k``)."""
+    """Checked, broadcast angles; trigonometry flattened to 1-D (kept 0-d when scalar)."""
 
     __slots__ = (
-        "theta_i", "theta_s", "phi_s", "phi_i", "eps", "shape", "ci", "si", "cs", "ss",
-        "cd", "sd", "qx", "qy", "qz", "q2", "cos_l",
+        "theta_i", "theta_s", "phi_s", "phi_i", "eps", "eps_flat", "shape", "size",
+        "ti_flat", "ts_flat", "dphi", "phi_i_flat", "phi_s_flat", "phi_i_zero", "dimension",
+    )  # fmt: skip
+
+    def chunk(self, sl: slice | None = None, *, signed_azimuth: bool = False) -> Local:
+        """Derived vectors (``q`` in units of k) for the flat index range ``sl`` (all if None).
+
+        ``signed_azimuth=False`` computes ``|sin Δφ|`` (cheaper), enough where only
+        ``sin²Δφ`` enters (isotropic slopes)."""
+        sl = slice(None) if sl is None else sl
+
+        def take(a):
+            return a if np.ndim(a) == 0 else a[sl]
+
+        loc = Local()
+        loc.n = len(range(*sl.indices(self.size)))
+        loc.si, loc.ci = _trig(take(self.ti_flat))
+        loc.ss, loc.cs = _trig(take(self.ts_flat))
+        dphi = take(self.dphi)
+        loc.cd = np.cos(dphi)
+        if signed_azimuth:
+            loc.sd = np.sin(dphi)
+        else:
+            loc.sd = np.sqrt(np.maximum((1.0 - loc.cd) * (1.0 + loc.cd), 0.0))
+        loc.eps = self.eps if isinstance(self.eps, str) else take(self.eps_flat)
+        loc.phi_i, loc.phi_s = take(self.phi_i_flat), take(self.phi_s_flat)
+        qxp = loc.ss * loc.cd - loc.si
+        qyp = loc.ss * loc.sd
+        if self.phi_i_zero or self.dimension == 1:
+            loc.qx, loc.qy = qxp, qyp
+        else:
+            cpi, spi = np.cos(loc.phi_i), np.sin(loc.phi_i)
+            loc.qx = qxp * cpi - qyp * spi
+            loc.qy = qxp * spi + qyp * cpi
+        loc.qz = loc.cs + loc.ci
+        # |q|²/k² = 2 (1 − k̂i·k̂s) = 2 (1 + cosθi cosθs − sinθi sinθs cosΔφ)
+        loc.q2 = np.maximum(2.0 * (1.0 + loc.ci * loc.cs - loc.si * loc.ss * loc.cd), 0.0)
+        loc.cos_l = np.minimum(0.5 * np.sqrt(loc.q2), 1.0)  # cosθl = |q|/(2k)
+        return loc
+
+
+class Local:
+    """Per-chunk derived quantities (``q`` in units of ``k``)."""
+
+    __slots__ = (
+        "si", "ci", "ss", "cs", "cd", "sd", "eps", "qx", "qy", "qz", "q2", "cos_l",
+        "phi_i", "phi_s", "n",
     )  # fmt: skip
 
 
-def geometry(theta_i, theta_s, phi_s, phi_i, eps, dimension: int) -> Geometry:
-    """Check and broadcast the angles [rad] and ``eps``; compute ``q/k`` and ``cosθl``.
+def _flat(a: np.ndarray, shape) -> np.ndarray:
+    return a if a.ndim == 0 else np.broadcast_to(a, shape).reshape(-1)
 
-    For ``dimension=1`` (profile along x) the scattering is in the x–z plane: ``sin φi`` and
-    ``sin φs`` must vanish (``φ ∈ {0, π}`` modulo 2π).
+
+def _trig(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(sinθ, cosθ)`` for θ ∈ [0, π/2] with ``cos = √((1−s)(1+s))`` (exactly 0 at π/2)."""
+    s = np.sin(x)
+    return s, np.sqrt((1.0 - s) * (1.0 + s))
+
+
+def geometry(theta_i, theta_s, phi_s, phi_i, eps, dimension: int) -> Geometry:
+    """Check and broadcast the angles [rad] and ``eps`` (complex or "pec").
+
+    For ``dimension=1`` the profile lies in the plane of incidence (whatever φi) and
+    ``φs ∈ {φi, φi + π}`` (mod 2π); ``q_x`` is then measured along that plane.
     """
     ti = check_angle("theta_i", theta_i)
     ts = check_angle("theta_s", theta_s)
@@ -94,49 +150,86 @@ def geometry(theta_i, theta_s, phi_s, phi_i, eps, dimension: int) -> Geometry:
     arrays = {"theta_i": ti, "theta_s": ts, "phi_s": ps, "phi_i": pi_}
     if not is_pec(eps):
         arrays["eps"] = eps
-    b = broadcast_angles(**arrays)
-    g = Geometry()
-    g.theta_i, g.theta_s, g.phi_s, g.phi_i = b[:4]
-    g.eps = b[4] if len(b) > 4 else eps
-    g.shape = g.theta_i.shape
+    try:
+        shape = np.broadcast_shapes(*(np.shape(a) for a in arrays.values()))
+    except ValueError:
+        desc = ", ".join(f"{k}{np.shape(v)}" for k, v in arrays.items())
+        raise ValueError(f"angle arrays (and eps) do not broadcast together: {desc}") from None
     if dimension == 1:
-        for name, arr in (("phi_i", g.phi_i), ("phi_s", g.phi_s)):
-            if np.any(np.abs(np.sin(arr)) > 1e-9):
-                bad = arr[np.abs(np.sin(arr)) > 1e-9].ravel()[0]
-                raise ValueError(
-                    f"{name} must be 0 or π (mod 2π) for a 1-D profile (scattering in the "
-                    f"x–z plane), got {bad!r} rad"
-                )
-    g.ci, g.si = np.cos(g.theta_i), np.sin(g.theta_i)
-    g.cs, g.ss = np.cos(g.theta_s), np.sin(g.theta_s)
-    dphi = g.phi_s - g.phi_i
-    g.cd, g.sd = np.cos(dphi), np.sin(dphi)
-    cpi, spi = np.cos(g.phi_i), np.sin(g.phi_i)
-    # q/k in the frame rotated by φi (x' along the incident azimuth), then rotated back.
-    qxp = g.ss * g.cd - g.si
-    qyp = g.ss * g.sd
-    g.qx = qxp * cpi - qyp * spi
-    g.qy = qxp * spi + qyp * cpi
-    g.qz = g.cs + g.ci
-    # |q|²/k² = 2 (1 − k̂i·k̂s) = 2 (1 + cosθi cosθs − sinθi sinθs cosΔ)
-    g.q2 = np.maximum(2.0 * (1.0 + g.ci * g.cs - g.si * g.ss * g.cd), 0.0)
-    g.cos_l = np.minimum(0.5 * np.sqrt(g.q2), 1.0)  # cosθl = |q|/(2k)
+        sin_d = np.abs(np.sin(ps - pi_))
+        if np.any(sin_d > 1e-9):
+            bad = np.broadcast_to(ps, sin_d.shape)[sin_d > 1e-9].ravel()[0]
+            raise ValueError(
+                f"phi_s must equal phi_i or phi_i + π (mod 2π) for a 1-D profile (scattering "
+                f"in the plane of incidence, which contains the profile), got {bad!r} rad"
+            )
+    g = Geometry()
+    g.shape = shape
+    g.size = int(np.prod(shape, dtype=np.int64))
+    g.theta_i, g.theta_s, g.phi_s, g.phi_i = (np.broadcast_to(a, shape) for a in (ti, ts, ps, pi_))
+    if is_pec(eps):
+        g.eps = g.eps_flat = PEC
+    else:
+        g.eps = np.broadcast_to(eps, shape)
+        g.eps_flat = _flat(eps, shape)
+    g.ti_flat, g.ts_flat = _flat(ti, shape), _flat(ts, shape)
+    g.dphi = _flat(ps - pi_, shape)
+    g.phi_i_flat, g.phi_s_flat = _flat(pi_, shape), _flat(ps, shape)
+    g.phi_i_zero = bool(pi_.ndim == 0 and float(pi_) == 0.0)
+    g.dimension = dimension
     return g
 
 
-def fresnel_factors(g: Geometry, dimension: int) -> np.ndarray:
-    """``|F_pq|²`` (module docstring), shape ``(2, 2, *shape)`` indexed ``[pol_s, pol_i]``."""
-    rh, rv = fresnel_cos(g.eps, g.cos_l)
-    rh = np.broadcast_to(rh, g.shape)
-    rv = np.broadcast_to(rv, g.shape)
-    a_h = rh.real**2 + rh.imag**2
-    a_v = rv.real**2 + rv.imag**2
-    out = np.zeros((2, 2, *g.shape))
+def fast_fresnel(eps, c: np.ndarray, cross: bool = True):
+    """``(|R_h|², |R_v|², Re(R_h R_v*))`` at incidence cosine ``c``, in real arithmetic (stable
+    complex square root, branch ``Im ≥ 0, Re ≥ 0`` as :mod:`emscatter.fresnel`; tested against
+    :func:`emscatter.fresnel.fresnel_cos`). ``cross=False`` returns ``None`` for the third."""
+    if isinstance(eps, str):
+        one = np.ones_like(c)
+        return one, one, (-one if cross else None)
+    er, ei = np.real(eps), np.imag(eps)
+    a = er - (1.0 - c * c)
+    b = ei + 0.0 * c
+    big = np.sqrt(0.5 * (np.sqrt(a * a + b * b) + np.abs(a)))  # valid for |ε| < 1e150
+    small = 0.5 * b / np.maximum(big, 1e-300)
+    pos = a >= 0
+    u = np.where(pos, big, small)  # Re √(ε − sin²θ)
+    v = np.where(pos, small, big)  # Im √(ε − sin²θ) ≥ 0 (b = Im ε ≥ 0)
+    hn_r, hd_r = c - u, c + u  # R_h = (c − w)/(c + w), imaginary parts −v, +v
+    ec_r, ec_i = er * c, ei * c
+    vn_r, vn_i, vd_r, vd_i = ec_r - u, ec_i - v, ec_r + u, ec_i + v  # R_v = (εc − w)/(εc + w)
+    v2 = v * v
+    hd2 = np.maximum(hd_r * hd_r + v2, 1e-300)  # 0 only with a 0/0 limit (ε = 1, grazing)
+    vd2 = np.maximum(vd_r * vd_r + vd_i * vd_i, 1e-300)
+    rh2 = (hn_r * hn_r + v2) / hd2
+    rv2 = (vn_r * vn_r + vn_i * vn_i) / vd2
+    if not cross:
+        return rh2, rv2, None
+    # R_h ∝ hn·conj(hd), R_v ∝ vn·conj(vd); Re(R_h R_v*) = Re(h · conj(v)) / (|hd|²|vd|²)
+    h_r, h_i = hn_r * hd_r - v2, -v * (hd_r + hn_r)
+    w_r, w_i = vn_r * vd_r + vn_i * vd_i, vn_i * vd_r - vn_r * vd_i
+    return rh2, rv2, (h_r * w_r + h_i * w_i) / (hd2 * vd2)
+
+
+def coherent_local(g: Local, sigma: float, k: float) -> np.ndarray:
+    """:func:`coherent_reflectivity` on a checked chunk, shape ``(2, n)``."""
+    rh2, rv2, _ = fast_fresnel(g.eps, g.ci, cross=False)
+    att = np.exp(-((2.0 * k * sigma * g.ci) ** 2))
+    return np.stack([np.broadcast_to(rh2 * att, (g.n,)), np.broadcast_to(rv2 * att, (g.n,))])
+
+
+def fresnel_factors(g: Local, dimension: int, scale=1.0, out=None) -> np.ndarray:
+    """``scale · |F_pq|²`` (module docstring), shape ``(2, 2, n)`` indexed ``[pol_s, pol_i]``,
+    written into ``out`` if given."""
+    n = g.n
+    a_h, a_v, cross = (np.broadcast_to(x * scale, (n,)) for x in fast_fresnel(g.eps, g.cos_l))
+    if out is None:
+        out = np.empty((2, 2, n))
     if dimension == 1:
+        out[0, 1] = out[1, 0] = 0.0
         out[0, 0] = a_h
         out[1, 1] = a_v
         return out
-    cross = rh.real * rv.real + rh.imag * rv.imag  # Re(R_h R_v*)
     hi = g.ci * g.ss * g.cd + g.si * g.cs
     vi = g.ss * g.sd
     hs = g.si * g.cs * g.cd + g.ci * g.ss
@@ -150,15 +243,15 @@ def fresnel_factors(g: Geometry, dimension: int) -> np.ndarray:
         vs = np.where(degenerate, 0.0, vs)
         d = np.where(degenerate, 1.0, d)
     inv = 1.0 / (d * d)
-    # (a, b) products: F_pq = (R_h a_pq + R_v b_pq) / |τ|²
-    pairs = (
-        ((0, 0), hs * hi, vs * vi),
-        ((0, 1), hs * vi, -vs * hi),
-        ((1, 0), vs * hi, -hs * vi),
-        ((1, 1), vs * vi, hs * hi),
-    )
-    for (p, q), a, b in pairs:
-        out[p, q] = (a_h * a * a + a_v * b * b + 2.0 * cross * a * b) * inv
+    ah, av, cr = a_h * inv, a_v * inv, 2.0 * cross * inv
+    # F_pq = (R_h a_pq + R_v b_pq)/|τ|² with (a, b): hh (hs·hi, vs·vi), vv (vs·vi, hs·hi),
+    # hv (hs·vi, −vs·hi), vh (vs·hi, −hs·vi)
+    p, m, x, y = hs * hi, vs * vi, hs * vi, vs * hi
+    out[0, 0] = ah * p * p + av * m * m + cr * p * m
+    out[1, 1] = ah * m * m + av * p * p + cr * p * m
+    out[0, 1] = ah * x * x + av * y * y - cr * x * y
+    out[1, 0] = ah * y * y + av * x * x - cr * x * y
+    np.maximum(out, 0.0, out=out)  # rounding of the cross term (exact zeros in the plane)
     return out
 
 
@@ -172,14 +265,12 @@ def coherent_reflectivity(roughness, eps, k: float, theta_i) -> np.ndarray:
     k = check_positive("k", k, unit="rad/m")
     ti = check_angle("theta_i", theta_i)
     eps = check_eps(eps)
-    ci = np.cos(ti)
     if not is_pec(eps):
-        ci, eps = np.broadcast_arrays(ci, eps)
-    rh, rv = fresnel_cos(eps, ci)
+        ti, eps = np.broadcast_arrays(ti, eps)
+    ci = np.cos(ti)
+    rh2, rv2, _ = fast_fresnel(eps, ci)
     att = np.exp(-((2.0 * k * rough.sigma * ci) ** 2))
-    return np.stack(
-        [np.broadcast_to(np.abs(rh) ** 2 * att, ci.shape), np.abs(rv) ** 2 * att]
-    )
+    return np.stack([rh2 * att, rv2 * att])
 
 
 def slope_variances(roughness: Roughness, k_max=None, slope_variance=None) -> tuple[float, float]:
@@ -212,42 +303,43 @@ def slope_variances(roughness: Roughness, k_max=None, slope_variance=None) -> tu
 
 def smith_lambda(a: np.ndarray) -> np.ndarray:
     """Smith's ``Λ(a) = [exp(−a²)/(a√π) − erfc(a)] / 2`` for Gaussian slopes (Smith 1967,
-    IEEE TAP 15; Walter et al. 2007 eq. 27 form ``G1 = 1/(1+Λ)``), ``a = cotθ/(√2 s)``."""
-    a = np.maximum(a, 1e-300)
-    lam = 0.5 * (np.exp(-a * a) / (a * math.sqrt(math.pi)) - special.erfc(a))
-    return np.where(a > 26.0, 0.0, np.maximum(lam, 0.0))
+    IEEE TAP 15, 668; Walter et al. 2007, eq. 27; ``G1 = 1/(1+Λ)``), ``a = cotθ/(√2 s)``.
+    ``Λ < 1e-17`` (so ``G1 = 1`` in double precision) for ``a > 6``: not evaluated there."""
+    a = np.asarray(a, dtype=float)
+    out = np.zeros(a.shape)
+    need = a < 6.0
+    if np.any(need):
+        an = np.maximum(a[need], 1e-300)
+        lam = 0.5 * (np.exp(-an * an) / (an * math.sqrt(math.pi)) - special.erfc(an))
+        out[need] = np.maximum(lam, 0.0)
+    return out
 
 
-def _g1(cos_t, sin_t, s2_dir):
-    # a = cotθ / (√2 s) ; s2_dir = slope variance along the azimuth of the direction
-    with np.errstate(divide="ignore"):
-        a = np.where(sin_t > 0, cos_t / np.maximum(sin_t * np.sqrt(2.0 * s2_dir), 1e-300), np.inf)
-    a = np.minimum(a, 1e300)
-    return 1.0 / (1.0 + smith_lambda(a))
+def _a(cos_t, sin_t, s2_dir):
+    """``a = cotθ/(√2 s)`` (∞ at θ = 0, 0 at θ = π/2), clipped to [0, 1e300]."""
+    den = sin_t * np.sqrt(2.0 * s2_dir)
+    return np.where(den > cos_t * 1e-300, cos_t / np.where(den > 0, den, 1.0), 1e300)
 
 
-def shadowing(g: Geometry, sx: float, sy: float, mode="smith") -> np.ndarray:
+def shadowing_factor(g: Local, sx: float, sy: float, mode="smith") -> np.ndarray:
     """Bistatic shadowing/masking factor [-].
 
     ``"smith"``: separable ``G1(θi) G1(θs)`` with Smith's ``G1 = 1/(1+Λ(a))`` (Smith 1967;
-    the form used by Mitsuba 3's microfacet models, Walter et al. 2007 eqs. 23–27);
-    ``"correlated"``: height-correlated ``1/(1+Λ(a_i)+Λ(a_s))`` (Sancer 1969 for the
-    forward half-space; Heitz 2014). The slope variance along each direction's azimuth is
-    ``sx cos²φ + sy sin²φ`` (anisotropic Gaussian slopes).
+    the form of Mitsuba 3's microfacet models, Walter et al. 2007 eqs. 23–27);
+    ``"correlated"``: height-correlated ``1/(1+Λ(a_i)+Λ(a_s))`` (Sancer 1969, IEEE TAP 17,
+    577; Heitz 2014). The slope variance along each direction's azimuth is
+    ``sx cos²φ + sy sin²φ`` (anisotropic Gaussian slopes); for a profile it is ``sx``.
     """
-    cpi, spi = np.cos(g.phi_i), np.sin(g.phi_i)
-    cps, sps = np.cos(g.phi_s), np.sin(g.phi_s)
-    s2i = sx * cpi**2 + sy * spi**2 if sy > 0 else np.full(g.shape, sx)
-    s2s = sx * cps**2 + sy * sps**2 if sy > 0 else np.full(g.shape, sx)
+    if sy > 0 and sx != sy:
+        s2i = sx * np.cos(g.phi_i) ** 2 + sy * np.sin(g.phi_i) ** 2
+        s2s = sx * np.cos(g.phi_s) ** 2 + sy * np.sin(g.phi_s) ** 2
+    else:
+        s2i = s2s = sx
+    lam_i = np.broadcast_to(smith_lambda(_a(g.ci, g.si, s2i)), (g.n,))
+    lam_s = np.broadcast_to(smith_lambda(_a(g.cs, g.ss, s2s)), (g.n,))
     if mode == "smith":
-        return _g1(g.ci, g.si, s2i) * _g1(g.cs, g.ss, s2s)
-
-    def lam(c, s, s2):
-        with np.errstate(divide="ignore"):
-            a = np.where(s > 0, c / np.maximum(s * np.sqrt(2.0 * s2), 1e-300), np.inf)
-        return smith_lambda(np.minimum(a, 1e300))
-
-    return 1.0 / (1.0 + lam(g.ci, g.si, s2i) + lam(g.cs, g.ss, s2s))
+        return (1.0 / (1.0 + lam_i)) * (1.0 / (1.0 + lam_s))
+    return 1.0 / (1.0 + lam_i + lam_s)
 
 
 def check_shadowing(shadowing_opt) -> str | None:
@@ -260,6 +352,15 @@ def check_shadowing(shadowing_opt) -> str | None:
     raise ValueError(
         f"shadowing must be True/'smith', 'correlated', or False/None, got {shadowing_opt!r}"
     )
+
+
+def workers_for(threads, n_chunks: int) -> int:
+    """Number of worker threads: ``threads`` (None → CPU count, at most 8), ≤ ``n_chunks``."""
+    if threads is None:
+        threads = min(os.cpu_count() or 1, 8)
+    if isinstance(threads, bool) or not isinstance(threads, int | np.integer) or threads < 1:
+        raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
+    return int(min(threads, n_chunks))
 
 
 def validity_report(roughness: Roughness, k: float, checks: list[tuple[str, bool, str]]) -> dict:

@@ -25,13 +25,20 @@ the 1-D slope density ``p₁(ζ) = exp(−ζ²/(2 sx))/√(2π sx)`` and ``dθs 
 (the large-``kσ`` limit of the 1-D Kirchhoff integral, cf. Thorsos 1988, JASA 83, 78), so
 that ``r = 1/(2π cosθi) ∫ σ⁰ dθs → 1`` for a perfect conductor at small slopes.
 
-Energy: without shadowing a perfect conductor reflects ``∫ D (ĥ·k̂_o) ... ≈ 1`` at small
-slopes; at large slopes GO without shadowing exceeds 1 at grazing angles (use shadowing).
+Energy: without shadowing a perfect conductor reflects ``∫ D (ĥ·k̂_i)/cosθi dΩh ≈ 1`` at
+small slopes (tested, 2-D and 1-D); at large slopes GO without shadowing exceeds 1 at grazing
+angles, shadowing only removes energy.
+
+Coherent part: ``coherent`` holds the Kirchhoff ``|R_p(θi)|² exp(−(2kσ cosθi)²)`` like the
+other solvers. GO's σ⁰ is the stationary-phase limit of the *whole* Kirchhoff intensity, so
+where GO is valid (``kσ cosθ > √10``) the coherent term is < e⁻⁴⁰ and negligible; outside
+that range adding it to GO's σ⁰ double counts the specular energy (use PO there).
 """
 
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -40,12 +47,13 @@ from ..scattering import Scattering
 from .kirchhoff_common import (
     check_roughness,
     check_shadowing,
-    coherent_reflectivity,
+    coherent_local,
     fresnel_factors,
     geometry,
-    shadowing as shadowing_factor,
+    shadowing_factor,
     slope_variances,
     validity_report,
+    workers_for,
 )
 
 __all__ = ["bistatic", "check_validity", "VALIDITY", "slope_pdf_factor"]
@@ -107,7 +115,7 @@ def slope_pdf_factor(g, sx: float, sy: float, dimension: int) -> np.ndarray:
         expo = -0.5 * zx * zx / sx
         pref = math.pi / math.sqrt(2 * math.pi * sx) * 0.5
         val = pref * g.q2 * g.q2 * inv * inv * inv * np.exp(np.where(ok, expo, -np.inf))
-    return np.where(ok, val, 0.0)
+    return np.broadcast_to(np.where(ok, val, 0.0), (g.n,))
 
 
 def bistatic(
@@ -122,6 +130,7 @@ def bistatic(
     shadowing: bool | str = True,
     k_max: float | None = None,
     slope_variance=None,
+    threads: int | None = None,
 ) -> Scattering:
     """Geometric-optics bistatic scattering coefficients σ⁰ (all four polarizations).
 
@@ -134,6 +143,7 @@ def bistatic(
     shadowing : True/"smith" (separable Smith, as Mitsuba 3), "correlated", or False.
     k_max : spectral cutoff [rad/m] for correlations with infinite slope variance.
     slope_variance : override the per-direction slope variance(s) ``⟨ζx²⟩[, ⟨ζy²⟩]`` [-].
+    threads : worker threads for large inputs (default: the CPU count, at most 8).
 
     Returns
     -------
@@ -147,25 +157,31 @@ def bistatic(
     dim = rough.dimension
     g = geometry(theta_i, theta_s, phi_s, phi_i, eps, dim)
     shape = g.shape
-    sigma0 = np.empty((2, 2, *shape))
-    flat = sigma0.reshape(2, 2, -1)
-    n = int(np.prod(shape, dtype=np.int64))
-    arrays = [a.ravel() for a in (g.theta_i, g.theta_s, g.phi_s, g.phi_i)]
-    eps_flat = g.eps if isinstance(g.eps, str) else g.eps.ravel()
-    for start in range(0, max(n, 1), _CHUNK):
-        sl = slice(start, min(start + _CHUNK, n))
-        if n == 0:
-            break
-        e = eps_flat if isinstance(eps_flat, str) else eps_flat[sl]
-        gc = geometry(*(a[sl] for a in arrays), e, dim)
-        val = slope_pdf_factor(gc, sx, sy, dim)
+    n = g.size
+    flat = np.empty((2, 2, n))
+    coh = np.empty((2, n))
+    signed = sx != sy and dim == 2
+
+    def work(start: int) -> None:
+        loc = g.chunk(slice(start, min(start + _CHUNK, n)), signed_azimuth=signed)
+        val = slope_pdf_factor(loc, sx, sy, dim)
         if mode is not None:
-            val = val * shadowing_factor(gc, sx, sy, mode)
-        flat[:, :, sl] = fresnel_factors(gc, dim) * val
-    coh = coherent_reflectivity(rough, g.eps, k, g.theta_i)
+            val = val * shadowing_factor(loc, sx, sy, mode)
+        fresnel_factors(loc, dim, val, out=flat[:, :, start : start + loc.n])
+        coh[:, start : start + loc.n] = coherent_local(loc, rough.sigma, k)
+
+    starts = range(0, n, _CHUNK)
+    workers = workers_for(threads, len(starts))
+    if workers > 1:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            list(pool.map(work, starts))  # numpy releases the GIL in its kernels
+    else:
+        for st in starts:
+            work(st)
+    sigma0 = flat.reshape(2, 2, *shape)
     return Scattering(
         sigma0=sigma0,
-        coherent=np.broadcast_to(coh, (2, *shape)).copy(),
+        coherent=coh.reshape(2, *shape),
         method="kirchhoff-go",
         theta_i=g.theta_i,
         theta_s=g.theta_s,
@@ -177,7 +193,6 @@ def bistatic(
             "slope_variance": (sx, sy),
             "total_mean_square_slope": sx + sy,
             "shadowing": mode,
-            "validity": check_validity(rough, k, k_max=k_max, slope_variance=slope_variance),
+            "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx),
         },
     )
-
