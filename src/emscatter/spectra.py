@@ -48,7 +48,6 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import integrate, special
 
 from .conventions import check_in_range, check_positive
 
@@ -181,6 +180,8 @@ class Roughness(ABC):
         used) when the slope variance is infinite (exponential, power law). Without it such
         a roughness raises ``ValueError``.
         """
+        from scipy import integrate  # lazy: keep `import emscatter` fast
+
         closed = self._mss_closed()
         if closed is not None and k_max is None:
             return closed
@@ -313,6 +314,8 @@ class PowerLawCorrelation(Roughness):
         return {**super()._params(), "hurst": self.hurst}
 
     def _rho_unit(self, u):
+        from scipy import special
+
         h = self.hurst
         u = np.asarray(u, dtype=float)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -325,7 +328,7 @@ class PowerLawCorrelation(Roughness):
 
     def _w1_unit(self, q):
         h = self.hurst
-        c = special.gamma(h + 0.5) / (math.sqrt(math.pi) * special.gamma(h))
+        c = math.gamma(h + 0.5) / (math.sqrt(math.pi) * math.gamma(h))
         return c * (1.0 + q**2) ** -(h + 0.5)
 
     def describe(self):
@@ -398,6 +401,8 @@ def roughness(kind: str, **params):
 def _numeric_nfold(rough: Roughness, n, kx, ky=0.0) -> np.ndarray:
     """Transform of ρⁿ by quadrature (1-D cosine transform, 2-D Hankel transform of order 0,
     anisotropy folded into the scaled wavenumber). Slow; for spectra without closed forms."""
+    from scipy import integrate, special
+
     n_arr, kx, ky = np.broadcast_arrays(
         np.asarray(n, dtype=float), np.asarray(kx, dtype=float), np.asarray(ky, dtype=float)
     )
