@@ -36,7 +36,7 @@ def _check_roughness(surface) -> Roughness:
     )
 
 
-def resolve_method(roughness: Roughness, k: float, method: str, out_of_range: str):
+def resolve_method(roughness: Roughness, k: float, method: str, out_of_range: str, eps=None):
     """``(name, module, report, make_nan)`` for a method name or ``"auto"``."""
     select.check_out_of_range(out_of_range)
     if not isinstance(method, str):
@@ -47,7 +47,9 @@ def resolve_method(roughness: Roughness, k: float, method: str, out_of_range: st
     else:
         name = method.lower()
         module = solvers.get(name)  # raises for unknown names
-        report = module.check_validity(roughness, k)
+        params = inspect.signature(module.check_validity).parameters
+        extra = {"eps": eps} if eps is not None and "eps" in params else {}
+        report = module.check_validity(roughness, k, **extra)
     make_nan = select.enforce(name, report, out_of_range, stacklevel=4)
     return name, solvers.get(name), report, make_nan
 
@@ -93,7 +95,7 @@ def bistatic(
     ps = check_finite("phi_s", phi_s).astype(float)
     pi_ = check_finite("phi_i", phi_i).astype(float)
     ti, ts, ps, pi_ = broadcast_angles(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
-    name, module, report, make_nan = resolve_method(rough, k, method, out_of_range)
+    name, module, report, make_nan = resolve_method(rough, k, method, out_of_range, eps)
     result = module.bistatic(rough, eps, k, ti, ts, ps, pi_, **options)
     info = {**result.info, "validity": report}
     sigma0, coherent = result.sigma0, result.coherent
@@ -145,6 +147,29 @@ def backscatter(
     )
 
 
+def _integrate(module, rough, eps, k, ti, pi_, tol, options):
+    """(r_coh, r_incoh, error, evaluations) by the shared hemispherical quadrature."""
+    dims = (Ellipsis,) + (None,) * (1 if rough.dimension == 1 else 2)
+    # σ⁰ only inside the integral: skip a solver's coherent part when it offers to.
+    takes_flag = "coherent" in inspect.signature(module.bistatic).parameters
+    skip = {"coherent": False} if takes_flag else {}
+
+    def sigma0_fn(theta_s, phi_s):
+        res = module.bistatic(rough, eps, k, ti[dims], theta_s, phi_s, pi_[dims], **skip, **options)
+        return res.sigma0
+
+    r_inc, err, evals = hemispherical_reflectivity(
+        sigma0_fn,
+        ti,
+        pi_,
+        dimension=rough.dimension,
+        finest=lobe_width(rough, k),
+        tol=tol,
+    )
+    r_coh = module.bistatic(rough, eps, k, ti, ti, pi_, pi_, **options).coherent
+    return r_coh, r_inc, err, evals
+
+
 def emissivity(
     surface: Roughness,
     eps,
@@ -171,26 +196,12 @@ def emissivity(
     pi_ = np.broadcast_to(check_finite("phi_i", phi_i).astype(float), ti.shape)
     if not (isinstance(tol, int | float) and math.isfinite(tol) and tol > 0):
         raise ValueError(f"tol must be a positive finite number, got {tol!r}")
-    name, module, report, make_nan = resolve_method(rough, k, method, out_of_range)
-    dims = (Ellipsis,) + (None,) * (1 if rough.dimension == 1 else 2)
-    # σ⁰ only inside the integral: skip a solver's coherent part when it offers to.
-    takes_flag = "coherent" in inspect.signature(module.bistatic).parameters
-    skip = {"coherent": False} if takes_flag else {}
-
-    def sigma0_fn(theta_s, phi_s):
-        res = module.bistatic(rough, eps, k, ti[dims], theta_s, phi_s, pi_[dims], **skip, **options)
-        return res.sigma0
-
-    r_inc, err, evals = hemispherical_reflectivity(
-        sigma0_fn,
-        ti,
-        pi_,
-        dimension=rough.dimension,
-        finest=lobe_width(rough, k),
-        tol=tol,
-    )
-    flat = module.bistatic(rough, eps, k, ti, ti, pi_, pi_, **options)
-    r_coh = flat.coherent
+    name, module, report, make_nan = resolve_method(rough, k, method, out_of_range, eps)
+    if hasattr(module, "reflectivity"):  # e.g. the method of moments: its own far-field sums
+        r_coh, r_inc, err = module.reflectivity(rough, eps, k, ti, pi_, **options)
+        evals = 0
+    else:
+        r_coh, r_inc, err, evals = _integrate(module, rough, eps, k, ti, pi_, tol, options)
     e = 1.0 - r_coh - r_inc
     info = {"validity": report}
     if make_nan:

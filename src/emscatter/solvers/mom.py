@@ -67,6 +67,7 @@ __all__ = [
     "MomResult",
     "MomWarning",
     "bistatic",
+    "reflectivity",
     "check_validity",
     "incident_power",
     "incident_power_thorsos",
@@ -380,6 +381,36 @@ def _bistatic_many(roughness, eps, k, theta_i, theta_s, phi_s, phi_i, **kw) -> S
         sigma0=sigma0, coherent=coherent, method="mom", theta_i=ti, theta_s=ts, phi_s=ps,
         phi_i=pi_, k=float(k), dimension=1, info=info,
     )  # fmt: skip
+
+
+def reflectivity(roughness, eps, k: float, theta_i, phi_i=0.0, **options):
+    """Coherent and incoherent reflectivity of a 1-D profile by Monte Carlo MoM, per incident
+    polarization, for each incidence angle: ``(r_coh, r_incoh, std_error)``, each ``(2, *shape)``.
+
+    The incoherent part is the far-field integral of the incoherent intensity
+    (``r = 1/(2π cosθi) ∫σ⁰ dθs`` without a quadrature over a solver's σ⁰ — one Monte Carlo
+    run per distinct angle); ``std_error`` is the standard error of the reflected power
+    fraction. ``options`` as :func:`bistatic` (``realizations``, ``seed``, ``executor`` ...).
+    Used by :func:`emscatter.emissivity` for ``method="mom"``.
+    """
+    ti = np.asarray(theta_i, dtype=float)
+    phis = np.broadcast_to(np.asarray(phi_i, dtype=float), ti.shape).ravel()
+    out = np.empty((3, 2, ti.size))
+    for j, t in enumerate(ti.ravel()):
+        ph = float(phis[j])
+        res = bistatic(roughness, eps, k, float(t), float(t), ph, ph, **options)
+        per = res.info["per_polarization"]
+        for i, p in enumerate(("h", "v")):
+            if p in per:
+                out[:, i, j] = (
+                    per[p]["coherent_reflectivity"],
+                    per[p]["incoherent_reflectivity"],
+                    per[p]["reflected_se"],
+                )
+            else:
+                out[:, i, j] = np.nan
+    out = out.reshape(3, 2, *ti.shape)
+    return out[0], out[1], out[2]
 
 
 def check_validity(
