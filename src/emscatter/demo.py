@@ -5,7 +5,8 @@ Writes under ``out/`` (atomically):
 * ``surfaces/<kind>.png`` + ``surfaces/stats.json`` — Gaussian, exponential and fBm
   surfaces with their spectra, target statistics beside the measured ones;
 * ``figure_5_3.png`` + ``figure_5_3.csv`` — the seed's Figure 5.3 (SPM, see below);
-* ``emissivity.png`` + ``emissivity.csv`` — h/v emissivity of the same surfaces.
+* ``emissivity.png`` + ``emissivity.csv`` — h/v emissivity of the same surfaces;
+* ``methods_comparison.png`` + ``.csv`` — SPM, physical and geometric optics side by side.
 
 Figure 5.3 of the seed (ch. 5.4): Gaussian surface with correlation length τ = 1, relative
 permittivity ε = 17 + 2i, TE (h) incidence at θi = 45°, rms height σ varied, curves over
@@ -188,6 +189,83 @@ def emissivity_curves(out: Path, *, n_theta: int = 18) -> list[Path]:
     ]
 
 
+COMPARISON_CASES = (
+    ("slightly rough: σ = 0.02 m, ℓ = 1.5 m", 0.02, 1.5),  # kσ = 0.13, kℓ = 9.4
+    ("very rough: σ = 0.6 m, ℓ = 4 m", 0.6, 4.0),  # kσ = 3.8, kℓ = 25, slope 0.21
+)
+
+
+def methods_comparison(out: Path, *, n_theta: int = 179) -> list[Path]:
+    """σ⁰_hh and σ⁰_vv over θs (θi = 30°, φ = 0, λ = 1 m, ε = 17 + 2i) by SPM, physical and
+    geometric optics for two surfaces: SPM ≈ PO where the surface is slightly rough and
+    PO ≈ GO where it is very rough. Each curve is labelled valid / outside validity."""
+    import matplotlib.pyplot as plt
+
+    from . import api, solvers
+    from .io import save_figure, write_csv
+    from .spectra import GaussianCorrelation
+
+    th_deg = np.linspace(0.0, 89.5, n_theta)
+    th = np.radians(th_deg)
+    ti = math.radians(30.0)
+    k = 2 * math.pi
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.3))
+    cols, labels = [th_deg], ["theta_s_deg"]
+    for ax, (title, sigma, ell) in zip(axes, COMPARISON_CASES, strict=True):
+        rough = GaussianCorrelation(sigma, ell)
+        for j, method in enumerate(("spm", "po", "go")):
+            res = api.bistatic(
+                rough,
+                FIG53_EPS,
+                wavelength=1.0,
+                theta_i=ti,
+                theta_s=th,
+                phi_s=0.0,
+                method=method,
+                out_of_range="ignore",
+            )
+            valid = solvers.get(method).check_validity(rough, k)["valid"]
+            style = "-" if valid else ":"
+            tag = "valid" if valid else "outside validity"
+            color = f"C{j}"
+            ax.plot(
+                th_deg,
+                10 * np.log10(np.maximum(res.hh, 1e-30)),
+                style,
+                color=color,
+                label=f"{method.upper()} hh ({tag})",
+            )
+            ax.plot(
+                th_deg,
+                10 * np.log10(np.maximum(res.vv, 1e-30)),
+                style,
+                color=color,
+                alpha=0.45,
+                label=f"{method.upper()} vv",
+            )
+            if method == "po":
+                peak = float(np.max(10 * np.log10(np.maximum(res.hh, 1e-30))))
+            cols += [res.hh, res.vv]
+            labels += [f"{method}_hh_sigma{sigma:g}", f"{method}_vv_sigma{sigma:g}"]
+        ax.set_ylim(peak - 60, peak + 10)
+        ax.axvline(30, color="0.6", ls=":", lw=1)
+        ax.set_title(f"{title} (kσ = {k * sigma:.2f}, kℓ = {k * ell:.1f})", fontsize=9)
+        ax.set_xlabel("scattering angle θs [deg] (φ = 0, θi = 30°)")
+        ax.set_ylabel("σ⁰ [dB]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(
+        "Where approximations overlap — λ = 1 m, ε = 17 + 2i (solid: valid, dotted: "
+        "outside validity)",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    return [
+        save_figure(fig, out / "methods_comparison.png"),
+        write_csv(out / "methods_comparison.csv", labels, cols),
+    ]
+
+
 def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
     """Run every part of the demo into ``out``; returns the files written."""
     from .io import write_json
@@ -202,7 +280,7 @@ def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
     }
     written: list[Path] = []
     all_stats = {}
-    steps = list(surfaces) + ["figure 5.3", "emissivity"]
+    steps = list(surfaces) + ["figure 5.3", "emissivity", "methods"]
     for step in tqdm(steps, desc="emscatter demo", unit="step"):
         if step in surfaces:
             png = surf_dir / f"{step}.png"
@@ -210,7 +288,9 @@ def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
             written.append(png)
         elif step == "figure 5.3":
             written += figure_5_3(out, n_theta=89 if quick else 179)
-        else:
+        elif step == "emissivity":
             written += emissivity_curves(out, n_theta=10 if quick else 18)
+        else:
+            written += methods_comparison(out, n_theta=60 if quick else 179)
     written.append(write_json(surf_dir / "stats.json", all_stats))
     return written
