@@ -72,7 +72,10 @@ def surface_report(
         rough = roughness(kind, sigma=sigma, length=length, dimension=dim, **extra)
     shape = size if profile else (size, size)
     surf = generate_surface(rough, shape, spacing, periodic=periodic, rng=seed)
-    measured = summarize(surf.heights, surf.spacing, hurst=(kind in ("fbm", "power-law")))
+    model = kind if kind in ("gaussian", "exponential") else "1/e"  # fit the matching ACF
+    measured = summarize(
+        surf.heights, surf.spacing, hurst=(kind in ("fbm", "power-law")), model=model
+    )
     stats: dict = {"description": rough.describe(), "method": surf.method, "seed": seed}
     stats.update({f"target_{k}": v for k, v in _target_stats(rough).items()})
     skip = {"shape", "spacing"}
