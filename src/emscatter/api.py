@@ -20,20 +20,13 @@ from .emissivity import Emissivity, hemispherical_reflectivity, lobe_width
 from .fresnel import check_eps
 from .scattering import Scattering
 from .solvers import select
-from .spectra import Roughness
+from .spectra import Roughness, check_roughness
 
 __all__ = ["bistatic", "backscatter", "emissivity", "resolve_method"]
 
 
 def _check_roughness(surface) -> Roughness:
-    if isinstance(surface, Roughness):
-        return surface
-    raise TypeError(
-        "surface must be a roughness description from emscatter.spectra "
-        "(GaussianCorrelation, ExponentialCorrelation, PowerLawCorrelation), got "
-        f"{type(surface).__name__}; fractional Brownian statistics are for surface generation "
-        "and measurement, and a generated Surface carries its statistics in .target"
-    )
+    return check_roughness(surface, "surface")
 
 
 def resolve_method(roughness: Roughness, k: float, method: str, out_of_range: str, eps=None):

@@ -58,6 +58,7 @@ __all__ = [
     "PowerLawCorrelation",
     "FractionalBrownian",
     "roughness",
+    "check_roughness",
 ]
 
 
@@ -396,6 +397,18 @@ def roughness(kind: str, **params):
     if not isinstance(kind, str) or kind.lower() not in _NAMES:
         raise ValueError(f"kind must be one of {sorted(set(_NAMES))}, got {kind!r}")
     return _NAMES[kind.lower()](**params)
+
+
+def check_roughness(value, name: str = "roughness") -> Roughness:
+    """``value`` if it is a stationary :class:`Roughness`, else a TypeError naming ``name``."""
+    if not isinstance(value, Roughness):
+        raise TypeError(
+            f"{name} must be a roughness description from emscatter.spectra "
+            "(GaussianCorrelation, ExponentialCorrelation, PowerLawCorrelation), got "
+            f"{type(value).__name__}; fractional Brownian statistics are for surface generation "
+            "and measurement, and a generated Surface carries its statistics in .target"
+        )
+    return value
 
 
 def _numeric_nfold(rough: Roughness, n, kx, ky=0.0) -> np.ndarray:

@@ -41,7 +41,7 @@ from scipy import special
 
 from ..conventions import check_angle, check_finite, check_positive
 from ..fresnel import PEC, check_eps, is_pec
-from ..spectra import Roughness
+from ..spectra import Roughness, check_roughness
 
 __all__ = [
     "Geometry",
@@ -58,13 +58,6 @@ __all__ = [
 _TAU_EPS = 1e-28  # |k̂_i × k̂_s|² below this is treated as exact backscatter
 
 
-def check_roughness(roughness) -> Roughness:
-    if not isinstance(roughness, Roughness):
-        raise TypeError(
-            "roughness must be an emscatter.spectra Roughness (GaussianCorrelation, "
-            f"ExponentialCorrelation, PowerLawCorrelation), got {type(roughness).__name__}"
-        )
-    return roughness
 
 
 class Geometry:
