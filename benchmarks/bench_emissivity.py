@@ -10,7 +10,6 @@ Target (issue 3): 1e-4 absolute in ≤ 20 ms per θi and polarization.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import platform
@@ -36,9 +35,17 @@ TOLS = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7]
 
 
 def main() -> dict:
-    out = {"machine": {"nproc": os.cpu_count(), "python": sys.version.split()[0],
-                       "platform": platform.platform(), "numpy": np.__version__},
-           "eps": str(EPS), "theta_i_deg": np.degrees(THETA).tolist(), "cases": {}}
+    out = {
+        "machine": {
+            "nproc": os.cpu_count(),
+            "python": sys.version.split()[0],
+            "platform": platform.platform(),
+            "numpy": np.__version__,
+        },
+        "eps": str(EPS),
+        "theta_i_deg": np.degrees(THETA).tolist(),
+        "cases": {},
+    }
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4.2))
@@ -54,13 +61,26 @@ def main() -> dict:
                 times.append(time.perf_counter() - t0)
             per = statistics.median(times) / (THETA.size * 2)
             err = float(np.max(np.abs(e.emissivity - ref)))
-            rows.append({"tol": tol, "max_abs_error": err, "ms_per_theta_pol": per * 1e3,
-                         "evaluations": e.evaluations, "estimated_error": float(e.error.max())})
-            print(f"{method:4s} tol={tol:7.0e}  error={err:9.2e}  "
-                  f"{per * 1e3:7.3f} ms/(θi·pol)  evals={e.evaluations}")
+            rows.append(
+                {
+                    "tol": tol,
+                    "max_abs_error": err,
+                    "ms_per_theta_pol": per * 1e3,
+                    "evaluations": e.evaluations,
+                    "estimated_error": float(e.error.max()),
+                }
+            )
+            print(
+                f"{method:4s} tol={tol:7.0e}  error={err:9.2e}  "
+                f"{per * 1e3:7.3f} ms/(θi·pol)  evals={e.evaluations}"
+            )
         out["cases"][method] = {"roughness": rough.describe(), "rows": rows}
-        ax.loglog([r["ms_per_theta_pol"] for r in rows], [max(r["max_abs_error"], 1e-16)
-                  for r in rows], "o-", label=f"{method}: {rough.describe()}")
+        ax.loglog(
+            [r["ms_per_theta_pol"] for r in rows],
+            [max(r["max_abs_error"], 1e-16) for r in rows],
+            "o-",
+            label=f"{method}: {rough.describe()}",
+        )
     ax.axhline(1e-4, color="0.5", ls=":")
     ax.axvline(20, color="0.5", ls=":")
     ax.set_xlabel("run time per θi and polarization [ms] (median of 7)")

@@ -34,8 +34,9 @@ def test_backscatter_is_bistatic_in_the_backward_direction():
 
 
 def test_frequency_and_wavelength_agree():
-    a = em.bistatic(ROUGH, 4.0, frequency=em.constants.SPEED_OF_LIGHT, theta_i=0.3,
-                    theta_s=0.2, phi_s=1.0)
+    a = em.bistatic(
+        ROUGH, 4.0, frequency=em.constants.SPEED_OF_LIGHT, theta_i=0.3, theta_s=0.2, phi_s=1.0
+    )
     b = em.bistatic(ROUGH, 4.0, wavelength=1.0, theta_i=0.3, theta_s=0.2, phi_s=1.0)
     np.testing.assert_allclose(a.sigma0, b.sigma0, rtol=1e-12)
 
@@ -44,10 +45,12 @@ def test_emissivity_bounds_and_flat_limit():
     e = em.emissivity(ROUGH, 17 + 2j, wavelength=1.0, theta_i=TH[:-1])
     assert np.all((e.emissivity >= 0) & (e.emissivity <= 1))
     assert np.all(e.error < 1e-4)
-    flat = em.emissivity(em.GaussianCorrelation(1e-7, 0.5), 17 + 2j, wavelength=1.0,
-                         theta_i=TH[:-1])
-    np.testing.assert_allclose(flat.emissivity, 1 - em.fresnel.reflectivity(17 + 2j, TH[:-1]),
-                               atol=1e-8)
+    flat = em.emissivity(
+        em.GaussianCorrelation(1e-7, 0.5), 17 + 2j, wavelength=1.0, theta_i=TH[:-1]
+    )
+    np.testing.assert_allclose(
+        flat.emissivity, 1 - em.fresnel.reflectivity(17 + 2j, TH[:-1]), atol=1e-8
+    )
 
 
 def test_out_of_range_policies():

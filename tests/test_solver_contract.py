@@ -10,10 +10,10 @@ import warnings
 
 import numpy as np
 import pytest
-from laws import assert_flat_limit, assert_physical, assert_reciprocal
 
 from emscatter import solvers
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
+from laws import assert_flat_limit, assert_physical, assert_reciprocal
 
 METHODS = ["spm", "go", "po"]
 K = 2 * math.pi  # λ = 1 m

@@ -58,8 +58,6 @@ __all__ = [
 _TAU_EPS = 1e-28  # |k̂_i × k̂_s|² below this is treated as exact backscatter
 
 
-
-
 class Geometry:
     """Checked, broadcast angles; trigonometry flattened to 1-D (kept 0-d when scalar)."""
 

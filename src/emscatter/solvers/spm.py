@@ -74,16 +74,7 @@ __all__ = ["VALIDITY", "bistatic", "coherent_reflectivity", "check_validity"]
 #: kσ < 0.3 and rms slope < 0.3; Thorsos & Jackson 1989). ``rms_slope`` is the per-direction
 #: rms slope √⟨h_x²⟩ (for a Gaussian correlation √2 σ/ℓ); for non-differentiable spectra it is
 #: computed with the short-wavelength cutoff ``k_max = 2k`` (the Bragg band the wave sees).
-#: ``k_sigma_k_l_max``: kσ·kℓ ≤ 3, from the method-of-moments validity map
-#: (validation/validity_maps/, 1-D Gaussian, PEC, θi = 20°): at kσ ≈ 0.2 first-order SPM σ⁰
-#: is within 1 dB up to kℓ ≈ 11 (kσ·kℓ ≈ 2.1) but 1.3 dB off at kℓ = 20 (kσ·kℓ ≈ 3.9), where
-#: physical optics is within 0.8 dB (large kℓ needs smaller kσ; Thorsos & Jackson 1989).
-VALIDITY = {
-    "k_sigma_max": 0.3,
-    "rms_slope_max": 0.3,
-    "slope_cutoff_factor": 2.0,
-    "k_sigma_k_l_max": 3.0,
-}
+VALIDITY = {"k_sigma_max": 0.3, "rms_slope_max": 0.3, "slope_cutoff_factor": 2.0}
 
 _CHUNK = 1 << 15  # geometries per vectorized block (cache-friendly)
 
@@ -706,8 +697,7 @@ def check_validity(roughness: Roughness, k: float) -> dict:
     """SPM validity report: ``{"valid", "k_sigma", "k_length", "rms_slope", "reasons"}``.
 
     Criteria (:data:`VALIDITY`; Ulaby, Moore & Fung 1982 vol. II ch. 12, Thorsos & Jackson
-    1989): ``kσ ≤ 0.3``, ``kσ·kℓ ≤ 3`` (MoM validity map, shortest ``ℓ``) and per-direction
-    rms slope ``≤ 0.3`` (the largest of the two
+    1989): ``kσ ≤ 0.3`` and per-direction rms slope ``≤ 0.3`` (the largest of the two
     directions for anisotropic surfaces; for non-differentiable correlations the slope of the
     spectrum below ``k_max = 2k``).
     """
@@ -725,8 +715,6 @@ def check_validity(roughness: Roughness, k: float) -> dict:
         reasons.append(f"k*sigma = {ks:.3g} > {VALIDITY['k_sigma_max']}")
     if slope > VALIDITY["rms_slope_max"]:
         reasons.append(f"rms slope = {slope:.3g} > {VALIDITY['rms_slope_max']}")
-    if ks * kl > VALIDITY["k_sigma_k_l_max"]:
-        reasons.append(f"k*sigma * k*l = {ks * kl:.3g} > {VALIDITY['k_sigma_k_l_max']}")
     return {
         "valid": not reasons,
         "k_sigma": ks,
