@@ -306,3 +306,15 @@ def test_agrees_with_physical_optics_for_large_k_ell():
         for lo, hi in main_lobe:
             d = _window_db(res, signed, lo, hi, p) - _window_db(ref, signed, lo, hi, p)
             assert abs(d) < 1.0, (lo, hi, p, d)
+
+
+def test_correlation_length_below_grid_spacing_fails_before_running():
+    import math
+
+    from emscatter.solvers import mom
+    from emscatter.spectra import GaussianCorrelation
+
+    k = 2 * math.pi
+    rough = GaussianCorrelation(0.05 / k, 0.5 / k, dimension=1)  # kℓ = 0.5: ℓ < λ/10
+    with pytest.raises(ValueError, match="coarser than the correlation length"):
+        mom.bistatic(rough, "pec", k, 0.3, 0.3, realizations=4, seed=0, progress=False)

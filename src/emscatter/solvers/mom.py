@@ -261,6 +261,12 @@ def bistatic(
         else check_positive("length", length, unit="m")
     )
     x, dx = _grid(k, eps, length, ppw)
+    if corr is not None and dx > corr:  # fail before any realization is drawn
+        raise ValueError(
+            f"points_per_wavelength={ppw:g} gives a grid spacing dx = {dx:.4g} m coarser than "
+            f"the correlation length {corr:.4g} m; use points_per_wavelength >= "
+            f"{ppw * dx / corr * 5:.3g} (≥ 5 points per correlation length)"
+        )
     length = x.size * dx
     g = length / 4 if taper_g is None else check_positive("taper_g", taper_g, unit="m")
     _check_taper(g, length, k, theta_i)
