@@ -103,3 +103,19 @@ def test_unknown_polarization_pair():
 def test_emissivity_bad_tol():
     with pytest.raises(ValueError, match="tol must be"):
         em.emissivity(ROUGH, 4.0, wavelength=1.0, theta_i=0.2, tol=0)
+
+
+def test_fallback_ranks_methods_by_how_far_their_limits_are_exceeded():
+    from emscatter.solvers.select import select_method
+
+    k = 2 * math.pi
+    # kσ = 3, kℓ = 5.8: no method is valid. SPM is 10× past its kσ limit (17 dB off against
+    # the method of moments, validation/validity_maps), geometric optics just short of kσ = √10
+    # and kℓ = 6 (1.8 dB off): the fallback must be a Kirchhoff method, not SPM.
+    name, reports = select_method(em.GaussianCorrelation(3 / k, 5.8 / k), k)
+    assert not any(r["valid"] for r in reports.values())
+    assert name in ("go", "po")
+    assert reports["spm"]["excess"] > reports[name]["excess"] > 0
+    # a valid report has no excess
+    name, reports = select_method(em.GaussianCorrelation(0.05 / k, 2 / k), k)
+    assert name == "spm" and reports["spm"]["excess"] == 0

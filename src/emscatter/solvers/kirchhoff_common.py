@@ -354,13 +354,19 @@ def workers_for(threads, n_chunks: int) -> int:
     return int(min(threads, n_chunks))
 
 
-def validity_report(roughness: Roughness, k: float, checks: list[tuple[str, bool, str]]) -> dict:
-    """``{"valid", "reasons", "checks", "k_sigma", "k_l"}`` from (name, ok, text) triples."""
-    reasons = [text for _, ok, text in checks if not ok]
+def validity_report(roughness: Roughness, k: float, checks: list[tuple]) -> dict:
+    """``{"valid", "reasons", "checks", "excess", "k_sigma", "k_l"}`` from
+    ``(name, ok, text[, ratio])`` tuples; ``ratio`` ≥ 1 says by what factor a failed criterion
+    is exceeded, and ``excess = max log(ratio)`` over failed criteria (0 when valid, inf when a
+    failed criterion gives no ratio) ranks out-of-range methods in ``select_method``."""
+    reasons = [c[2] for c in checks if not c[1]]
+    failed = [c[3] if len(c) > 3 else math.inf for c in checks if not c[1]]
+    excess = max((math.log(max(r, 1.0)) for r in failed), default=0.0)
     return {
         "valid": not reasons,
         "reasons": reasons,
-        "checks": {name: ok for name, ok, _ in checks},
+        "checks": {c[0]: c[1] for c in checks},
+        "excess": excess,
         "k_sigma": k * roughness.sigma,
         "k_l": k * roughness.length,
     }

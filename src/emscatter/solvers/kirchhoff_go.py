@@ -80,18 +80,36 @@ def check_validity(roughness, k: float, *, k_max=None, slope_variance=None) -> d
     lam = 2 * math.pi / k
     v = VALIDITY
     checks = [
-        ("k_l", kl > v["k_l_min"], f"kℓ = {kl:.3g} ≤ {v['k_l_min']} (tangent plane)"),
+        (
+            "k_l",
+            kl > v["k_l_min"],
+            f"kℓ = {kl:.3g} ≤ {v['k_l_min']} (tangent plane)",
+            v["k_l_min"] / kl,
+        ),
         (
             "curvature",
             rough.length**2 > v["curvature_factor"] * rough.sigma * lam,
             f"ℓ² = {rough.length**2:.3g} ≤ 2.76 σλ = {2.76 * rough.sigma * lam:.3g} m²",
+            v["curvature_factor"] * rough.sigma * lam / rough.length**2,
         ),
-        ("k_sigma", ks > v["k_sigma_min"], f"kσ = {ks:.3g} ≤ √10 (stationary phase)"),
+        (
+            "k_sigma",
+            ks > v["k_sigma_min"],
+            f"kσ = {ks:.3g} ≤ √10 (stationary phase)",
+            v["k_sigma_min"] / ks,
+        ),
     ]
     try:
         sx, sy = slope_variances(rough, k_max, slope_variance)
         m = math.sqrt(sx + sy)
-        checks.append(("rms_slope", m < v["rms_slope_max"], f"rms slope m = {m:.3g} ≥ 1"))
+        checks.append(
+            (
+                "rms_slope",
+                m < v["rms_slope_max"],
+                f"rms slope m = {m:.3g} ≥ 1",
+                m / v["rms_slope_max"],
+            )
+        )
     except ValueError as exc:
         checks.append(("rms_slope", False, str(exc)))
     return validity_report(rough, k, checks)

@@ -62,13 +62,13 @@ __all__ = ["bistatic", "check_validity", "VALIDITY", "series_sum", "log_nfold"]
 
 #: Validity of the scalar (physical-optics) Kirchhoff approximation. Textbook limits (Ulaby,
 #: Moore & Fung 1982 vol. II §12-4, Table 12.2): ``kℓ > 6``, ``ℓ² > 2.76 σλ``, rms slope
-#: ``m < 0.25``. Here ``kℓ > 3`` and ``m < 0.7``, from the method-of-moments validity maps
+#: ``m < 0.25``. Here ``kℓ > 4`` and ``m < 0.4``, from the method-of-moments validity maps
 #: (validation/validity_maps/, 1-D Gaussian, θi = 20°, 128 realizations): PO σ⁰ is within 1 dB
-#: for kℓ ≥ 5.8 and m ≤ 0.39 (PEC and ε = 3); at kℓ ≈ 3.2 it is within 1 dB for ε = 3 when
-#: kσ ≥ 0.2 (0.9–1.0 dB) but 1.1–1.9 dB off for PEC, and at m ≈ 0.65 0.9–1.0 dB (ε = 3) and
-#: 1.3–1.8 dB (PEC). The looser limits keep ``method="auto"`` from falling back to SPM where
-#: kσ > 0.3 (SPM 1.3–11 dB off) when PO is within 1 dB or the best of the three.
-VALIDITY = {"k_l_min": 3.0, "curvature_factor": 2.76, "rms_slope_max": 0.7}
+#: for kℓ ≥ 5.8 and m ≤ 0.39 (PEC and ε = 3), but 1.1–1.9 dB off for PEC at kℓ ≈ 3.2 and
+#: 1.3–1.8 dB at m ≈ 0.65. Outside every method's range, ``method="auto"`` takes the method
+#: whose criteria are exceeded by the smallest factor (report ``"excess"``), which is PO in
+#: those cells rather than SPM at kσ > 0.3 (1.3–17 dB off).
+VALIDITY = {"k_l_min": 4.0, "curvature_factor": 2.76, "rms_slope_max": 0.4}
 
 _LOG_2PI = math.log(2 * math.pi)
 _BLOCK = 1 << 15  # geometries per series block (one thread each)
@@ -82,17 +82,28 @@ def check_validity(roughness, k: float, *, k_max=None) -> dict:
     lam = 2 * math.pi / k
     v = VALIDITY
     checks = [
-        ("k_l", kl > v["k_l_min"], f"kℓ = {kl:.3g} ≤ {v['k_l_min']} (tangent plane)"),
+        (
+            "k_l",
+            kl > v["k_l_min"],
+            f"kℓ = {kl:.3g} ≤ {v['k_l_min']} (tangent plane)",
+            v["k_l_min"] / kl,
+        ),
         (
             "curvature",
             min(rough.length, rough.length_y) ** 2 > v["curvature_factor"] * rough.sigma * lam,
             f"ℓ² ≤ 2.76 σλ = {2.76 * rough.sigma * lam:.3g} m²",
+            v["curvature_factor"] * rough.sigma * lam / min(rough.length, rough.length_y) ** 2,
         ),
     ]
     try:
         m = math.sqrt(rough.total_mean_square_slope(k_max))
         checks.append(
-            ("rms_slope", m < v["rms_slope_max"], f"rms slope m = {m:.3g} ≥ {v['rms_slope_max']}")
+            (
+                "rms_slope",
+                m < v["rms_slope_max"],
+                f"rms slope m = {m:.3g} ≥ {v['rms_slope_max']}",
+                m / v["rms_slope_max"],
+            )
         )
     except ValueError as exc:
         checks.append(("rms_slope", False, str(exc)))

@@ -9,6 +9,7 @@ that is valid. Outside every validity range the least-bad candidate is used and 
 
 from __future__ import annotations
 
+import math
 import warnings
 from typing import Literal
 
@@ -38,8 +39,9 @@ def validity(roughness, k: float, methods=AUTO_ORDER) -> dict[str, dict]:
 
 
 def select_method(roughness, k: float, methods=AUTO_ORDER) -> tuple[str, dict]:
-    """The cheapest valid method, and all reports. If none is valid, the one with the
-    fewest violated criteria (ties: cheapest) is returned with ``valid=False``."""
+    """The cheapest valid method, and all reports. If none is valid, the one whose criteria
+    are exceeded by the smallest factor (report ``"excess"`` = max log(value/limit); ties:
+    fewer violated criteria, then cheaper) is returned with ``valid=False``."""
     reports = {}
     for name in methods:
         try:
@@ -54,7 +56,15 @@ def select_method(roughness, k: float, methods=AUTO_ORDER) -> tuple[str, dict]:
             "no solver supports this roughness: "
             + "; ".join(f"{n}: {r['reasons'][0]}" for n, r in reports.items())
         )
-    best = min(supported, key=lambda n: len(reports[n].get("reasons", [])))
+    order = {n: i for i, n in enumerate(methods)}
+    best = min(
+        supported,
+        key=lambda n: (
+            reports[n].get("excess", math.inf),
+            len(reports[n].get("reasons", [])),
+            order[n],
+        ),
+    )
     return best, reports
 
 

@@ -715,12 +715,15 @@ def check_validity(roughness: Roughness, k: float) -> dict:
         reasons.append(f"k*sigma = {ks:.3g} > {VALIDITY['k_sigma_max']}")
     if slope > VALIDITY["rms_slope_max"]:
         reasons.append(f"rms slope = {slope:.3g} > {VALIDITY['rms_slope_max']}")
+    ratios = (ks / VALIDITY["k_sigma_max"], slope / VALIDITY["rms_slope_max"])
     return {
         "valid": not reasons,
         "k_sigma": ks,
         "k_length": kl,
         "rms_slope": slope,
         "reasons": reasons,
+        # log of the largest factor by which a criterion is exceeded (ranks fallbacks)
+        "excess": max([0.0, *(math.log(r) for r in ratios if r > 0)]),
     }
 
 
