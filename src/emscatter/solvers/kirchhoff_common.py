@@ -53,6 +53,7 @@ __all__ = [
     "shadowing_factor",
     "check_roughness",
     "validity_report",
+    "tangent_plane_checks",
 ]
 
 _TAU_EPS = 1e-28  # |k̂_i × k̂_s|² below this is treated as exact backscatter
@@ -352,6 +353,29 @@ def workers_for(threads, n_chunks: int) -> int:
     if isinstance(threads, bool) or not isinstance(threads, int | np.integer) or threads < 1:
         raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
     return int(min(threads, n_chunks))
+
+
+def tangent_plane_checks(rough: Roughness, k: float, validity: dict) -> list[tuple]:
+    """The Kirchhoff tangent-plane criteria shared by GO and PO (Ulaby, Moore & Fung 1982
+    vol. II §12-4): ``kℓ > k_l_min`` and radius of curvature ``ℓ² > curvature_factor · σλ``
+    with the shorter correlation length; ``(name, ok, text, ratio)`` tuples."""
+    kl = k * rough.length
+    ell2 = min(rough.length, rough.length_y) ** 2
+    curv = validity["curvature_factor"] * rough.sigma * 2 * math.pi / k
+    return [
+        (
+            "k_l",
+            kl > validity["k_l_min"],
+            f"kℓ = {kl:.3g} ≤ {validity['k_l_min']} (tangent plane)",
+            validity["k_l_min"] / kl,
+        ),
+        (
+            "curvature",
+            ell2 > curv,
+            f"ℓ² = {ell2:.3g} ≤ {validity['curvature_factor']} σλ = {curv:.3g} m²",
+            curv / ell2,
+        ),
+    ]
 
 
 def validity_report(roughness: Roughness, k: float, checks: list[tuple]) -> dict:

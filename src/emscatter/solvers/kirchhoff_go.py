@@ -52,6 +52,7 @@ from .kirchhoff_common import (
     geometry,
     shadowing_factor,
     slope_variances,
+    tangent_plane_checks,
     validity_report,
     workers_for,
 )
@@ -76,22 +77,10 @@ def check_validity(roughness, k: float, *, k_max=None, slope_variance=None) -> d
     """Validity report ``{"valid", "reasons", "checks", ...}`` for ``k`` [rad/m]."""
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
-    ks, kl = k * rough.sigma, k * rough.length
-    lam = 2 * math.pi / k
+    ks = k * rough.sigma
     v = VALIDITY
     checks = [
-        (
-            "k_l",
-            kl > v["k_l_min"],
-            f"kℓ = {kl:.3g} ≤ {v['k_l_min']} (tangent plane)",
-            v["k_l_min"] / kl,
-        ),
-        (
-            "curvature",
-            rough.length**2 > v["curvature_factor"] * rough.sigma * lam,
-            f"ℓ² = {rough.length**2:.3g} ≤ 2.76 σλ = {2.76 * rough.sigma * lam:.3g} m²",
-            v["curvature_factor"] * rough.sigma * lam / rough.length**2,
-        ),
+        *tangent_plane_checks(rough, k, v),
         (
             "k_sigma",
             ks > v["k_sigma_min"],

@@ -54,6 +54,7 @@ from .kirchhoff_common import (
     coherent_local,
     fresnel_factors,
     geometry,
+    tangent_plane_checks,
     validity_report,
     workers_for,
 )
@@ -78,23 +79,8 @@ def check_validity(roughness, k: float, *, k_max=None) -> dict:
     """Validity report ``{"valid", "reasons", "checks", ...}`` for ``k`` [rad/m]."""
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
-    kl = k * rough.length
-    lam = 2 * math.pi / k
     v = VALIDITY
-    checks = [
-        (
-            "k_l",
-            kl > v["k_l_min"],
-            f"kℓ = {kl:.3g} ≤ {v['k_l_min']} (tangent plane)",
-            v["k_l_min"] / kl,
-        ),
-        (
-            "curvature",
-            min(rough.length, rough.length_y) ** 2 > v["curvature_factor"] * rough.sigma * lam,
-            f"ℓ² ≤ 2.76 σλ = {2.76 * rough.sigma * lam:.3g} m²",
-            v["curvature_factor"] * rough.sigma * lam / min(rough.length, rough.length_y) ** 2,
-        ),
-    ]
+    checks = tangent_plane_checks(rough, k, v)
     try:
         m = math.sqrt(rough.total_mean_square_slope(k_max))
         checks.append(
