@@ -21,9 +21,10 @@ grazing directions, on both the incident and the outgoing side.
 
 ``s`` is found by a monotone fixed-point iteration on the exact albedo of the interpolated
 table (:meth:`~.table.BrdfTable.outgoing_weights`): ``A_i = s_i Σ_o K_io s_o + R_coh,i`` with
-``K_io = Σ W_o f_io``; rows with ``A_i > 1`` get ``s_i ← s_i √((1 − R_coh,i)/(A_i − R_coh,i))``
-(the square root because the specular lobe of row ``i`` lies mostly on column ``i``), until
-every ``A_i ≤ 1``. ``s`` only decreases, so rows that were fine stay fine. The coherent
+``K_io = Σ W_o f_io``: ``s_i ← min(1, s_i √((1 − R_coh,i)/(A_i − R_coh,i)))`` (the square
+root because the specular lobe of row ``i`` lies mostly on column ``i``; a capped symmetric
+Sinkhorn scaling) until it settles, so every row that is reduced ends at albedo 1 and every
+other keeps ``s = 1``; a final decrease-only pass guarantees ``A_i ≤ 1`` to rounding. The coherent
 delta lobe is left as the solver gave it (it is ≤ 1 by construction). Where and by how much
 the remedy acted is recorded in ``metadata["energy"]``.
 """
@@ -54,6 +55,16 @@ def reciprocal_energy_scale(kernel: np.ndarray, coherent: np.ndarray, limit: flo
     if np.any(budget < 0):
         raise ValueError(f"coherent reflectivity exceeds {limit} on its own: {c.max()!r}")
     s = np.ones(k.shape[0])
+    # 1) two-sided fixed point s_i ← min(1, s_i √(b_i / A_i)): rows that are reduced end at the
+    #    limit, rows that are not keep s = 1 (a symmetric Sinkhorn scaling with a cap)
+    for _ in range(_MAX_ITER):
+        inc = s * (k @ s)
+        ratio = budget / np.maximum(inc, 1e-300)
+        new = np.minimum(1.0, s * np.sqrt(ratio))
+        if np.max(np.abs(new - s)) < 1e-13:
+            break
+        s = new
+    # 2) monotone guarantee: only decrease until every row is within the limit
     for it in range(_MAX_ITER):
         inc = s * (k @ s)
         over = inc > budget
