@@ -41,6 +41,7 @@ REMEDY = (
 )
 
 _MAX_ITER = 500
+_MARGIN = 1e-12  # target 1 − 1e-12 so that albedo sums in any order stay ≤ 1
 
 
 def reciprocal_energy_scale(kernel: np.ndarray, coherent: np.ndarray, limit: float = 1.0):
@@ -113,7 +114,7 @@ def apply_energy_remedy(table, *, limit: float = 1.0):
                 .round(4)
                 .tolist()
             )
-        s, _ = reciprocal_energy_scale(kern, c, limit)
+        s, _ = reciprocal_energy_scale(kern, c, limit - _MARGIN)
         if np.any(s < 1):
             applied = True
             if table.isotropic:
