@@ -404,27 +404,27 @@ def _bsdf_class(mi):
             )
             return dr.select(keep, i, a), dr.clip(v, 0.0, 1.0)
 
-        def _half_vector_u(self, si, m):
-            th_m = elevation(m)
+        def _cell(self, si, m):
+            """(row, col) of half-vector ``m`` in the sampling grid."""
+            n = self._n
             phi_m = dr.atan2(m.y, m.x)
             if self._data.isotropic:
                 phi_m = phi_m - dr.atan2(si.wi.y, si.wi.x)
             uy = (phi_m + math.pi) * (0.5 / math.pi)
-            return th_m, mi.Point2f(dr.sqrt(th_m * (2.0 / math.pi)), uy - dr.floor(uy))
+            uy = uy - dr.floor(uy)
+            ux = dr.sqrt(elevation(m) * (2.0 / math.pi))
+            return dr.minimum(mi.UInt32(uy * n), n - 1), dr.minimum(mi.UInt32(ux * n), n - 1)
 
         def _glossy_pdf(self, si, wo, active):
-            wi = si.wi
-            m = dr.normalize(wi + wo)
-            th_m, u = self._half_vector_u(si, m)
-            n = self._n
-            row = dr.minimum(mi.UInt32(u.y * n), n - 1)
-            col = dr.minimum(mi.UInt32(u.x * n), n - 1)
-            pdf_u = self._density(self._slices(si), row, col, active)
-            jac = 8 * math.pi**2 * u.x * dr.sin(th_m) * dr.dot(wi, m)
-            return dr.select(active & (jac > 0), pdf_u / jac, 0.0)
+            """Density [1/sr] of ``wo``: the half-vector's cell density over 4 (wi·h)."""
+            m = dr.normalize(si.wi + wo)
+            row, col = self._cell(si, m)
+            dens = self._density(self._slices(si), row, col, active)
+            dot = dr.dot(si.wi, m)
+            return dr.select(active & (dot > 0), dens / (4.0 * dot), 0.0)
 
         def _sample_glossy(self, si, xi, sample2, active):
-            """Half-vector from the alias tables: ``(wo, pdf)``; ``xi`` picks the node."""
+            """``(wo, pdf)`` from the alias tables; ``xi`` picks the incident node."""
             slices = self._slices(si)
             if len(slices) == 2:
                 (i0, _), (i1, t) = slices
@@ -445,19 +445,20 @@ def _bsdf_class(mi):
             n = self._n
             row, vy = self._pick(self._mprob, self._malias, idx * n, sample2.y, active)
             col, vx = self._pick(self._cprob, self._calias, (idx * n + row) * n, sample2.x, active)
-            u = mi.Point2f((mi.Float(col) + vx) * (1.0 / n), (mi.Float(row) + vy) * (1.0 / n))
-            pdf_u = self._density(slices, row, col, active)
-            th_m = dr.square(u.x) * (0.5 * math.pi)
-            phi_m = (2.0 * u.y - 1.0) * math.pi
+            dens = self._density(slices, row, col, active)
+            # uniform in the cell's solid angle: φh linear in the row, cosθh linear in the column
+            phi_m = (2.0 * (mi.Float(row) + vy) * (1.0 / n) - 1.0) * math.pi
             if self._data.isotropic:
                 phi_m = phi_m + dr.atan2(si.wi.y, si.wi.x)
-            s_t, c_t = dr.sincos(th_m)
+            ca = dr.cos(dr.square(mi.Float(col) * (1.0 / n)) * (0.5 * math.pi))
+            cb = dr.cos(dr.square(mi.Float(col + 1) * (1.0 / n)) * (0.5 * math.pi))
+            c_t = dr.lerp(ca, cb, vx)
+            s_t = dr.safe_sqrt(1.0 - dr.square(c_t))
             s_p, c_p = dr.sincos(phi_m)
             m = mi.Vector3f(c_p * s_t, s_p * s_t, c_t)
             dot = dr.dot(si.wi, m)
             wo = dr.fma(m, 2.0 * dot, -si.wi)
-            jac = 8 * math.pi**2 * u.x * s_t * dot
-            return wo, dr.select(jac > 0, pdf_u / jac, 0.0)
+            return wo, dr.select(dot > 0, dens / (4.0 * dot), 0.0)
 
         # ---------------------------------------------------------------- BSDF interface
         def eval(self, ctx, si, wo, active=True):

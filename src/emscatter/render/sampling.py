@@ -1,34 +1,34 @@
 """Importance sampling of a tabulated BRDF: a marginal/conditional distribution of half-vectors.
 
-For each incident node (θi, and φi for anisotropic tables) the reflected power
-``f_r cosθo |dωo/du|`` is tabulated at the cell centres of an n × n grid on the unit square of
-half-vectors ``u = (√(2θh/π), (φh − φi)/2π + ½)`` (``φh`` absolute for anisotropic tables;
-rows u_φ, columns u_θ). The density is piecewise constant on the cells; a sample draws the row
-from the marginal distribution and the column from the row's conditional distribution, each by
-Walker's alias method (O(1): one uniform variate picks a bin and, from its leftover bits,
-whether to take the bin or its alias; what is left positions the sample inside the cell), so
-the density returned is exact for the samples drawn. Between incident nodes the distribution
-is the mixture of the neighbouring nodes' (weights linear in θi, φi), sampled by picking one
-node at random with those weights.
+For each incident node (θi, and φi for anisotropic tables) an n × n grid of cells covers the
+half-vector hemisphere: rows split ``φh − φi`` (``φh`` for anisotropic tables) uniformly over
+``[−π, π)``, columns split ``θh`` at ``(c/n)² · π/2`` (the ``u_θ = √(2θh/π)`` spacing of
+Mitsuba's ``measured``, fine near the mirror direction). Each cell's probability is the
+reflected power ``f_r cosθo dωo`` through it (midpoint rule, ``dωo = 4 (wi·h) dωh``); a sample
+draws the row from the marginal distribution and the column from the row's conditional
+distribution, each by Walker's alias method (O(1): one uniform variate picks a bin and, from its
+leftover bits, whether to take the bin or its alias), then a half-vector uniformly in the cell's
+solid angle (uniform in φh and cosθh). The density is thus piecewise constant in half-vector
+solid angle, ``p(ωo) = P_cell / (Ω_cell · 4 wi·h)``, exact for the samples drawn and finite at
+the mirror direction. Between incident nodes the distribution is the mixture of the
+neighbouring nodes' (weights linear in θi, φi), sampled by picking one node with those weights.
 
 Cells whose reflected direction is below the horizon take the value of the nearest valid
 cell, so no direction where ``f_r > 0`` has zero density (samples that land below the horizon
 are discarded by the BSDF with weight 0).
 
-``|dωo/du|``: ``θh = u_θ² π/2``, ``φh = 2π u_φ − π`` ⇒ ``dωh = 2π² u_θ sinθh du``, and
-``dωo = 4 (wi·h) dωh`` (the half-vector Jacobian, Walter et al. 2007 eq. 14).
+``dωo = 4 (wi·h) dωh``: the half-vector Jacobian (Walter et al. 2007, eq. 14).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..brdf.rgl_warp import direction, fill_from_neighbours, u2phi, u2theta
 
-__all__ = ["HalfVectorSampler", "alias_table", "build_sampler", "half_vector_jacobian"]
+__all__ = ["HalfVectorSampler", "alias_table", "build_sampler", "cell_edges"]
 
 
 def alias_table(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -61,17 +61,19 @@ def alias_table(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return prob.reshape(*lead, n), alias.reshape(*lead, n)
 
 
-def half_vector_jacobian(u_theta, theta_h, wi_dot_h):
-    """``|dωo/du|`` [sr] of the half-vector square (module docstring)."""
-    return 8 * math.pi**2 * u_theta * np.sin(theta_h) * np.maximum(wi_dot_h, 0.0)
+def cell_edges(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Column edges in θh [rad] (n+1) and row edges in φh − φi [rad] (n+1)."""
+    e = np.arange(n + 1) / n
+    return u2theta(e), u2phi(e)
 
 
 @dataclass(frozen=True)
 class HalfVectorSampler:
     """Alias tables and densities, one slice per incident node (float32 / uint32).
 
-    ``density[..., r, c]``: density w.r.t. u on cell (row r = u_φ, column c = u_θ), each slice
-    integrating to 1. Slices are indexed ``[i_theta]`` (isotropic) or ``[i_phi, i_theta]``.
+    ``density[..., r, c]``: probability per steradian of half-vector in cell (row r, column c),
+    each slice summing to 1 over the hemisphere. Slices are indexed ``[i_theta]`` (isotropic)
+    or ``[i_phi, i_theta]``.
     """
 
     theta_i: np.ndarray  # [rad] uniform nodes
@@ -87,8 +89,8 @@ class HalfVectorSampler:
         return self.density.shape[-1]
 
     def sample(self, slice_index: int, ux, uy):
-        """numpy reference of the plugin's sampling in one slice (flat index): returns
-        ``(u_θ, u_φ, density)`` for uniform variates ``ux``, ``uy`` (arrays)."""
+        """numpy reference of the plugin's sampling in one slice (flat index): returns the
+        half-vector ``(θh, φh − φi)`` [rad] and its density [1/sr] for uniform variates."""
         n = self.resolution
         ux, uy = np.asarray(ux, float), np.asarray(uy, float)
         mp = self.marginal_prob.reshape(-1, n)[slice_index]
@@ -99,8 +101,11 @@ class HalfVectorSampler:
         cp = self.conditional_prob.reshape(-1, n, n)[slice_index, row]
         ca = self.conditional_alias.reshape(-1, n, n)[slice_index, row]
         col, vx = _alias_pick(cp, ca, ux)
+        th_e, ph_e = cell_edges(n)
+        cos_t = np.cos(th_e[col]) + (np.cos(th_e[col + 1]) - np.cos(th_e[col])) * vx
+        phi = ph_e[row] + (ph_e[row + 1] - ph_e[row]) * vy
         dens = self.density.reshape(-1, n, n)[slice_index, row, col]
-        return (col + vx) / n, (row + vy) / n, dens
+        return np.arccos(np.clip(cos_t, -1, 1)), phi, dens
 
 
 def _alias_pick(prob: np.ndarray, alias: np.ndarray, u: np.ndarray):
@@ -122,9 +127,10 @@ def build_sampler(source, weights: np.ndarray, theta_i, phi_i, n: int) -> HalfVe
 
     ``weights`` (n_source_channels,): how channels combine into the sampled quantity.
     """
-    u = (np.arange(n) + 0.5) / n
-    th_h = u2theta(u)[None, :]  # columns u_θ
-    ph_h = u2phi(u)[:, None]  # rows u_φ
+    th_e, ph_e = cell_edges(n)
+    th_h = 0.5 * (th_e[:-1] + th_e[1:])[None, :]  # columns: θh
+    ph_h = 0.5 * (ph_e[:-1] + ph_e[1:])[:, None]  # rows: φh (− φi)
+    solid = (np.cos(th_e[:-1]) - np.cos(th_e[1:]))[None, :] * np.diff(ph_e)[:, None]  # Ω_cell
     h = direction(th_h, ph_h)  # (n, n, 3)
     if phi_i is None:
         wi = direction(np.asarray(theta_i), 0.0)  # (n_ti, 3), φi = 0: relative φh = absolute
@@ -139,19 +145,19 @@ def build_sampler(source, weights: np.ndarray, theta_i, phi_i, n: int) -> HalfVe
     f = np.zeros(ok.shape)
     if ok.any():
         f[ok] = source.evaluate(np.broadcast_to(wi_b, wo.shape)[ok], wo[ok]) @ weights
-    dens = np.where(
-        ok, np.maximum(f, 0.0) * wo[..., 2] * half_vector_jacobian(u[None, :], th_h, dot), 0.0
-    )
-    valid = ok & (dens > 0)
-    flat = dens.reshape(-1, 1, n, n)
+    power = np.where(ok, np.maximum(f, 0.0) * wo[..., 2] * 4 * dot * solid, 0.0)  # f cos dωo
+    valid = ok & (power > 0)
+    flat = (power / solid).reshape(-1, 1, n, n)  # per steradian of h
     vflat = valid.reshape(-1, n, n)
     empty = ~vflat.any(axis=(1, 2))
-    flat[empty] = 1.0  # nothing reflected at this incidence: uniform over the square
+    flat[empty] = 1.0  # nothing reflected at this incidence: uniform over the hemisphere
     vflat[empty] = True
     dens = fill_from_neighbours(flat, vflat).reshape(lead + (n, n))
-    dens = dens / dens.mean(axis=(-2, -1), keepdims=True)  # ∫ density du = 1
-    mprob, malias = alias_table(dens.sum(axis=-1))
-    cprob, calias = alias_table(dens)
+    prob = dens * solid
+    dens = dens / prob.sum(axis=(-2, -1), keepdims=True)  # Σ density · Ω_cell = 1
+    prob = dens * solid
+    mprob, malias = alias_table(prob.sum(axis=-1))
+    cprob, calias = alias_table(prob)
     return HalfVectorSampler(
         theta_i=np.asarray(theta_i, dtype=float),
         phi_i=None if phi_i is None else np.asarray(phi_i, dtype=float),
