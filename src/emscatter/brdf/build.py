@@ -281,11 +281,16 @@ def build_table(
     )
     if energy == "rescale":
         return apply_energy_remedy(table)
+    return _record_albedo(table, "off")
+
+
+def _record_albedo(table: BrdfTable, remedy: str) -> BrdfTable:
+    """Record the albedo in ``metadata["energy"]`` without changing the values."""
     alb = table.albedo().total
-    meta["energy"] = {
-        "remedy": "off",
+    table.metadata["energy"] = {
+        "remedy": remedy,
         "remedy_applied": False,
-        "max_albedo_before": alb.reshape(wl.size, -1).max(axis=1).tolist(),
+        "max_albedo_before": alb.reshape(alb.shape[0], -1).max(axis=1).tolist(),
         "albedo_exceeds_one": bool(np.any(alb > 1)),
     }
     return table
@@ -349,3 +354,30 @@ def _version() -> str:
     from .. import __version__
 
     return __version__
+
+
+def fill_from_function(brdf, wavelengths, theta, phi, anisotropic: bool, metadata: dict):
+    """A table of ``brdf(wi, wo, wavelength)`` on the full node grid (no reciprocity assumed;
+    :meth:`BrdfTable.reciprocity_error` tells), ``coherent = 0``, albedo recorded."""
+    wl = _check_wavelengths(wavelengths)
+    if anisotropic:
+        ti, pi_, to, po = np.meshgrid(theta, phi, theta, phi, indexing="ij")
+        grid_kw = {"phi_i": phi, "phi_o": phi}
+    else:
+        ti, to, po = np.meshgrid(theta, theta, phi, indexing="ij")
+        pi_ = np.zeros_like(ti)
+        grid_kw = {"phi_d": phi}
+    wi, wo = frames.directions(ti, pi_), frames.directions(to, po)
+    values = np.stack([np.asarray(brdf(wi, wo, float(lam)), dtype=float) for lam in wl])
+    meta = {
+        "format_version": FORMAT_VERSION,
+        "emscatter_version": _version(),
+        "solver": "analytic",
+        "units": {"values": "1/sr", "wavelengths": "m", "angles": "rad", "coherent": "-"},
+        "coherent": "none (analytic model)",
+        **metadata,
+    }
+    table = BrdfTable(
+        wavelengths=wl, theta_i=theta, theta_o=theta, values=values, metadata=meta, **grid_kw
+    )
+    return _record_albedo(table, "off (analytic model)")
