@@ -23,7 +23,7 @@ import numbers
 
 import numpy as np
 
-from .. import api
+from .. import api, materials
 from ..conventions import check_positive
 from ..fresnel import check_eps
 from ..spectra import check_roughness
@@ -60,34 +60,21 @@ def _check_count(name: str, n, low: int) -> int:
 
 def material_eps(material, wavelength: float):
     """Relative permittivity (``exp(−iωt)``, ``Im ε ≥ 0``) of ``material`` at ``wavelength``
-    [m]: a number, ``"pec"``, an object with ``eps(wavelength=…)`` (an
-    :mod:`emscatter.materials` material) or a callable ``eps(wavelength)``."""
-    if isinstance(material, str):
-        try:
-            from .. import materials  # lands on main with BOARD interface 4
-        except ImportError:
-            return check_eps(material, "material")
-        if material.lower() == "pec":
-            return "pec"
-        return check_eps(materials.as_material(material).eps(wavelength=wavelength), "material")
-    if hasattr(material, "eps") and callable(material.eps):
-        return check_eps(np.asarray(material.eps(wavelength=wavelength)).item(), "material")
-    if callable(material):
+    [m]: anything :func:`emscatter.materials.eps_at` takes (a number, ``"pec"``, a material
+    name like ``"Au"`` or ``"itu:concrete"``, a :class:`~emscatter.materials.Material`) or a
+    callable ``eps(wavelength [m])``."""
+    if callable(material) and not isinstance(material, materials.Material):
         return check_eps(np.asarray(material(wavelength)).item(), "material")
-    if isinstance(material, numbers.Number) or np.ndim(material) == 0:
-        return check_eps(complex(material), "material")
-    raise TypeError(
-        "material must be a permittivity (number), 'pec', a material name, an emscatter "
-        f"Material or a callable eps(wavelength [m]); got {type(material).__name__}"
-    )
+    eps = materials.eps_at(material, wavelength=wavelength)
+    return eps if isinstance(eps, str) else check_eps(np.asarray(eps).item(), "material")
 
 
-def _describe_material(material) -> str:
-    if hasattr(material, "describe") and callable(material.describe):
-        return str(material.describe())
-    if callable(material) and not isinstance(material, numbers.Number):
+def _describe_material(material) -> dict | str:
+    """A JSON-able description: the material's ``to_dict()`` (round-trips through
+    :func:`emscatter.materials.from_dict`) or a string for callables."""
+    if callable(material) and not isinstance(material, materials.Material):
         return f"callable {getattr(material, '__name__', type(material).__name__)}(wavelength)"
-    return repr(material)
+    return materials.as_material(material).to_dict()
 
 
 def _check_wavelengths(wavelengths) -> np.ndarray:
