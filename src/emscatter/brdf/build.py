@@ -157,6 +157,8 @@ def build_table(
     polarized: bool = False,
     energy: str = "rescale",
     out_of_range: str = "warn",
+    tol: float | None = None,
+    tol_floor: float = 1e-2,
     **options,
 ) -> BrdfTable:
     """A BRDF table of ``surface`` (2-D roughness) over ``material`` at ``wavelengths`` [m].
@@ -172,6 +174,10 @@ def build_table(
     resolution : ``(n_theta, n_phi)``: θ nodes ``k·90°/n_theta`` (shared by θi and θo) and
         ``n_phi`` Δφ nodes on ``[0, π]`` (isotropic) or φ nodes on ``[0, 2π)`` (anisotropic).
     theta, phi : explicit axes [rad] instead (θ in ``[0, π/2)``; φ as above).
+    tol : target interpolation error instead of a fixed resolution: the grid is refined from
+        a coarse one until the interpolant is within ``tol`` of direct evaluation at every
+        interval midpoint (:mod:`.adaptive`; error relative to ``max(|f|, tol_floor · peak)``);
+        the report is in ``metadata["resolution"]``.
     anisotropic : None → from the surface (``surface.is_isotropic``).
     polarized : also store ``f_r`` per polarization pair.
     energy : ``"rescale"`` (default) applies the reciprocal energy remedy
@@ -202,12 +208,24 @@ def build_table(
     else:
         phi_ax = grid.check_axis("phi", phi_ax, 0.0, math.pi)
     fill = _fill_anisotropic if aniso else _fill_isotropic
-    values, pol_values, coh = [], [], []
-    per_wl = []
+    setups = []
     for lam in wl:
         eps = material_eps(material, float(lam))
-        k = 2 * math.pi / lam
-        name = _solver_name(rough, k, method, eps, out_of_range)
+        setups.append(
+            (float(lam), eps, _solver_name(rough, 2 * math.pi / lam, method, eps, out_of_range))
+        )
+    resolution_report = {
+        "n_theta": int(theta_ax.size),
+        "n_phi": int(phi_ax.size),
+        "adaptive": False,
+    }
+    if tol is not None:
+        theta_ax, phi_ax, resolution_report = _adaptive(
+            rough, setups, aniso, tol, tol_floor, out_of_range, options
+        )
+    values, pol_values, coh = [], [], []
+    per_wl = []
+    for lam, eps, name in setups:
         f, fp, info = fill(
             rough, eps, float(lam), name, theta_ax, phi_ax, out_of_range, options, polarized
         )
@@ -241,6 +259,7 @@ def build_table(
         "format_version": FORMAT_VERSION,
         "emscatter_version": _version(),
         "solver": solvers[0] if len(solvers) == 1 else "+".join(solvers),
+        "resolution": resolution_report,
         "method_requested": method,
         "per_wavelength": per_wl,
         "surface": rough.describe(),
@@ -281,6 +300,25 @@ def _record_albedo(table: BrdfTable, remedy: str) -> BrdfTable:
         "albedo_exceeds_one": bool(np.any(alb > 1)),
     }
     return table
+
+
+def _adaptive(rough, setups, aniso, tol, floor, out_of_range, options):
+    """Axes refined to ``tol`` (:func:`.adaptive.refine_axes`) from a 10 × 13 (isotropic) or
+    10 × 16 (anisotropic) start."""
+    from .adaptive import refine_axes
+
+    def direct(ti, pi_, to, po):
+        return np.stack(
+            [
+                _sigma0(rough, eps, lam, name, ti, to, po, pi_, out_of_range, options, False)[0]
+                for lam, eps, name in setups
+            ]
+        )
+
+    theta0 = default_theta(10)
+    phi0 = default_phi(16) if aniso else default_phi_d(13)
+    theta, phi, report = refine_axes(direct, theta0, phi0, anisotropic=aniso, tol=tol, floor=floor)
+    return theta, phi, {**report, "adaptive": True}
 
 
 def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, polarized):
