@@ -20,6 +20,7 @@ from emscatter.brdf.distributions import (
     SeedDistribution,
     _Radial,
 )
+from emscatter.brdf.grid import gauss_legendre
 from emscatter.spectra import GaussianCorrelation
 
 EPS = (0.2 + 3j) ** 2
@@ -41,15 +42,15 @@ DISTS = [
 ]
 
 
-def _hemisphere_integral(fn, breaks=(), n=600, m=256):
+def _hemisphere_integral(fn, breaks=(), n=300, m=128):
     pts = sorted({0.0, 0.5 * math.pi, *breaks})
     xs, ws = [], []
-    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = gauss_legendre(n)
     for lo, hi in zip(pts[:-1], pts[1:], strict=True):
         xs.append(lo + 0.5 * (hi - lo) * (x + 1))
         ws.append(0.5 * (hi - lo) * w)
     th, wt = np.concatenate(xs), np.concatenate(ws)
-    xp, wp = np.polynomial.legendre.leggauss(m)
+    xp, wp = gauss_legendre(m)
     T, P = np.meshgrid(th, math.pi * (xp + 1), indexing="ij")
     val = fn(frames.directions(T, P), T) * np.sin(T)
     return np.einsum("ij,i,j->", val, wt, math.pi * wp)

@@ -30,8 +30,9 @@ def merl_file(table, tmp_path_factory):
 
 def test_merl_bins_are_self_consistent():
     wi, wo = merl.merl_bin_directions()
-    ih, idd, ip = merl.merl_indices(wi, wo)
-    grid = np.meshgrid(*(np.arange(n) for n in merl.MERL_SHAPE), indexing="ij")
+    sub = (slice(None, None, 3),) * 3
+    ih, idd, ip = merl.merl_indices(wi[sub], wo[sub])
+    grid = np.meshgrid(*(np.arange(n)[::3] for n in merl.MERL_SHAPE), indexing="ij")
     for got, want in zip((ih, idd, ip), grid, strict=True):
         np.testing.assert_array_equal(got, want)
     # the half vector of every bin's pair is at the bin's θh, in the x–z plane (φh = 0)

@@ -25,7 +25,7 @@ def gold():
 
 @pytest.fixture(scope="module")
 def gold_fit(gold):
-    return fit_microfacet(gold)
+    return fit_microfacet(gold, max_points=3000)
 
 
 def test_fit_recovers_geometric_optics_parameters(gold, gold_fit):
@@ -37,7 +37,7 @@ def test_fit_recovers_geometric_optics_parameters(gold, gold_fit):
     assert fit.errors["rms"] < 1e-8 and fit.errors["albedo_max_abs"] < 1e-8
     assert fit.mitsuba["type"] == "roughconductor" and fit.mitsuba["distribution"] == "beckmann"
     # a GGX lobe cannot be a Beckmann one: the fit says by how much
-    ggx = fit_microfacet(gold, distribution="ggx")
+    ggx = fit_microfacet(gold, distribution="ggx", max_points=3000)
     assert ggx.errors["rms"] > 1e3 * fit.errors["rms"] and ggx.errors["p90_rel"] > 0.05
 
 
@@ -51,7 +51,7 @@ def test_fitted_dict_loads_in_mitsuba_and_matches_the_table(gold):
         coherent=gold.coherent[1:2],
         coherent_polarized=gold.coherent_polarized[:, 1:2],
     )
-    fit = fit_microfacet(one)
+    fit = fit_microfacet(one, max_points=3000)
     assert isinstance(fit.mitsuba["eta"], float)
     rng = np.random.default_rng(2)
     wi = random_directions(rng, 3000, math.radians(70))

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..fresnel import check_eps, fresnel_cos, is_pec
 from .distributions import Beckmann, Distribution
+from .grid import gauss_legendre
 
 __all__ = [
     "half_vector",
@@ -273,7 +274,7 @@ def directional_albedo(
             *(math.sqrt(b / (0.5 * math.pi)) for b in theta_h_breaks if 0 < b < 0.5 * math.pi),
         }
     )
-    x, w = np.polynomial.legendre.leggauss(n_theta)
+    x, w = gauss_legendre(n_theta)
     us, ws = [], []
     for lo, hi in zip(edges[:-1], edges[1:], strict=True):
         us.append(lo + 0.5 * (hi - lo) * (x + 1))
@@ -281,7 +282,7 @@ def directional_albedo(
     u, wu = np.concatenate(us), np.concatenate(ws)
     th = 0.5 * math.pi * u * u
     wth = wu * math.pi * u  # dθh = π u du
-    xp, wp = np.polynomial.legendre.leggauss(n_phi)
+    xp, wp = gauss_legendre(n_phi)
     ph = math.pi * (xp + 1)
     wph = math.pi * wp
     T, P = np.meshgrid(th, ph, indexing="ij")

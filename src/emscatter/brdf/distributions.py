@@ -35,6 +35,7 @@ import numpy as np
 from scipy import special
 
 from ..conventions import check_positive
+from .grid import gauss_legendre
 
 __all__ = [
     "Distribution",
@@ -50,8 +51,7 @@ HALF_PI = 0.5 * math.pi
 
 
 def _gl(n: int, a: float, b: float):
-    x, w = np.polynomial.legendre.leggauss(n)
-    return 0.5 * (b - a) * x + 0.5 * (b + a), 0.5 * (b - a) * w
+    return gauss_legendre(n, a, b)
 
 
 def _cos_tan2(w):
