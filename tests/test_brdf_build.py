@@ -56,6 +56,24 @@ def test_isotropic_half_grid_equals_direct_polarized():
     np.testing.assert_allclose(t.coherent_reflectance(th, pol="v", wavelength=LAM), coh[1])
 
 
+def test_physical_optics_half_grid_equals_direct():
+    rough = GaussianCorrelation(0.1e-6, 0.8e-6)
+    t = build_table(
+        rough,
+        EPS,
+        [LAM],
+        method="po",
+        resolution=(6, 7),
+        polarized=True,
+        out_of_range="ignore",
+        energy="off",
+    )
+    th, pd = default_theta(6), default_phi_d(7)
+    ti, to, d = np.meshgrid(th, th, pd, indexing="ij")
+    direct = _direct(rough, EPS, "po", ti, 1.0, to, 1.0 + d)
+    np.testing.assert_allclose(t.polarized[:, :, 0], direct, rtol=1e-7, atol=1e-14)
+
+
 def test_anisotropic_half_grid_equals_direct():
     rough = GaussianCorrelation(0.3e-6, 1.0e-6, length_y=2.5e-6)
     t = build_table(
