@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from emscatter import api
+from emscatter.brdf import frames
 
 
 def mitsuba_variant(mi, names=("llvm_ad_rgb", "scalar_rgb")) -> str | None:
@@ -45,3 +50,23 @@ def random_directions(rng, n: int, max_theta: float) -> np.ndarray:
     phi = rng.uniform(0, 2 * np.pi, n)
     s = np.sqrt(1 - cos_t**2)
     return np.stack([s * np.cos(phi), s * np.sin(phi), cos_t], axis=-1)
+
+
+def go_fr(rough, eps, wi, wo, convert=frames.to_emscatter, **options) -> np.ndarray:
+    """emscatter's GO unpolarized f_r [1/sr] at renderer-frame directions (``wavelength=1``)."""
+    ti, pi_ = frames.angles(wi)
+    to, po = frames.angles(wo)
+    et, es, ps, ei = convert(ti, pi_, to, po)
+    res = api.bistatic(
+        rough,
+        eps,
+        wavelength=1.0,
+        theta_i=et,
+        theta_s=es,
+        phi_s=ps,
+        phi_i=ei,
+        method="go",
+        out_of_range="ignore",
+        **options,
+    )
+    return res.unpolarized() / (4 * math.pi * np.cos(ti) * np.cos(to))

@@ -56,6 +56,24 @@ def test_isotropic_half_grid_equals_direct_polarized():
     np.testing.assert_allclose(t.coherent_reflectance(th, pol="v", wavelength=LAM), coh[1])
 
 
+def test_physical_optics_half_grid_equals_direct():
+    rough = GaussianCorrelation(0.1e-6, 0.8e-6)
+    t = build_table(
+        rough,
+        EPS,
+        [LAM],
+        method="po",
+        resolution=(6, 7),
+        polarized=True,
+        out_of_range="ignore",
+        energy="off",
+    )
+    th, pd = default_theta(6), default_phi_d(7)
+    ti, to, d = np.meshgrid(th, th, pd, indexing="ij")
+    direct = _direct(rough, EPS, "po", ti, 1.0, to, 1.0 + d)
+    np.testing.assert_allclose(t.polarized[:, :, 0], direct, rtol=1e-7, atol=1e-14)
+
+
 def test_anisotropic_half_grid_equals_direct():
     rough = GaussianCorrelation(0.3e-6, 1.0e-6, length_y=2.5e-6)
     t = build_table(
@@ -154,3 +172,25 @@ def test_build_errors_name_the_parameter():
         kw = {**base, **change}
         with pytest.raises(ValueError, match=match):
             build_table(kw.pop("surface"), kw.pop("material"), kw.pop("wavelengths"), **kw)
+
+
+def test_adaptive_resolution_meets_its_target():
+    from emscatter.brdf.analytic import cook_torrance
+    from emscatter.brdf.distributions import Beckmann
+
+    rough = GaussianCorrelation(0.2e-6, 1.0e-6)  # m = 0.4
+    t = build_table(rough, EPS, [LAM], method="go", tol=0.1, out_of_range="ignore")
+    rep = t.metadata["resolution"]
+    assert rep["adaptive"] and rep["converged"] and rep["max_error_theta"] <= 0.1
+    assert not np.allclose(np.diff(t.theta_i), np.diff(t.theta_i)[0])  # refined, non-uniform
+    rng = np.random.default_rng(0)
+    ti, to = rng.uniform(0, 1.45, (2, 20000))
+    pd = rng.uniform(0, math.pi, 20000)
+    wi, wo = frames.directions(ti, 0.0), frames.directions(to, pd)
+    ref = cook_torrance(wi, wo, Beckmann(0.4), eps=EPS)  # = GO (tests/test_brdf_analytic.py)
+    w = np.cos(ti) * np.cos(to)
+    g = t.evaluate(wi, wo, wavelength=LAM) * w
+    err = np.abs(g - ref * w) / np.maximum(ref * w, 0.01 * (ref * w).max())
+    assert np.percentile(err, 99) < 0.1 and err.max() < 0.3
+    with pytest.raises(ValueError, match="tol"):
+        build_table(rough, EPS, [LAM], method="go", tol=2.0, out_of_range="ignore")

@@ -12,8 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from brdf_helpers import mitsuba_fr, mitsuba_variant, random_directions
-from emscatter import api
+from brdf_helpers import go_fr, mitsuba_fr, mitsuba_variant, random_directions
 from emscatter.brdf import frames
 from emscatter.spectra import GaussianCorrelation
 
@@ -42,24 +41,6 @@ def test_angles_rejects_bad_vectors():
         frames.angles(np.zeros((4, 2)))
     with pytest.raises(ValueError, match="zero vector"):
         frames.angles(np.zeros((1, 3)))
-
-
-def _go_fr(rough, wi, wo, convert=frames.to_emscatter):
-    ti, pi_ = frames.angles(wi)
-    to, po = frames.angles(wo)
-    et, es, ps, ei = convert(ti, pi_, to, po)
-    res = api.bistatic(
-        rough,
-        EPS,
-        wavelength=1.0,
-        theta_i=et,
-        theta_s=es,
-        phi_s=ps,
-        phi_i=ei,
-        method="go",
-        out_of_range="ignore",
-    )
-    return res.unpolarized() / (4 * math.pi * np.cos(ti) * np.cos(to))
 
 
 def _significant_rel(ours, theirs):
@@ -93,11 +74,11 @@ def test_conversion_matches_mitsuba_anisotropic():
         ]
     )
     theirs = mitsuba_fr(mi, bsdf, wi, wo)
-    ours = _go_fr(rough, wi, wo)
+    ours = go_fr(rough, EPS, wi, wo)
     rel, sig = _significant_rel(ours, theirs)
     assert sig.sum() > 150
     assert rel.max() < 1e-2, f"max relative difference {rel.max():.3g}"
     # the tempting mistake (φi taken as is, without + π) is far off
-    wrong = _go_fr(rough, wi, wo, convert=lambda ti, pi_, to, po: (ti, to, po, pi_))
+    wrong = go_fr(rough, EPS, wi, wo, convert=lambda ti, pi_, to, po: (ti, to, po, pi_))
     rel_wrong, _ = _significant_rel(wrong, theirs)
     assert rel_wrong.max() > 0.5

@@ -193,3 +193,27 @@ def test_go_table_albedo_below_one_and_coherent_zero(go_table):
     assert np.all(alb.total <= 1.0) and np.all(alb.coherent == 0)
     assert alb.total[0, 0] > 0.85  # a good metal, small slope: most energy reflected
     assert "GO" in go_table.metadata["coherent"]
+
+
+def test_asymmetric_grid_is_reciprocal_within_interpolation_error():
+    from emscatter.brdf.analytic import cook_torrance, table_from_function
+    from emscatter.brdf.distributions import Beckmann
+
+    def ct(wi, wo, lam):
+        return cook_torrance(wi, wo, Beckmann(0.4), eps=EPS)
+
+    ref = table_from_function(ct, WL, resolution=(24, 25))
+    ti, to = default_theta(17), default_theta(29)  # θi and θo nodes differ
+    ai, ao, pd = np.meshgrid(ti, to, ref.phi_d, indexing="ij")
+    vals = ct(frames.directions(ai, 0.0), frames.directions(ao, pd), WL[0])[None]
+    t = BrdfTable(wavelengths=WL, theta_i=ti, theta_o=to, phi_d=ref.phi_d, values=vals)
+    assert not t.symmetric_grid
+    rng = np.random.default_rng(9)
+    wi = random_directions(rng, 4000, math.radians(75))
+    wo = random_directions(rng, 4000, math.radians(75))
+    exact = ct(wi, wo, WL[0])
+    interp_err = np.abs(t.evaluate(wi, wo)[0] - exact)
+    swap_err = np.abs(t.evaluate(wi, wo)[0] - t.evaluate(wo, wi)[0])
+    assert swap_err.max() > 0  # not exact on an asymmetric grid ...
+    scale = exact.max()
+    assert swap_err.max() <= 2 * interp_err.max() + 1e-12 * scale  # ... but within the error

@@ -23,7 +23,7 @@ import numbers
 
 import numpy as np
 
-from .. import api
+from .. import api, materials
 from ..conventions import check_positive
 from ..fresnel import check_eps
 from ..spectra import check_roughness
@@ -60,34 +60,21 @@ def _check_count(name: str, n, low: int) -> int:
 
 def material_eps(material, wavelength: float):
     """Relative permittivity (``exp(−iωt)``, ``Im ε ≥ 0``) of ``material`` at ``wavelength``
-    [m]: a number, ``"pec"``, an object with ``eps(wavelength=…)`` (an
-    :mod:`emscatter.materials` material) or a callable ``eps(wavelength)``."""
-    if isinstance(material, str):
-        try:
-            from .. import materials  # lands on main with BOARD interface 4
-        except ImportError:
-            return check_eps(material, "material")
-        if material.lower() == "pec":
-            return "pec"
-        return check_eps(materials.as_material(material).eps(wavelength=wavelength), "material")
-    if hasattr(material, "eps") and callable(material.eps):
-        return check_eps(np.asarray(material.eps(wavelength=wavelength)).item(), "material")
-    if callable(material):
+    [m]: anything :func:`emscatter.materials.eps_at` takes (a number, ``"pec"``, a material
+    name like ``"Au"`` or ``"itu:concrete"``, a :class:`~emscatter.materials.Material`) or a
+    callable ``eps(wavelength [m])``."""
+    if callable(material) and not isinstance(material, materials.Material):
         return check_eps(np.asarray(material(wavelength)).item(), "material")
-    if isinstance(material, numbers.Number) or np.ndim(material) == 0:
-        return check_eps(complex(material), "material")
-    raise TypeError(
-        "material must be a permittivity (number), 'pec', a material name, an emscatter "
-        f"Material or a callable eps(wavelength [m]); got {type(material).__name__}"
-    )
+    eps = materials.eps_at(material, wavelength=wavelength)
+    return eps if isinstance(eps, str) else check_eps(np.asarray(eps).item(), "material")
 
 
-def _describe_material(material) -> str:
-    if hasattr(material, "describe") and callable(material.describe):
-        return str(material.describe())
-    if callable(material) and not isinstance(material, numbers.Number):
+def _describe_material(material) -> dict | str:
+    """A JSON-able description: the material's ``to_dict()`` (round-trips through
+    :func:`emscatter.materials.from_dict`) or a string for callables."""
+    if callable(material) and not isinstance(material, materials.Material):
         return f"callable {getattr(material, '__name__', type(material).__name__)}(wavelength)"
-    return repr(material)
+    return materials.as_material(material).to_dict()
 
 
 def _check_wavelengths(wavelengths) -> np.ndarray:
@@ -170,6 +157,8 @@ def build_table(
     polarized: bool = False,
     energy: str = "rescale",
     out_of_range: str = "warn",
+    tol: float | None = None,
+    tol_floor: float = 1e-2,
     **options,
 ) -> BrdfTable:
     """A BRDF table of ``surface`` (2-D roughness) over ``material`` at ``wavelengths`` [m].
@@ -185,6 +174,10 @@ def build_table(
     resolution : ``(n_theta, n_phi)``: θ nodes ``k·90°/n_theta`` (shared by θi and θo) and
         ``n_phi`` Δφ nodes on ``[0, π]`` (isotropic) or φ nodes on ``[0, 2π)`` (anisotropic).
     theta, phi : explicit axes [rad] instead (θ in ``[0, π/2)``; φ as above).
+    tol : target interpolation error instead of a fixed resolution: the grid is refined from
+        a coarse one until the interpolant is within ``tol`` of direct evaluation at every
+        interval midpoint (:mod:`.adaptive`; error relative to ``max(|f|, tol_floor · peak)``);
+        the report is in ``metadata["resolution"]``.
     anisotropic : None → from the surface (``surface.is_isotropic``).
     polarized : also store ``f_r`` per polarization pair.
     energy : ``"rescale"`` (default) applies the reciprocal energy remedy
@@ -215,12 +208,24 @@ def build_table(
     else:
         phi_ax = grid.check_axis("phi", phi_ax, 0.0, math.pi)
     fill = _fill_anisotropic if aniso else _fill_isotropic
-    values, pol_values, coh = [], [], []
-    per_wl = []
+    setups = []
     for lam in wl:
         eps = material_eps(material, float(lam))
-        k = 2 * math.pi / lam
-        name = _solver_name(rough, k, method, eps, out_of_range)
+        setups.append(
+            (float(lam), eps, _solver_name(rough, 2 * math.pi / lam, method, eps, out_of_range))
+        )
+    resolution_report = {
+        "n_theta": int(theta_ax.size),
+        "n_phi": int(phi_ax.size),
+        "adaptive": False,
+    }
+    if tol is not None:
+        theta_ax, phi_ax, resolution_report = _adaptive(
+            rough, setups, aniso, tol, tol_floor, out_of_range, options
+        )
+    values, pol_values, coh = [], [], []
+    per_wl = []
+    for lam, eps, name in setups:
         f, fp, info = fill(
             rough, eps, float(lam), name, theta_ax, phi_ax, out_of_range, options, polarized
         )
@@ -254,6 +259,7 @@ def build_table(
         "format_version": FORMAT_VERSION,
         "emscatter_version": _version(),
         "solver": solvers[0] if len(solvers) == 1 else "+".join(solvers),
+        "resolution": resolution_report,
         "method_requested": method,
         "per_wavelength": per_wl,
         "surface": rough.describe(),
@@ -281,14 +287,38 @@ def build_table(
     )
     if energy == "rescale":
         return apply_energy_remedy(table)
+    return _record_albedo(table, "off")
+
+
+def _record_albedo(table: BrdfTable, remedy: str) -> BrdfTable:
+    """Record the albedo in ``metadata["energy"]`` without changing the values."""
     alb = table.albedo().total
-    meta["energy"] = {
-        "remedy": "off",
+    table.metadata["energy"] = {
+        "remedy": remedy,
         "remedy_applied": False,
-        "max_albedo_before": alb.reshape(wl.size, -1).max(axis=1).tolist(),
+        "max_albedo_before": alb.reshape(alb.shape[0], -1).max(axis=1).tolist(),
         "albedo_exceeds_one": bool(np.any(alb > 1)),
     }
     return table
+
+
+def _adaptive(rough, setups, aniso, tol, floor, out_of_range, options):
+    """Axes refined to ``tol`` (:func:`.adaptive.refine_axes`) from a 10 × 13 (isotropic) or
+    10 × 16 (anisotropic) start."""
+    from .adaptive import refine_axes
+
+    def direct(ti, pi_, to, po):
+        return np.stack(
+            [
+                _sigma0(rough, eps, lam, name, ti, to, po, pi_, out_of_range, options, False)[0]
+                for lam, eps, name in setups
+            ]
+        )
+
+    theta0 = default_theta(10)
+    phi0 = default_phi(16) if aniso else default_phi_d(13)
+    theta, phi, report = refine_axes(direct, theta0, phi0, anisotropic=aniso, tol=tol, floor=floor)
+    return theta, phi, {**report, "adaptive": True}
 
 
 def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, polarized):
@@ -349,3 +379,30 @@ def _version() -> str:
     from .. import __version__
 
     return __version__
+
+
+def fill_from_function(brdf, wavelengths, theta, phi, anisotropic: bool, metadata: dict):
+    """A table of ``brdf(wi, wo, wavelength)`` on the full node grid (no reciprocity assumed;
+    :meth:`BrdfTable.reciprocity_error` tells), ``coherent = 0``, albedo recorded."""
+    wl = _check_wavelengths(wavelengths)
+    if anisotropic:
+        ti, pi_, to, po = np.meshgrid(theta, phi, theta, phi, indexing="ij")
+        grid_kw = {"phi_i": phi, "phi_o": phi}
+    else:
+        ti, to, po = np.meshgrid(theta, theta, phi, indexing="ij")
+        pi_ = np.zeros_like(ti)
+        grid_kw = {"phi_d": phi}
+    wi, wo = frames.directions(ti, pi_), frames.directions(to, po)
+    values = np.stack([np.asarray(brdf(wi, wo, float(lam)), dtype=float) for lam in wl])
+    meta = {
+        "format_version": FORMAT_VERSION,
+        "emscatter_version": _version(),
+        "solver": "analytic",
+        "units": {"values": "1/sr", "wavelengths": "m", "angles": "rad", "coherent": "-"},
+        "coherent": "none (analytic model)",
+        **metadata,
+    }
+    table = BrdfTable(
+        wavelengths=wl, theta_i=theta, theta_o=theta, values=values, metadata=meta, **grid_kw
+    )
+    return _record_albedo(table, "off (analytic model)")

@@ -52,9 +52,9 @@ def reciprocal_energy_scale(kernel: np.ndarray, coherent: np.ndarray, limit: flo
     """
     k = np.asarray(kernel, dtype=float)
     c = np.asarray(coherent, dtype=float)
-    budget = limit - c
-    if np.any(budget < 0):
+    if np.any(c > limit + 2 * _MARGIN):
         raise ValueError(f"coherent reflectivity exceeds {limit} on its own: {c.max()!r}")
+    budget = np.maximum(limit - c, 0.0)  # coherent ≈ limit: no room left for the incoherent
     s = np.ones(k.shape[0])
     # 1) two-sided fixed point s_i ← min(1, s_i √(b_i / A_i)): rows that are reduced end at the
     #    limit, rows that are not keep s = 1 (a symmetric Sinkhorn scaling with a cap)
