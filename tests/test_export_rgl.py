@@ -18,6 +18,14 @@ import math
 
 import numpy as np
 import pytest
+
+from emscatter.brdf import frames
+from emscatter.brdf.colour import spectrum_to_rgb_weights
+from emscatter.brdf.export_rgl import RglFormatError, read_rgl, write_rgl
+from emscatter.brdf.rgl_warp import estimate_alpha, marginal2d_sample
+from emscatter.brdf.source import BrdfFunction, as_brdf_source
+from emscatter.solvers import kirchhoff_go as go
+from emscatter.spectra import GaussianCorrelation
 from render_helpers import (
     ALPHA,
     LENGTH,
@@ -31,14 +39,6 @@ from render_helpers import (
     sampled_albedo,
     use_variant,
 )
-
-from emscatter.brdf import frames
-from emscatter.brdf.colour import spectrum_to_rgb_weights
-from emscatter.brdf.export_rgl import RglFormatError, read_rgl, write_rgl
-from emscatter.brdf.rgl_warp import estimate_alpha, marginal2d_sample
-from emscatter.brdf.source import BrdfFunction, as_brdf_source
-from emscatter.solvers import kirchhoff_go as go
-from emscatter.spectra import GaussianCorrelation
 
 VARIANT = {"rgb": "llvm_ad_rgb", "spectral": "llvm_ad_spectral"}
 

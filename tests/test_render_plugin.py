@@ -14,6 +14,12 @@ import warnings
 
 import numpy as np
 import pytest
+
+from emscatter.brdf import build_table
+from emscatter.brdf.colour import spectrum_to_rgb_weights
+from emscatter.render import mitsuba as em_mi
+from emscatter.render.plugin_data import prepare
+from emscatter.spectra import GaussianCorrelation
 from render_helpers import (
     go_table,
     mi,
@@ -23,12 +29,6 @@ from render_helpers import (
     sampled_albedo,
     use_variant,
 )
-
-from emscatter.brdf import build_table
-from emscatter.brdf.colour import spectrum_to_rgb_weights
-from emscatter.render import mitsuba as em_mi
-from emscatter.render.plugin_data import prepare
-from emscatter.spectra import GaussianCorrelation
 
 
 def _rgb(table, values):
@@ -88,7 +88,9 @@ def test_chi2_sampling_matches_pdf(aspect, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # a failing test writes chi2_data.py into the working folder
     from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 
-    table = go_table(alpha=0.4, **({} if aspect == 1.0 else {"resolution": (12, 16), "aspect": aspect}))
+    table = go_table(
+        alpha=0.4, **({} if aspect == 1.0 else {"resolution": (12, 16), "aspect": aspect})
+    )
     d = em_mi.bsdf_dict(table)
     for deg, azimuth in ((20.0, 0.0), (60.0, 2.0)):
         th = math.radians(deg)

@@ -26,6 +26,7 @@ __all__ = [
     "image_difference",
     "render",
     "save_png",
+    "save_rows",
     "sphere_row",
     "to_srgb",
 ]
@@ -161,3 +162,29 @@ def image_difference(a: np.ndarray, b: np.ndarray, *, block: int = 8) -> float:
     (block averaging removes most of the Monte Carlo noise, not the bias)."""
     ba, bb = block_mean(a, block), block_mean(b, block)
     return float(np.abs(ba - bb).mean() / bb.mean())
+
+
+def save_rows(
+    path, rows: list[tuple[np.ndarray, str, list[str]]], *, exposure: float = 1.0
+) -> Path:
+    """A figure of rendered rows, each ``(linear RGB image, title, labels under the spheres)``,
+    written atomically as PNG (matplotlib)."""
+    import matplotlib.pyplot as plt
+
+    from ..io import save_figure
+
+    width = rows[0][0].shape[1]
+    fig_w = max(6.0, width / 110)
+    heights = [img.shape[0] / img.shape[1] * fig_w + 0.55 for img, _, _ in rows]
+    fig, axes = plt.subplots(len(rows), 1, figsize=(fig_w, sum(heights)), squeeze=False)
+    for ax, (img, title, labels) in zip(axes[:, 0], rows, strict=True):
+        ax.imshow(to_srgb(img, exposure), interpolation="nearest")
+        ax.set_title(title, fontsize=9)
+        n = len(labels)  # sphere centres of sphere_row's default spacing (2.4) and margin (1.3)
+        span = 2.4 * (n - 1) + 2.6
+        ax.set_xticks([(1.3 + 2.4 * k) / span * img.shape[1] for k in range(n)], labels, fontsize=8)
+        ax.set_yticks([])
+        for side in ax.spines.values():
+            side.set_visible(False)
+    fig.tight_layout()
+    return save_figure(fig, path)
