@@ -21,6 +21,7 @@ from emscatter.render import mitsuba as em_mi
 from emscatter.render.plugin_data import prepare
 from emscatter.spectra import GaussianCorrelation
 from render_helpers import (
+    dr,
     go_table,
     mi,
     mitsuba_eval,
@@ -180,3 +181,35 @@ def test_errors_name_the_problem():
         prepare(go_table(), "rgb", sampling_resolution=3)
     with pytest.raises(ValueError, match="channels must be one of"):
         prepare(go_table(), "xyz")
+
+
+def test_anisotropic_coherent_lobe_follows_the_azimuth():
+    """R_coh(θi, φi) of an anisotropic table, periodic in φi (between the last node and 2π too)."""
+    from emscatter.brdf import BrdfTable
+    from emscatter.brdf.build import default_phi, default_theta
+
+    use_variant("llvm_ad_rgb")
+    th, ph = default_theta(6), default_phi(8)
+    values = np.full((1, 6, 8, 6, 8), 0.05)
+    coh = 0.3 + 0.2 * np.cos(ph)[None, None, :] * np.ones((1, 6, 1))
+    table = BrdfTable(
+        wavelengths=[5.5e-7],
+        theta_i=th,
+        theta_o=th,
+        phi_i=ph,
+        phi_o=ph,
+        values=values,
+        coherent=coh,
+    )
+    bsdf = mi.load_dict(em_mi.bsdf_dict(table))
+    ctx = mi.BSDFContext()
+    ctx.component = 1
+    th_i = math.radians(30.0)
+    for phi in (0.3, 2.0, 5.9):  # 5.9 rad lies between the last node (5.50) and 2π
+        si = dr.zeros(mi.SurfaceInteraction3f, 64)
+        si.wi = mi.Vector3f(
+            math.sin(th_i) * math.cos(phi), math.sin(th_i) * math.sin(phi), math.cos(th_i)
+        )
+        _, w = bsdf.sample(ctx, si, mi.Float(0.5), mi.Point2f(0.5, 0.5))
+        want = table.coherent_reflectance(th_i, phi)[0]
+        np.testing.assert_allclose(np.array(w)[1], want, rtol=1e-5)

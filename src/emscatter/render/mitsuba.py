@@ -197,8 +197,12 @@ def _bsdf_class(mi):
                 self._coh = texture(mi.Texture1f, data.coherent)
                 self._pdelta = texture(mi.Texture1f, data.delta_probability[:, None])
             else:
-                self._coh = texture(mi.Texture2f, data.coherent)
-                self._pdelta = texture(mi.Texture2f, data.delta_probability[..., None])
+                # rows φi, periodic: the first row repeated at 2π closes the circle
+                def periodic(a):
+                    return np.concatenate([a, a[:1]], axis=0)
+
+                self._coh = texture(mi.Texture2f, periodic(data.coherent))
+                self._pdelta = texture(mi.Texture2f, periodic(data.delta_probability[..., None]))
             smp = data.sampler
             self._n = smp.resolution
             self._s_theta = _axis_of(smp.theta_i)
@@ -348,7 +352,7 @@ def _bsdf_class(mi):
                 return tex.eval(mi.Point1f(coord(ti, d.theta_i)), active)
             pos = mi.Point2f(
                 coord(ti, d.theta_i),
-                (self._azimuth(si.wi) * (1.0 / d.phi_i.step) + 0.5) * (1.0 / d.phi_i.size),
+                (self._azimuth(si.wi) * (1.0 / d.phi_i.step) + 0.5) * (1.0 / (d.phi_i.size + 1)),
             )
             return tex.eval(pos, active)
 
