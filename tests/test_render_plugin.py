@@ -213,3 +213,26 @@ def test_anisotropic_coherent_lobe_follows_the_azimuth():
         _, w = bsdf.sample(ctx, si, mi.Float(0.5), mi.Point2f(0.5, 0.5))
         want = table.coherent_reflectance(th_i, phi)[0]
         np.testing.assert_allclose(np.array(w)[1], want, rtol=1e-5)
+
+
+def test_compact_lobe_wastes_no_samples():
+    """The seed's uniform distribution (f = 0 beyond θh = 0.1 rad): cells outside the lobe get
+    no samples, yet the sampled albedo is the table's (the ring around the support keeps every
+    direction with f > 0 reachable)."""
+    from emscatter.brdf.analytic import cook_torrance, table_from_function
+    from emscatter.brdf.distributions import SeedDistribution
+
+    use_variant("llvm_ad_rgb")
+    dist = SeedDistribution("uniform", a=0.1)
+    table = table_from_function(
+        lambda wi, wo, lam: cook_torrance(wi, wo, dist, eps=(0.5 + 3j) ** 2),
+        [550e-9],
+        resolution=(45, 90),
+    )
+    bsdf = mi.load_dict(em_mi.bsdf_dict(table))
+    for deg in (10.0, 50.0):
+        got, bs = sampled_albedo(bsdf, math.radians(deg), n=100_000)
+        want = np.interp(math.radians(deg), table.theta_i, table.albedo().incoherent[0])
+        assert got[1] == pytest.approx(want, rel=5e-3)
+        wo = np.array(bs.wo)
+        assert np.mean(wo[2] <= 0) < 0.01  # hardly any sample wasted below the horizon

@@ -13,9 +13,10 @@ solid angle, ``p(ωo) = P_cell / (Ω_cell · 4 wi·h)``, exact for the samples d
 the mirror direction. Between incident nodes the distribution is the mixture of the
 neighbouring nodes' (weights linear in θi, φi), sampled by picking one node with those weights.
 
-Cells whose reflected direction is below the horizon take the value of the nearest valid
-cell, so no direction where ``f_r > 0`` has zero density (samples that land below the horizon
-are discarded by the BSDF with weight 0).
+Cells whose reflected direction is below the horizon take the value of the nearest cell whose
+direction is above it, and the ring of cells around the support of ``f_r`` half its neighbours'
+density, so no direction where ``f_r > 0`` has zero density (samples that land below the
+horizon are discarded by the BSDF with weight 0) while compact lobes waste no samples.
 
 ``dωo = 4 (wi·h) dωh``: the half-vector Jacobian (Walter et al. 2007, eq. 14).
 """
@@ -108,6 +109,15 @@ class HalfVectorSampler:
         return np.arccos(np.clip(cos_t, -1, 1)), phi, dens
 
 
+def _neighbour_sum(a: np.ndarray) -> np.ndarray:
+    """Sum over the 4-neighbours of each cell of ``a`` (..., rows, cols): rows (φ) periodic,
+    columns (θ) not."""
+    out = np.roll(a, 1, axis=-2) + np.roll(a, -1, axis=-2)
+    out[..., 1:] += a[..., :-1]
+    out[..., :-1] += a[..., 1:]
+    return out
+
+
 def _alias_pick(prob: np.ndarray, alias: np.ndarray, u: np.ndarray):
     """Bin and leftover uniform variate for each lane (``prob``, ``alias``: (P, n))."""
     n = prob.shape[-1]
@@ -146,18 +156,28 @@ def build_sampler(source, weights: np.ndarray, theta_i, phi_i, n: int) -> HalfVe
     if ok.any():
         f[ok] = source.evaluate(np.broadcast_to(wi_b, wo.shape)[ok], wo[ok]) @ weights
     power = np.where(ok, np.maximum(f, 0.0) * wo[..., 2] * 4 * dot * solid, 0.0)  # f cos dωo
-    valid = ok & (power > 0)
-    flat = (power / solid).reshape(-1, 1, n, n)  # per steradian of h
-    vflat = valid.reshape(-1, n, n)
-    empty = ~vflat.any(axis=(1, 2))
-    flat[empty] = 1.0  # nothing reflected at this incidence: uniform over the hemisphere
-    vflat[empty] = True
-    dens = fill_from_neighbours(flat, vflat).reshape(lead + (n, n))
+    dens = (power / solid).reshape(-1, n, n)  # per steradian of h
+    ok = ok.reshape(-1, n, n)
+    # f may be > 0 in part of a cell whose centre has f = 0 (compact lobes: the seed's uniform
+    # distribution): give the ring around the support half its neighbours' mean density
+    support = dens > 0
+    total, count = _neighbour_sum(np.where(support, dens, 0.0)), _neighbour_sum(support * 1.0)
+    ring = ok & ~support & (count > 0)
+    dens = np.where(ring, 0.5 * total / np.maximum(count, 1), dens)
+    valid = ok & (dens > 0)
+    empty = ~valid.any(axis=(1, 2))
+    dens[empty] = 1.0  # nothing reflected at this incidence: uniform over the hemisphere
+    valid[empty] = True
+    # cells whose centre reflects below the horizon: the nearest cell with a direction above it
+    geometry = ok | empty[:, None, None]
+    dens = fill_from_neighbours(dens[:, None], geometry)[:, 0].reshape(lead + (n, n))
     prob = dens * solid
     dens = dens / prob.sum(axis=(-2, -1), keepdims=True)  # Σ density · Ω_cell = 1
     prob = dens * solid
-    mprob, malias = alias_table(prob.sum(axis=-1))
-    cprob, calias = alias_table(prob)
+    rows = prob.sum(axis=-1)
+    mprob, malias = alias_table(rows)
+    # a row without power is never drawn; its conditional table just has to exist
+    cprob, calias = alias_table(np.where(rows[..., None] > 0, prob, 1.0))
     return HalfVectorSampler(
         theta_i=np.asarray(theta_i, dtype=float),
         phi_i=None if phi_i is None else np.asarray(phi_i, dtype=float),

@@ -134,9 +134,15 @@ def render(scene: dict, *, seed: int = 0, spp: int | None = None) -> np.ndarray:
     return np.array(img, dtype=np.float64)[..., :3]
 
 
-def to_srgb(img: np.ndarray, exposure: float = 1.0) -> np.ndarray:
-    """Linear RGB → 8-bit sRGB (IEC 61966-2-1 transfer curve), clipped."""
-    x = np.clip(np.asarray(img, dtype=float) * exposure, 0.0, 1.0)
+def to_srgb(img: np.ndarray, exposure: float = 1.0, *, white: float | None = None) -> np.ndarray:
+    """Linear RGB → 8-bit sRGB (IEC 61966-2-1 transfer curve), clipped. With ``white``, the
+    luminance is first compressed by the extended Reinhard curve ``L (1 + L/w²)/(1 + L)`` so
+    that highlights up to ``w`` keep their shape (Reinhard et al. 2002, eq. 4)."""
+    x = np.asarray(img, dtype=float) * exposure
+    if white is not None:
+        lum = np.maximum(x @ np.array([0.2126, 0.7152, 0.0722]), 1e-12)[..., None]
+        x = x * ((1 + lum / white**2) / (1 + lum))
+    x = np.clip(x, 0.0, 1.0)
     srgb = np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
     return np.round(srgb * 255).astype(np.uint8)
 
@@ -165,10 +171,14 @@ def image_difference(a: np.ndarray, b: np.ndarray, *, block: int = 8) -> float:
 
 
 def save_rows(
-    path, rows: list[tuple[np.ndarray, str, list[str]]], *, exposure: float = 1.0
+    path,
+    rows: list[tuple[np.ndarray, str, list[str]]],
+    *,
+    exposure: float = 1.5,
+    white: float | None = 24.0,
 ) -> Path:
     """A figure of rendered rows, each ``(linear RGB image, title, labels under the spheres)``,
-    written atomically as PNG (matplotlib)."""
+    tone-mapped (:func:`to_srgb`), written atomically as PNG (matplotlib)."""
     import matplotlib.pyplot as plt
 
     from ..io import save_figure
@@ -178,7 +188,7 @@ def save_rows(
     heights = [img.shape[0] / img.shape[1] * fig_w + 0.55 for img, _, _ in rows]
     fig, axes = plt.subplots(len(rows), 1, figsize=(fig_w, sum(heights)), squeeze=False)
     for ax, (img, title, labels) in zip(axes[:, 0], rows, strict=True):
-        ax.imshow(to_srgb(img, exposure), interpolation="nearest")
+        ax.imshow(to_srgb(img, exposure, white=white), interpolation="nearest")
         ax.set_title(title, fontsize=9)
         n = len(labels)  # sphere centres of sphere_row's default spacing (2.4) and margin (1.3)
         span = 2.4 * (n - 1) + 2.6
