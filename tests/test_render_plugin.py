@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from emscatter.brdf import build_table
-from emscatter.brdf.colour import spectrum_to_rgb_weights
+from emscatter.brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
 from emscatter.render import mitsuba as em_mi
 from emscatter.render.plugin_data import prepare
 from emscatter.spectra import GaussianCorrelation
@@ -44,8 +44,9 @@ def _rgb(table, values):
         ("llvm_ad_spectral", {"wavelengths": (450e-9, 500e-9, 550e-9, 600e-9, 650e-9, 700e-9)}),
         ("llvm_ad_rgb", {"resolution": (12, 16), "aspect": 0.6}),
         ("llvm_ad_spectral", {"resolution": (12, 16), "aspect": 0.6}),
+        ("llvm_ad_mono", {}),
     ],
-    ids=["rgb", "spectral", "spectral-6wl", "aniso-rgb", "aniso-spectral"],
+    ids=["rgb", "spectral", "spectral-6wl", "aniso-rgb", "aniso-spectral", "mono"],
 )
 def test_eval_is_the_table(variant, table_kw):
     use_variant(variant)
@@ -55,6 +56,8 @@ def test_eval_is_the_table(variant, table_kw):
     want = table.evaluate(wi, wo) * wo[:, 2]  # (n_wl, n)
     if mi.is_rgb:
         got, want = mitsuba_eval(bsdf, wi, wo), _rgb(table, want).T
+    elif mi.is_monochromatic:  # the luminance of the sRGB conversion
+        got, want = mitsuba_eval(bsdf, wi, wo), (RGB_LUMINANCE @ _rgb(table, want))[:, None]
     else:
         lam = 0.5 * (table.wavelengths[1] + table.wavelengths[2])  # between two nodes
         got = mitsuba_eval(bsdf, wi, wo, wavelength_nm=lam * 1e9)
@@ -164,6 +167,9 @@ def test_scene_dict_and_xml_use_the_registered_name():
     wi, wo = random_pairs(np.random.default_rng(6), 500)
     np.testing.assert_array_equal(mitsuba_eval(a, wi, wo), mitsuba_eval(b, wi, wo))
     assert "gold-demo" in str(a)
+    em_mi.unregister_table(key)
+    with pytest.raises(Exception, match="no table registered as 'gold-demo'"):
+        mi.load_string(xml)
 
 
 def test_errors_name_the_problem():

@@ -1,7 +1,7 @@
 """An emscatter BRDF table as a Mitsuba 3 BSDF (plugin ``"emscatter"``), delta lobe included.
 
-Usage (after ``mi.set_variant(...)``; an LLVM or CUDA variant — a scalar variant calls Python
-once per ray)::
+Usage, after ``mi.set_variant(...)`` with an LLVM variant (tested here; the CUDA ones are not,
+and a scalar one would call Python once per ray)::
 
     import mitsuba as mi
     from emscatter.render import mitsuba as em_mi
@@ -41,7 +41,14 @@ import numpy as np
 
 from .plugin_data import PluginData, prepare
 
-__all__ = ["PLUGIN_NAME", "bsdf_dict", "register", "register_table", "channels_of_variant"]
+__all__ = [
+    "PLUGIN_NAME",
+    "bsdf_dict",
+    "channels_of_variant",
+    "register",
+    "register_table",
+    "unregister_table",
+]
 
 PLUGIN_NAME = "emscatter"
 _TABLES: dict[str, object] = {}
@@ -74,7 +81,8 @@ def channels_of_variant(variant: str) -> str:
 
 
 def register_table(table, key: str | None = None) -> str:
-    """Make ``table`` (BrdfTable or BrdfFunction) available to scenes as ``{"table": key}``."""
+    """Make ``table`` (BrdfTable or BrdfFunction) available to scenes as ``{"table": key}``
+    (in this process; the registry keeps a reference until :func:`unregister_table`)."""
     if not (hasattr(table, "evaluate") or callable(getattr(table, "_fr", None))):
         raise TypeError(f"table must be a BrdfTable or BrdfFunction, got {type(table).__name__}")
     if key is None:
@@ -86,6 +94,15 @@ def register_table(table, key: str | None = None) -> str:
         for k in [k for k in _PREPARED if k[0] == key]:
             del _PREPARED[k]
     return key
+
+
+def unregister_table(key: str) -> None:
+    """Drop a registered table and its prepared lookups (scenes already loaded keep theirs)."""
+    if key not in _TABLES:
+        raise ValueError(f"no table registered as {key!r}")
+    del _TABLES[key]
+    for k in [k for k in _PREPARED if k[0] == key]:
+        del _PREPARED[k]
 
 
 def register(name: str = PLUGIN_NAME) -> None:
