@@ -194,3 +194,24 @@ def test_adaptive_resolution_meets_its_target():
     assert np.percentile(err, 99) < 0.1 and err.max() < 0.3
     with pytest.raises(ValueError, match="tol"):
         build_table(rough, EPS, [LAM], method="go", tol=2.0, out_of_range="ignore")
+
+
+@pytest.mark.parametrize("method", ["spm", "go"])
+def test_table_albedo_equals_api_reflectivity(method):
+    """The whole chain (f = σ⁰/(4π cosθi cosθo), polarization averaging, coherent part, the
+    interpolant's quadrature) against emscatter's independent hemispherical integration."""
+    rough = {
+        "spm": GaussianCorrelation(0.02e-6, 0.5e-6),
+        "go": GaussianCorrelation(0.3e-6, 1.0e-6),
+    }[method]
+    t = build_table(
+        rough, EPS, [LAM], method=method, resolution=(20, 31), out_of_range="ignore", energy="off"
+    )
+    th = t.theta_i[[0, 6, 14]]  # 0°, 27°, 63°
+    em = api.emissivity(
+        rough, EPS, wavelength=LAM, theta_i=th, method=method, out_of_range="ignore"
+    )
+    # GO's σ⁰ is the whole Kirchhoff intensity: its table has no coherent lobe, so compare
+    # the incoherent part (api.emissivity adds the Kirchhoff coherent term to GO)
+    ref = em.incoherent.mean(axis=0) + (em.coherent.mean(axis=0) if method == "spm" else 0)
+    np.testing.assert_allclose(t.albedo().total[0, [0, 6, 14]], ref, atol=3e-4)
