@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from brdf_helpers import SEPARABLE
 from emscatter import api
 from emscatter.brdf import build_table, frames
 from emscatter.brdf.build import default_phi, default_phi_d, default_theta
@@ -179,7 +180,9 @@ def test_adaptive_resolution_meets_its_target():
     from emscatter.brdf.distributions import Beckmann
 
     rough = GaussianCorrelation(0.2e-6, 1.0e-6)  # m = 0.4
-    t = build_table(rough, EPS, [LAM], method="go", tol=0.1, out_of_range="ignore")
+    t = build_table(
+        rough, EPS, [LAM], method="go", tol=0.1, out_of_range="ignore", shadowing=SEPARABLE
+    )
     rep = t.metadata["resolution"]
     assert rep["adaptive"] and rep["converged"] and rep["max_error_theta"] <= 0.1
     assert not np.allclose(np.diff(t.theta_i), np.diff(t.theta_i)[0])  # refined, non-uniform
