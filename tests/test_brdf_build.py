@@ -45,7 +45,7 @@ def test_isotropic_half_grid_equals_direct_polarized():
     )
     th, pd = default_theta(10), default_phi_d(13)
     ti, to, d = np.meshgrid(th, th, pd, indexing="ij")
-    direct = _direct(rough, EPS, "spm", ti, 0.3, to, 0.3 + d, coherent=False)
+    direct = _direct(rough, EPS, "spm", ti, 0.3, to, 0.3 + d)
     assert t.metadata["energy"]["remedy_applied"] is False
     np.testing.assert_allclose(t.polarized[:, :, 0], direct, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(t.values[0], 0.5 * direct.sum(axis=(0, 1)), rtol=1e-10)
