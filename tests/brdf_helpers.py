@@ -53,7 +53,9 @@ def random_directions(rng, n: int, max_theta: float) -> np.ndarray:
 
 
 def go_fr(rough, eps, wi, wo, convert=frames.to_emscatter, **options) -> np.ndarray:
-    """emscatter's GO unpolarized f_r [1/sr] at renderer-frame directions (``wavelength=1``)."""
+    """emscatter's GO unpolarized f_r [1/sr] at renderer-frame directions (``wavelength=1``),
+    separable Smith shadowing unless ``shadowing=`` says otherwise."""
+    options.setdefault("shadowing", SEPARABLE)
     ti, pi_ = frames.angles(wi)
     to, po = frames.angles(wo)
     et, es, ps, ei = convert(ti, pi_, to, po)
@@ -70,3 +72,19 @@ def go_fr(rough, eps, wi, wo, convert=frames.to_emscatter, **options) -> np.ndar
         **options,
     )
     return res.unpolarized() / (4 * math.pi * np.cos(ti) * np.cos(to))
+
+
+def separable_shadowing() -> str:
+    """The GO ``shadowing`` option for Mitsuba's separable Smith product ``G1(wi) G1(wo)``
+    everywhere: ``"separable"`` where the solver knows it (the accuracy branch makes the
+    default monostatic at exact backscatter), else ``"smith"`` (the separable product)."""
+    from emscatter.solvers.kirchhoff_common import check_shadowing
+
+    try:
+        check_shadowing("separable")
+        return "separable"
+    except ValueError:
+        return "smith"
+
+
+SEPARABLE = separable_shadowing()

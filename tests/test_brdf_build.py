@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from brdf_helpers import SEPARABLE
 from emscatter import api
 from emscatter.brdf import build_table, frames
 from emscatter.brdf.build import default_phi, default_phi_d, default_theta
@@ -44,7 +45,7 @@ def test_isotropic_half_grid_equals_direct_polarized():
     )
     th, pd = default_theta(10), default_phi_d(13)
     ti, to, d = np.meshgrid(th, th, pd, indexing="ij")
-    direct = _direct(rough, EPS, "spm", ti, 0.3, to, 0.3 + d, coherent=False)
+    direct = _direct(rough, EPS, "spm", ti, 0.3, to, 0.3 + d)
     assert t.metadata["energy"]["remedy_applied"] is False
     np.testing.assert_allclose(t.polarized[:, :, 0], direct, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(t.values[0], 0.5 * direct.sum(axis=(0, 1)), rtol=1e-10)
@@ -179,7 +180,9 @@ def test_adaptive_resolution_meets_its_target():
     from emscatter.brdf.distributions import Beckmann
 
     rough = GaussianCorrelation(0.2e-6, 1.0e-6)  # m = 0.4
-    t = build_table(rough, EPS, [LAM], method="go", tol=0.1, out_of_range="ignore")
+    t = build_table(
+        rough, EPS, [LAM], method="go", tol=0.1, out_of_range="ignore", shadowing=SEPARABLE
+    )
     rep = t.metadata["resolution"]
     assert rep["adaptive"] and rep["converged"] and rep["max_error_theta"] <= 0.1
     assert not np.allclose(np.diff(t.theta_i), np.diff(t.theta_i)[0])  # refined, non-uniform
@@ -194,3 +197,24 @@ def test_adaptive_resolution_meets_its_target():
     assert np.percentile(err, 99) < 0.1 and err.max() < 0.3
     with pytest.raises(ValueError, match="tol"):
         build_table(rough, EPS, [LAM], method="go", tol=2.0, out_of_range="ignore")
+
+
+@pytest.mark.parametrize("method", ["spm", "go"])
+def test_table_albedo_equals_api_reflectivity(method):
+    """The whole chain (f = σ⁰/(4π cosθi cosθo), polarization averaging, coherent part, the
+    interpolant's quadrature) against emscatter's independent hemispherical integration."""
+    rough = {
+        "spm": GaussianCorrelation(0.02e-6, 0.5e-6),
+        "go": GaussianCorrelation(0.3e-6, 1.0e-6),
+    }[method]
+    t = build_table(
+        rough, EPS, [LAM], method=method, resolution=(20, 31), out_of_range="ignore", energy="off"
+    )
+    th = t.theta_i[[0, 6, 14]]  # 0°, 27°, 63°
+    em = api.emissivity(
+        rough, EPS, wavelength=LAM, theta_i=th, method=method, out_of_range="ignore"
+    )
+    # GO's σ⁰ is the whole Kirchhoff intensity: its table has no coherent lobe, so compare
+    # the incoherent part (api.emissivity adds the Kirchhoff coherent term to GO)
+    ref = em.incoherent.mean(axis=0) + (em.coherent.mean(axis=0) if method == "spm" else 0)
+    np.testing.assert_allclose(t.albedo().total[0, [0, 6, 14]], ref, atol=3e-4)

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from brdf_helpers import mitsuba_fr, mitsuba_variant, random_directions
+from brdf_helpers import SEPARABLE, mitsuba_fr, mitsuba_variant, random_directions
 from emscatter import materials
 from emscatter.brdf import build_table
 from emscatter.brdf.fit import fit_microfacet
@@ -20,7 +20,15 @@ WL = [0.45e-6, 0.55e-6, 0.65e-6]
 @pytest.fixture(scope="module")
 def gold():
     rough = GaussianCorrelation(0.15e-6, 1.0e-6)  # m = 2σ/T = 0.3
-    return build_table(rough, "Au", WL, method="go", resolution=(24, 31), out_of_range="ignore")
+    return build_table(
+        rough,
+        "Au",
+        WL,
+        method="go",
+        resolution=(24, 31),
+        out_of_range="ignore",
+        shadowing=SEPARABLE,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +83,13 @@ def test_rgb_dict(gold_fit):
 def test_fit_dielectric_and_bad_input():
     rough = GaussianCorrelation(0.15e-6, 1.0e-6)
     glass = build_table(
-        rough, 2.25, [0.5e-6], method="go", resolution=(16, 19), out_of_range="ignore"
+        rough,
+        2.25,
+        [0.5e-6],
+        method="go",
+        resolution=(16, 19),
+        out_of_range="ignore",
+        shadowing=SEPARABLE,
     )
     fit = fit_microfacet(glass, kind="dielectric")
     assert fit.mitsuba["type"] == "roughdielectric"

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from brdf_helpers import mitsuba_fr, mitsuba_variant, random_directions
+from brdf_helpers import SEPARABLE, mitsuba_fr, mitsuba_variant, random_directions
 from emscatter.brdf import BrdfTable, build_table, frames
 from emscatter.brdf.build import default_phi, default_phi_d, default_theta
 from emscatter.spectra import GaussianCorrelation
@@ -151,7 +151,9 @@ def test_table_rejects_bad_input():
 @pytest.fixture(scope="module")
 def go_table():
     rough = GaussianCorrelation(0.15e-6, 1.0e-6)  # m = 0.3
-    return build_table(rough, EPS, WL, method="go", resolution=(30, 61), out_of_range="ignore")
+    return build_table(
+        rough, EPS, WL, method="go", resolution=(30, 61), out_of_range="ignore", shadowing=SEPARABLE
+    )
 
 
 def test_go_table_matches_mitsuba_at_nodes_and_between(go_table):

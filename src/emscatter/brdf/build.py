@@ -26,6 +26,7 @@ import numpy as np
 from .. import api, materials
 from ..conventions import check_positive
 from ..fresnel import check_eps
+from ..scattering import Scattering
 from ..spectra import check_roughness
 from . import frames, grid
 from .energy import apply_energy_remedy
@@ -93,6 +94,11 @@ def _solver_name(rough, k, method, eps, out_of_range) -> str:
     return name
 
 
+#: The API computes ``Scattering.coherent`` lazily (BOARD interface 3, reliability): then it
+#: skips the solvers' coherent part by itself and must not be given ``coherent=False``.
+_API_LAZY_COHERENT = hasattr(Scattering, "coherent_computed")
+
+
 def _bistatic(rough, eps, wavelength, name, ti, pi_, to, po, out_of_range, options):
     """``api.bistatic`` at renderer-frame angles (converted by :func:`frames.to_emscatter`)."""
     et, es, ps, ei = frames.to_emscatter(ti, pi_, to, po)
@@ -112,10 +118,11 @@ def _bistatic(rough, eps, wavelength, name, ti, pi_, to, po, out_of_range, optio
 
 def _sigma0(rough, eps, wavelength, name, ti, to, po, pi_, out_of_range, options, polarized):
     """Unpolarized (and per-pair) f_r at renderer angles: ``(f, f_pol or None, info)``."""
-    module = api.solvers.get(name)
     opts = dict(options)
-    if "coherent" in inspect.signature(module.bistatic).parameters:
-        opts.setdefault("coherent", False)
+    if not _API_LAZY_COHERENT:  # an API that does not defer the coherent part itself
+        module = api.solvers.get(name)
+        if "coherent" in inspect.signature(module.bistatic).parameters:
+            opts.setdefault("coherent", False)
     res = _bistatic(rough, eps, wavelength, name, ti, pi_, to, po, out_of_range, opts)
     sig = res.sigma0
     if not np.all(np.isfinite(sig)):
