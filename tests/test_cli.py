@@ -5,9 +5,11 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from emscatter.cli import main
+from emscatter.io import read_csv
 
 
 def test_surface_command_draws_and_measures(tmp_path, capsys):
@@ -57,9 +59,10 @@ def test_curves_bistatic_writes_png_csv_json(tmp_path):
         ]
     )
     assert rc == 0
-    rows = list(csv.DictReader(out["csv"].read_text().splitlines()))
-    assert len(rows) == 10 and float(rows[5]["sigma0_hh"]) > 0
-    assert json.loads(out["json"].read_text())["method"] == "spm"
+    header, cols, meta = read_csv(out["csv"])
+    assert cols["theta_s_deg"].size == 10 and cols["sigma0_hh"][5] > 0
+    assert meta["schema"] == "emscatter.curves/1"
+    assert json.loads(out["json"].read_text())["result"]["method"] == "spm"
 
 
 def test_curves_emissivity(tmp_path):
@@ -80,8 +83,9 @@ def test_curves_emissivity(tmp_path):
         ]
     )
     assert rc == 0
-    rows = list(csv.DictReader(csv_path.read_text().splitlines()))
-    assert all(0 < float(r["e_h"]) < 1 for r in rows)
+    _, cols, _ = read_csv(csv_path)
+    assert cols["theta_i_deg"].tolist() == [0, 20, 40, 60]
+    assert np.all((0 < cols["e_h"]) & (cols["e_h"] < 1)) and np.all(cols["energy_ok"] == 1)
 
 
 def test_bad_input_is_a_clear_error_and_writes_nothing(tmp_path, capsys):
