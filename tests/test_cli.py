@@ -1,6 +1,5 @@
 """The command-line tool, run for real (in-process through main(), and one subprocess)."""
 
-import csv
 import json
 import re
 import subprocess
@@ -136,11 +135,13 @@ def test_demo_quick_writes_every_output(tmp_path):
         assert (tmp_path / name).stat().st_size > 0, name
     stats = json.loads((tmp_path / "surfaces" / "stats.json").read_text())
     assert abs(stats["fbm_H0.7"]["measured_hurst_periodogram"] - 0.7) < 0.1
-    rows = list(csv.DictReader((tmp_path / "figure_5_3.csv").read_text().splitlines()))
+    _, cols, meta = read_csv(tmp_path / "figure_5_3.csv")
     # the seed's Figure 5.3: the hh lobe peaks near the specular direction (45°)
-    theta = [float(r["theta_s_deg"]) for r in rows]
-    hh = [float(r["sigma0_hh_sigma0.045"]) for r in rows]
-    assert 35 < theta[hh.index(max(hh))] < 50
+    theta, hh = cols["theta_s_deg"], cols["sigma0_hh_sigma0.045"]
+    assert 35 < theta[np.argmax(hh)] < 50
+    assert meta["schema"] == "emscatter.demo/1" and meta["inputs"]["wavelength_m"] == 1.0
+    _, cols, meta = read_csv(tmp_path / "emissivity.csv")
+    assert np.all(cols["energy_ok_sigma0.045"] == 1) and meta["inputs"]["method"] == "spm"
 
 
 def test_a_new_command_is_a_new_module(tmp_path, monkeypatch, capsys):

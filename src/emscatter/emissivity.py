@@ -80,9 +80,9 @@ class Emissivity:
 
 
 #: Default budget of σ⁰ evaluations per incidence angle in :func:`hemispherical_reflectivity`
-#: (the graded rule needs ~1e3–6e4 for tol = 1e-4; the budget only stops pathological cases,
+#: (the graded rule needs ~1e3–9e4 for tol = 1e-4; the budget only stops pathological cases,
 #: e.g. physical optics at kσ = 1e3, whose every evaluation sums thousands of series terms).
-MAX_EVALUATIONS_PER_ANGLE = 200_000
+MAX_EVALUATIONS_PER_ANGLE = 100_000
 
 #: Absolute slack [-] added to the quadrature error when checking the energy balance
 #: (rounding of quantities of order 1).
