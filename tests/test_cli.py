@@ -33,6 +33,7 @@ def test_surface_command_draws_and_measures(tmp_path, capsys):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     stats = json.loads(js.read_text())
     assert stats["target_hurst"] == 0.7
+    assert stats["schema"] == "emscatter.surface/1" and stats["inputs"]["size"] == 256
     assert abs(stats["measured_hurst_variogram"] - 0.7) < 0.1
     assert "measured_hurst_variogram" in capsys.readouterr().out
 

@@ -177,9 +177,14 @@ def test_coherent_part_is_computed_only_when_read(monkeypatch):
     th = np.radians(np.linspace(0, 89, 90))
     s = em.backscatter(rough, 17 + 2j, frequency=1e9, theta_i=th, method="spm")
     assert s.vv.shape == (90,) and not seen and not s.coherent_computed
+    import pickle
+
+    copy = pickle.loads(pickle.dumps(s))  # a lazy result still pickles (computed on the way)
+    assert copy.coherent_computed and seen
     eager = spm.bistatic(rough, 17 + 2j, s.k, th, th, math.pi, 0.0)
     np.testing.assert_allclose(s.coherent, eager.coherent, rtol=1e-14)
     assert s.coherent_computed and s.coherent.shape == (2, 90)
+    np.testing.assert_array_equal(copy.coherent, s.coherent)
     np.testing.assert_allclose(s.coherent_pol("TE"), eager.coherent[0], rtol=1e-14)
     np.testing.assert_allclose(s.coherent_pol("v"), eager.coherent[1], rtol=1e-14)
 

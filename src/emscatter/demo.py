@@ -35,14 +35,20 @@ DEMO_SCHEMA = "emscatter.demo/1"
 
 
 def _meta(figure: str, **inputs) -> dict:
-    """What a demo CSV needs to be reproduced: the inputs, the version, the command."""
+    """What a demo CSV needs to be reproduced: the inputs (every demo figure uses the seed's
+    ε = 17 + 2i at λ = 1 m), the version, the command."""
     from . import __version__
 
+    common = {
+        "eps": {"re": FIG53_EPS.real, "im": FIG53_EPS.imag},
+        "wavelength_m": 1.0,
+        "frequency_hz": SPEED_OF_LIGHT,
+    }
     return {
         "figure": figure,
         "emscatter_version": __version__,
         "command": "emscatter demo",
-        "inputs": inputs,
+        "inputs": {**common, **inputs},
     }
 
 
@@ -116,7 +122,21 @@ def surface_report(
         )
         save_figure(fig, png)
     if json_path:
-        write_json(json_path, _json_safe(stats))
+        from . import __version__
+
+        inputs = dict(
+            kind=kind,
+            hurst=hurst,
+            size=size,
+            spacing_m=spacing,
+            sigma_m=sigma,
+            length_m=length,
+            seed=seed,
+            periodic=periodic,
+            profile=profile,
+        )
+        meta = {"schema": "emscatter.surface/1", "emscatter_version": __version__, "inputs": inputs}
+        write_json(json_path, _json_safe({**meta, **stats}))
     return stats
 
 
@@ -186,9 +206,6 @@ def figure_5_3(out: Path, *, n_theta: int = 179) -> list[Path]:
                 "seed Figure 5.3",
                 method="spm",
                 roughness={"kind": "gaussian", "length_m": 1.0, "sigma_m": list(FIG53_SIGMAS)},
-                eps={"re": FIG53_EPS.real, "im": FIG53_EPS.imag},
-                wavelength_m=1.0,
-                frequency_hz=SPEED_OF_LIGHT,
                 theta_i_deg=45.0,
                 phi_s_deg=0.0,
             ),
@@ -233,9 +250,6 @@ def emissivity_curves(out: Path, *, n_theta: int = 18) -> list[Path]:
         "emissivity",
         method="spm",
         roughness={"kind": "gaussian", "length_m": 1.0, "sigma_m": list(EMISSIVITY_SIGMAS)},
-        eps={"re": FIG53_EPS.real, "im": FIG53_EPS.imag},
-        wavelength_m=1.0,
-        frequency_hz=SPEED_OF_LIGHT,
         theta_i_deg=th_deg.tolist(),
         tol=1e-4,
     )
@@ -330,9 +344,6 @@ def methods_comparison(out: Path, *, n_theta: int = 179) -> list[Path]:
                     {"kind": "gaussian", "sigma_m": sg, "length_m": ell}
                     for _, sg, ell in COMPARISON_CASES
                 ],
-                eps={"re": FIG53_EPS.real, "im": FIG53_EPS.imag},
-                wavelength_m=1.0,
-                frequency_hz=SPEED_OF_LIGHT,
                 theta_i_deg=30.0,
                 phi_s_deg=0.0,
                 out_of_range="ignore",

@@ -59,6 +59,11 @@ class Scattering:
             object.__setattr__(self, "coherent", value)
         return value
 
+    def __getstate__(self):  # pickling (e.g. to a worker process) computes a lazy part first
+        state = dict(self.__dict__)
+        state["coherent"] = self.coherent
+        return state
+
     @property
     def coherent_computed(self) -> bool:
         """Whether :attr:`coherent` has been computed (False while it is still lazy)."""
