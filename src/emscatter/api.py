@@ -345,7 +345,9 @@ def _energy_fallback(rough, eps, k, ti, pi_, tol, options, ranking, primary, sta
         except (ValueError, TypeError):  # this method cannot take these inputs
             continue
         angular = validity_report(cand, rough, k, eps=eps, theta_i=sub_ti)
-        accept = energy_balance(rc, ri, er, sub_ti)["ok"] & _angle_mask(angular, sub_ti.shape)
+        accept = energy_balance(rc, ri, er, sub_ti, tol=tol)["ok"] & _angle_mask(
+            angular, sub_ti.shape
+        )
         if not accept.any():
             continue
         where = np.flatnonzero(bad)[accept]
@@ -372,13 +374,13 @@ def _emissivity_one(rough, eps, k, ti, pi_, method, tol, out_of_range, options) 
         "r_inc": np.array(r_inc, dtype=float),
         "err": np.array(err, dtype=float),
         "methods": np.full(ti.shape, name, dtype=object),
-        "ok": _angle_mask(report, ti.shape) & energy_balance(r_coh, r_inc, err, ti)["ok"],
+        "ok": _angle_mask(report, ti.shape) & energy_balance(r_coh, r_inc, err, ti, tol=tol)["ok"],
         "evals": evals,
     }
     if method == "auto" and not make_nan:
         _energy_fallback(rough, eps, k, ti, pi_, tol, options, ranking, report, state)
     r_coh, r_inc, err = state["r_coh"], state["r_inc"], state["err"]
-    balance = energy_balance(r_coh, r_inc, err, ti)
+    balance = energy_balance(r_coh, r_inc, err, ti, tol=tol)
     ok = state["ok"]
     reasons = [*(report.get("angle_reasons", []) if not ok.all() else []), *balance["reasons"]]
     report = {

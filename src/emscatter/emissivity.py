@@ -74,9 +74,9 @@ class Emissivity:
         """Emissivity for ``"h"``/``"TE"`` or ``"v"``/``"TM"`` (case-insensitive)."""
         return self.emissivity[pol_index(pol)]
 
-    def energy_balance(self) -> dict:
+    def energy_balance(self, tol: float = 0.0) -> dict:
         """The per-angle balance (:func:`energy_balance`) of this result."""
-        return energy_balance(self.coherent, self.incoherent, self.error, self.theta_i)
+        return energy_balance(self.coherent, self.incoherent, self.error, self.theta_i, tol=tol)
 
 
 #: Default budget of σ⁰ evaluations per incidence angle in :func:`hemispherical_reflectivity`
@@ -94,10 +94,14 @@ def _list(values, limit=6) -> str:
     return ", ".join(vals) + (" ..." if np.size(values) > limit else "")
 
 
-def energy_balance(r_coh, r_incoh, error, theta_i, *, atol: float = ENERGY_ATOL) -> dict:
+def energy_balance(
+    r_coh, r_incoh, error, theta_i, *, tol: float = 0.0, atol: float = ENERGY_ATOL
+) -> dict:
     """Check energy conservation per incidence angle.
 
-    With ``e = 1 − r_coh − r_incoh`` and a margin ``m = error + atol`` per polarization, an
+    With ``e = 1 − r_coh − r_incoh`` and a margin ``m = max(error, tol) + atol`` per
+    polarization (the quadrature's accuracy: the tolerance asked, or the error estimate where it
+    is larger — the estimate, a difference of two refinements, can be optimistic), an
     angle conserves energy when, for both polarizations, everything is finite,
     ``r_coh ≥ −m``, ``r_incoh ≥ −m`` and ``−m ≤ e ≤ 1 + m`` (i.e. ``r_coh + r_incoh ≤ 1``
     beyond the quadrature error).
@@ -110,7 +114,7 @@ def energy_balance(r_coh, r_incoh, error, theta_i, *, atol: float = ENERGY_ATOL)
     r_incoh = np.asarray(r_incoh, dtype=float)
     error = np.asarray(error, dtype=float)
     e = 1.0 - r_coh - r_incoh
-    m = np.where(np.isnan(error), np.inf, np.abs(error)) + atol
+    m = np.maximum(np.where(np.isnan(error), np.inf, np.abs(error)), tol) + atol
     with np.errstate(invalid="ignore"):
         finite = np.isfinite(r_coh) & np.isfinite(r_incoh)
         ok_pol = finite & (r_coh >= -m) & (r_incoh >= -m) & (e >= -m) & (e <= 1 + m)
@@ -129,7 +133,7 @@ def energy_balance(r_coh, r_incoh, error, theta_i, *, atol: float = ENERGY_ATOL)
         tot = (r_coh[p] + r_incoh[p])[bad]
         reasons.append(
             f"energy not conserved, e_{label} = {_list(e[p][bad])} at θi = {deg} "
-            f"(r_coh + r_incoh = {_list(tot)}; allowed [0, 1] within the quadrature error "
+            f"(r_coh + r_incoh = {_list(tot)}; allowed [0, 1] within the quadrature accuracy "
             f"≤ {float(np.max(m[p][bad])):.2g})"
         )
     return {
@@ -138,6 +142,7 @@ def energy_balance(r_coh, r_incoh, error, theta_i, *, atol: float = ENERGY_ATOL)
         "emissivity": e,
         "reflectivity": r_coh + r_incoh,
         "error": error,
+        "margin": m,
         "reasons": reasons,
     }
 

@@ -70,14 +70,20 @@ def curves_figure(
     ylabel: str,
     title: str,
     db: bool = True,
-    floor_db: float = -80.0,
+    floor_db: float | None = None,
 ):
-    """Several curves over an angle axis; ``db=True`` plots ``10 log10`` with a floor."""
+    """Several curves over an angle axis; ``db=True`` plots ``10 log10``.
+
+    Values are drawn as computed: zeros (−∞ dB) and NaN leave gaps rather than a fake floor;
+    ``floor_db`` (default none) clips only if asked."""
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for label, y in curves.items():
         y = np.asarray(y, dtype=float)
         if db:
-            y = np.maximum(10 * np.log10(np.maximum(y, 1e-300)), floor_db)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                y = np.where(y > 0, 10 * np.log10(np.where(y > 0, y, 1.0)), np.nan)
+            if floor_db is not None:
+                y = np.maximum(y, floor_db)
         ax.plot(x_deg, y, label=label)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
