@@ -72,9 +72,9 @@ from .spm_second_order import (  # noqa: F401 (the tests reach the kernel throug
     _first_order_amplitudes,
     _root,
     _second_order_R,
+    _spectral_scales,
 )
 from .spm_validity import OPTIONS, VALIDITY, check_validity  # noqa: F401 (re-exported)
-from .validity import SLOPE_CUTOFF_FACTOR
 
 __all__ = ["VALIDITY", "bistatic", "coherent_reflectivity", "check_validity"]
 
@@ -256,10 +256,14 @@ def coherent_reflectivity(
         exponential spectra, kℓ 0.5–100, θi 0–89°, PEC and ε = 17 + 2i, with and without
         ``k_max``; typically 1e-8–1e-6; tests/test_spm.py).
     k_max : spectral cutoff [rad/m]: the roughness spectrum is taken as zero for
-        ``|k⊥ − k_i⊥| > k_max`` (:func:`coherent_cutoff`; default ``2k`` for exponential and
-        power-law spectra, none for the Gaussian). Over a lossy medium the second-order
-        coherent term of an algebraic spectrum depends on it (log-divergent in TM at oblique
-        incidence; validation/spm2_cutoff); give the surface's own inner scale if known.
+        ``|k⊥ − k_i⊥| > k_max`` (:func:`coherent_cutoff`). Default: the whole spectrum
+        (its support). Over a lossy medium the coherent term of an exponential/power-law
+        spectrum depends on how far the spectrum extends — the sub-wavelength roughness
+        couples through evanescent fields: h converges by ``k_max ≈ 100k–1000k``, TM at
+        oblique incidence keeps growing ~1e-3 per decade (validation/spm2_cutoff, where the
+        MoM emissivity of exponential profiles agrees with SPM2 at the MoM's own cutoff
+        ``π/dx`` to 0.005 and is 0.006–0.021 away from a 2k cutoff); give the surface's own
+        inner scale if it is known.
 
     Cost: ~2–10 ms per distinct ``theta_i`` (2-D surface), < 2 ms (1-D profile).
     """
@@ -284,16 +288,15 @@ def coherent_reflectivity(
     return _coherent(rough, eps_c, k, ti, shape, n_radial, n_azimuth, pi_, cut)[0]
 
 
-def coherent_cutoff(rough: Roughness, k: float, k_max=None) -> float | None:
-    """The cutoff [rad/m] of the second-order coherent term: ``k_max`` if given, else
-    ``2k`` for spectra with an infinite slope variance (exponential, power law: the same
-    spectrum the validity checks and GO use, :mod:`emscatter.solvers.validity`), else None
-    (the Gaussian's support)."""
+def coherent_cutoff(rough: Roughness, k: float, k_max=None) -> float:
+    """The cutoff [rad/m] of the second-order coherent term: ``k_max`` if given (and below
+    the support), else the spectrum's support radius — the whole spectrum: ``13/ℓ`` for
+    the Gaussian (``e^{−q²/4} < 1e-18`` beyond), ``2e4/ℓ`` for algebraic tails (relative
+    spectral mass ≲ 1e-4 beyond), ``ℓ`` the shorter correlation length."""
+    support = _spectral_scales(rough)[0] / min(rough.length, rough.length_y)
     if k_max is not None:
-        return check_positive("k_max", k_max, unit="rad/m")
-    if rough._mss_closed() is not None:
-        return None
-    return SLOPE_CUTOFF_FACTOR * k
+        return min(check_positive("k_max", k_max, unit="rad/m"), support)
+    return support
 
 
 def _coherent(rough, eps_c, k, ti, shape, n_radial, n_azimuth, phi_i=0.0, k_max=None):
@@ -349,8 +352,8 @@ def bistatic(
     theta_i, theta_s : incidence / scattering angles [rad] in ``[0, π/2]``.
     phi_s, phi_i : azimuths [rad] (finite; only ``phi_s − phi_i`` and ``phi_i`` enter).
     order : coherent part: 0/1 → Fresnel ``|R|²``; 2 → with the second-order correction.
-    k_max : spectral cutoff [rad/m] of the second-order coherent term (default ``2k`` for
-        exponential/power-law spectra; :func:`coherent_reflectivity`). σ⁰ does not depend
+    k_max : spectral cutoff [rad/m] of the second-order coherent term (default: the whole
+        spectrum; :func:`coherent_reflectivity`). σ⁰ does not depend
         on it (first order uses the spectrum at the Bragg wavenumber only).
     coherent : ``False`` skips the coherent part (its quadrature dominates the cost when only
         σ⁰ is needed, e.g. inside the hemispherical integral); ``coherent`` is then NaN and
@@ -407,7 +410,7 @@ def bistatic(
         "validity": check_validity(rough, k, k_max=k_max),
         "order": order,
         "coherent_clipped": clipped,
-        "coherent_cutoff": cut if order == 2 else None,
+        "coherent_cutoff": cut if order == 2 and coherent else None,
     }
     if not coherent:
         info["coherent"] = "not computed (coherent=False)"

@@ -25,11 +25,12 @@ Angle criterion (with ``theta_i`` and ``eps``):
   interpolated as ``cosθi · r₁`` (smooth up to grazing), so later calls cost nothing.
 
 Spectral cutoff of the coherent term (a note, not a failed check): over a lossy medium the
-second-order coherent reflectivity of an exponential or power-law spectrum depends on the
-cutoff ``k_max`` (default ``2k``, :func:`emscatter.solvers.spm.coherent_cutoff`;
-validation/spm2_cutoff). The report then carries ``coherent_depends_on_cutoff = True`` and a
-note; with ``coherent=True`` and ``theta_i`` it also measures ``cutoff_sensitivity``, the
-change of the coherent reflectivity (larger of h, v) when ``k_max`` grows tenfold, per angle.
+second-order coherent reflectivity of an exponential or power-law spectrum depends on how far
+the spectrum extends (``k_max``; default the whole spectrum,
+:func:`emscatter.solvers.spm.coherent_cutoff`; validation/spm2_cutoff). The report then
+carries ``coherent_depends_on_cutoff = True`` and a note; with ``coherent=True`` and
+``theta_i`` it also measures ``cutoff_sensitivity``, the change of the coherent reflectivity
+(larger of h, v) between ``k_max/10`` and ``k_max``, per angle.
 """
 
 from __future__ import annotations
@@ -164,16 +165,17 @@ def check_validity(
             cut = coherent_cutoff(rough, k, user_cut)
             extra["coherent_depends_on_cutoff"] = True
             notes.append(
-                f"spm2_cutoff: the coherent reflectivity over this lossy medium depends on the "
-                f"spectral cutoff k_max = {cut / k:.3g}k (log-divergent kernel for exponential/"
-                "power-law spectra; pass k_max, the surface's inner scale; "
-                "validation/spm2_cutoff)"
+                f"spm2_cutoff: over this lossy medium the coherent reflectivity of an "
+                f"exponential/power-law spectrum depends on how far the spectrum extends "
+                f"(here k_max = {cut / k:.3g}k{'' if user_cut else ', the whole spectrum'}; "
+                "TM at oblique incidence grows ~1e-3 per decade; pass k_max, the surface's "
+                "inner scale; validation/spm2_cutoff)"
             )
             if solver_options.get("coherent") is True and ti is not None:
                 sens = _cutoff_sensitivity(rough, k, e, ti, cut)
                 extra["cutoff_sensitivity"] = sens
                 notes.append(
-                    f"spm2_cutoff: ×10 in k_max changes the coherent reflectivity by up to "
+                    f"spm2_cutoff: k_max/10 → k_max changes the coherent reflectivity by up to "
                     f"{float(np.max(sens)):.2g}"
                 )
     return build_report(
@@ -191,9 +193,9 @@ def check_validity(
 
 
 def _cutoff_sensitivity(rough, k, eps, theta_i, cut) -> np.ndarray:
-    """``max_p |r_coh,p(k_max) − r_coh,p(10 k_max)|`` per angle (theta_i's shape)."""
+    """``max_p |r_coh,p(k_max/10) − r_coh,p(k_max)|`` per angle (theta_i's shape)."""
     from .spm import coherent_reflectivity
 
-    a = coherent_reflectivity(rough, eps, k, theta_i, k_max=cut)
-    b = coherent_reflectivity(rough, eps, k, theta_i, k_max=10 * cut)
+    a = coherent_reflectivity(rough, eps, k, theta_i, k_max=cut / 10)
+    b = coherent_reflectivity(rough, eps, k, theta_i, k_max=cut)
     return np.max(np.abs(a - b), axis=0)
