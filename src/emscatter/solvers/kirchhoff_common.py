@@ -42,7 +42,7 @@ from scipy import special
 from ..conventions import check_angle, check_finite, check_positive
 from ..fresnel import PEC, check_eps, is_pec
 from ..spectra import Roughness, check_roughness
-from .validity import Check, angle_lower, lower, wave_slope_variances
+from .validity import Check, angle_lower, build_report, lower, wave_slope_variances
 
 __all__ = [
     "Geometry",
@@ -56,6 +56,7 @@ __all__ = [
     "tangent_plane_checks",
     "illuminated_fraction",
     "shadowing_angle_check",
+    "validity_report",
 ]
 
 _TAU_EPS = 1e-28  # |k̂_i × k̂_s|² below this is treated as exact backscatter
@@ -429,3 +430,14 @@ def illuminated_fraction(theta_i, s2: float) -> np.ndarray:
 def shadowing_angle_check(name, theta_i, sx, sy, limit, what, source):
     """Per-angle ``G1(θi) ≥ limit`` with the larger per-direction slope variance."""
     return angle_lower(name, illuminated_fraction(theta_i, max(sx, sy)), limit, what, source)
+
+
+def validity_report(roughness: Roughness, k: float, checks: list[tuple]) -> dict:
+    """Compatibility wrapper: a report (:func:`emscatter.solvers.validity.build_report`) from
+    ``(name, ok, text[, ratio])`` tuples; prefer :mod:`emscatter.solvers.validity`'s
+    ``upper``/``lower`` checks, which also record the value and the limit."""
+    out = []
+    for c in checks:
+        ratio = c[3] if len(c) > 3 else (1.0 if c[1] else math.inf)
+        out.append(Check(c[0], bool(c[1]), math.nan, math.nan, float(ratio), c[2]))
+    return build_report(roughness, k, out)
