@@ -223,3 +223,22 @@ def test_bistatic_angle_policy_blanks_only_invalid_incidence_angles():
         )
     assert np.isfinite(s.sigma0[..., 0]).all() and np.isnan(s.sigma0[..., 1]).all()
     assert np.isnan(s.coherent[:, 1]).all() and np.isfinite(s.coherent[:, 0]).all()
+
+
+def test_lazy_coherent_follows_an_array_permittivity():
+    rough = em.GaussianCorrelation(0.005, 0.05)
+    eps = np.array([3 + 0.1j, 10 + 1j, 20 + 2j])
+    s = em.bistatic(
+        rough,
+        eps,
+        frequency=1e9,
+        theta_i=0.3,
+        theta_s=np.array([0.1, 0.2, 0.3]),
+        phi_s=0.0,
+        method="spm",
+    )
+    for j, e in enumerate(eps):
+        one = em.bistatic(
+            rough, e, frequency=1e9, theta_i=0.3, theta_s=0.1, phi_s=0.0, method="spm"
+        )
+        np.testing.assert_allclose(s.coherent[:, j], one.coherent, rtol=1e-13)

@@ -112,8 +112,12 @@ def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scatt
     if lazy:
 
         def coherent():  # the specular geometry: depends on θi, φi, ε only
-            t, p = np.broadcast_arrays(ti, pi_)
-            coh = module.bistatic(rough, eps, k, t, t, p, p, **opts).coherent
+            if is_pec(eps) or np.ndim(eps) == 0:
+                t, p = np.broadcast_arrays(ti, pi_)
+                e = eps
+            else:
+                t, p, e = np.broadcast_arrays(ti, pi_, eps)
+            coh = module.bistatic(rough, e, k, t, t, p, p, **opts).coherent
             coh = coh.reshape(2, *(1,) * (len(shape) - t.ndim), *t.shape)
             return np.array(np.broadcast_to(coh, (2, *shape)))
 
@@ -185,6 +189,13 @@ def _bistatic_groups(rough, groups: list[Group], shape, k_b, angles, method, out
         return out
 
     ti, ts, ps, pi_ = (np.broadcast_to(a, shape) for a in angles)
+    info = {**parts[0][1].info, "validity": _merged_validity(parts), "methods": methods}
+    info.pop("out_of_range", None)
+    if any("out_of_range" in res.info for _, res in parts):
+        blank = np.zeros(shape, dtype=bool)
+        for g, res in parts:
+            blank[g.mask] = np.broadcast_to(res.info.get("out_of_range", False), g.mask.sum())
+        info["out_of_range"] = blank
     return Scattering(
         sigma0=sigma0,
         coherent=coherent,
@@ -195,7 +206,7 @@ def _bistatic_groups(rough, groups: list[Group], shape, k_b, angles, method, out
         phi_i=pi_,
         k=k_b,
         dimension=rough.dimension,
-        info={"validity": _merged_validity(parts), "methods": methods},
+        info=info,
     )
 
 
