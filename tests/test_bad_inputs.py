@@ -375,6 +375,8 @@ CLI = [
         ["argument --eps: permittivity '17-2j' has Im < 0", "give 17+2j"],
     ),
     (["curves", "--eps", "0"], ["argument --eps: permittivity must be nonzero"]),
+    (["curves", "--eps", "gold"], ["argument --eps:", "unknown material 'gold'", "'Au'"]),
+    (["curves", "--eps", "Au", "--wavelength", "1"], ["material 'Au'", "298.8–885.6 nm"]),
     (
         ["curves", "--theta-i-deg", "10:40"],
         [

@@ -303,3 +303,38 @@ def test_emissivity_figure_shows_the_data_it_is_given():
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+
+
+def test_material_names_on_the_command_line_round_trip(tmp_path):
+    js = tmp_path / "c.json"
+    argv = [
+        "curves",
+        "--quantity",
+        "backscatter",
+        "--eps",
+        "concrete",
+        "--frequency",
+        "3.5e9",
+        "--sigma",
+        "0.004",
+        "--length",
+        "0.05",
+        "--theta-i-deg",
+        "30",
+        "--json",
+        str(js),
+    ]
+    assert main(argv) == 0
+    data = json.loads(js.read_text())
+    assert data["inputs"]["eps"] == {"material": "concrete"}
+    import emscatter as em
+    from emscatter import materials
+
+    eps = materials.itu("concrete").eps(frequency=3.5e9)
+    ref = em.backscatter(
+        em.GaussianCorrelation(0.004, 0.05), eps, frequency=3.5e9, theta_i=np.radians(30)
+    )
+    assert data["columns"]["sigma0_vv"][0] == pytest.approx(float(ref.vv), rel=1e-9)
+    again = tmp_path / "again.json"
+    assert main(["curves", "--from", str(js), "--json", str(again)]) == 0
+    assert json.loads(again.read_text())["columns"] == data["columns"]

@@ -34,6 +34,7 @@ __all__ = [
     "Number",
     "Integer",
     "parse_eps",
+    "MaterialName",
     "add_frequency_args",
     "frequency_kwargs",
     "OutputPath",
@@ -175,10 +176,17 @@ class Angles:
         return vals
 
 
-def parse_eps(text: str):
-    """A complex relative permittivity (``exp(-iωt)``, ``Im ε ≥ 0``) or the string ``"pec"``.
+class MaterialName(str):
+    """A material name from ``--eps`` (``Au``, ``concrete``, ``itu:glass``), checked to exist;
+    the API takes it as ``eps`` and evaluates it at the frequency of the call."""
 
-    Accepts ``17``, ``17+2j``, ``17+2i``, ``(17+2j)``, ``-5+1j``, ``pec`` (any case).
+
+def parse_eps(text: str):
+    """A complex relative permittivity (``exp(-iωt)``, ``Im ε ≥ 0``), ``"pec"``, or a material
+    name (:class:`MaterialName`: a Mitsuba metal such as ``Au``, an ITU-R P.2040 material such
+    as ``concrete``).
+
+    Accepts ``17``, ``17+2j``, ``17+2i``, ``(17+2j)``, ``-5+1j``, ``pec`` (any case), ``Au``.
     """
     t = str(text).strip().lower().replace(" ", "")
     if t == "pec":
@@ -186,6 +194,17 @@ def parse_eps(text: str):
     try:
         value = complex(t.replace("i", "j"))
     except ValueError:
+        if t[:1].isalpha():
+            from ..materials import as_material
+
+            try:
+                as_material(str(text).strip())
+            except (ValueError, TypeError) as exc:
+                raise argparse.ArgumentTypeError(
+                    f"expected a complex permittivity like 17+2j (exp(-iωt): Im ≥ 0), 'pec' or a "
+                    f"material name; {exc}"
+                ) from None
+            return MaterialName(str(text).strip())
         raise argparse.ArgumentTypeError(
             f"expected a complex permittivity like 17+2j (exp(-iωt): Im ≥ 0) or 'pec', got {text!r}"
         ) from None

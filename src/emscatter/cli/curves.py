@@ -59,7 +59,8 @@ def register(subparsers) -> None:
         "--eps",
         type=parse_eps,
         default=17 + 2j,
-        help="relative permittivity, exp(-iωt) so Im ≥ 0 (17+2j or 17+2i), or 'pec'",
+        help="relative permittivity, exp(-iωt) so Im ≥ 0 (17+2j or 17+2i), 'pec', or a material "
+        "(a Mitsuba metal such as Au, an ITU-R P.2040 name such as concrete)",
     )
     add_frequency_args(c)
     c.add_argument(
@@ -137,7 +138,10 @@ def _inputs(a, rough) -> dict:
     else:
         lam = fk["wavelength"]
         f = SPEED_OF_LIGHT / lam
-    eps = a.eps if a.eps == "pec" else {"re": a.eps.real, "im": a.eps.imag}
+    if isinstance(a.eps, str):  # "pec" or a material name
+        eps = a.eps if a.eps == "pec" else {"material": str(a.eps)}
+    else:
+        eps = {"re": a.eps.real, "im": a.eps.imag}
     inputs = {
         "quantity": a.quantity,
         "roughness": {
@@ -180,8 +184,8 @@ def _argv_from_inputs(inputs: dict) -> list[str]:
         argv += ["--hurst", repr(r["hurst"])]
     if r.get("dimension") == 1:
         argv.append("--profile")
-    if eps == "pec":
-        argv += ["--eps", "pec"]
+    if eps == "pec" or "material" in eps:
+        argv += ["--eps", "pec" if eps == "pec" else eps["material"]]
     else:
         re, im = float(eps["re"]), float(eps["im"])
         argv += ["--eps", f"{re!r}{'+' if im >= 0 else '-'}{abs(im)!r}j"]
@@ -252,7 +256,7 @@ def _compute(a, rough):
 
     common = dict(method=a.method, out_of_range=a.out_of_range, **frequency_kwargs(a))
     th_i = np.asarray(a.theta_i_deg, dtype=float)
-    eps_label = "pec" if a.eps == "pec" else fmt(a.eps)
+    eps_label = str(a.eps) if isinstance(a.eps, str) else fmt(a.eps)
     title_tail = f"{rough.describe()}, ε = {eps_label}"
     if a.quantity == "emissivity":
         res = api.emissivity(rough, a.eps, theta_i=np.radians(th_i), tol=a.tol, **common)
