@@ -28,7 +28,12 @@ _NUMBER_LIKE = re.compile(r"^-(\d|\.\d|inf|nan)", re.IGNORECASE)
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse with one-line errors that point to ``--help``."""
+    """argparse with one-line errors that point to ``--help``; no abbreviated options (an
+    abbreviation that silently picks an option is a guess, not an input)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message):  # noqa: D102 - argparse hook
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
@@ -106,11 +111,15 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:  # --help, --version, or a usage error already printed
         return int(exc.code or 0) if not isinstance(exc.code, str) else 2
     command = args.command
+    args._argv = argv  # what was typed: commands check which options were given
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         warnings.showwarning = _show_warning(command)
         try:
             return int(args.func(args) or 0)
+        except BrokenPipeError:  # e.g. `emscatter curves | head`: stop quietly
+            sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - keep Python from flushing
+            return 141
         except (ValueError, TypeError, OSError, argparse.ArgumentTypeError) as exc:
             if os.environ.get("EMSCATTER_DEBUG"):
                 raise

@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..conventions import fmt  # a number as a person writes it (0.5, 1e+09, (17+2j))
+
 __all__ = [
     "HelpFormatter",
     "add_command",
@@ -32,9 +34,12 @@ __all__ = [
     "Number",
     "Integer",
     "parse_eps",
+    "MaterialName",
     "add_frequency_args",
     "frequency_kwargs",
     "OutputPath",
+    "given_options",
+    "reject_unless",
     "FREQUENCY_RANGE",
     "WAVELENGTH_RANGE",
 ]
@@ -43,11 +48,6 @@ __all__ = [
 FREQUENCY_RANGE = (1e6, 3e16)
 #: Plausible wavelengths [m]: 10 nm to 1 km.
 WAVELENGTH_RANGE = (1e-8, 1e3)
-
-
-def fmt(x: float) -> str:
-    """A number as a person writes it (``0.5``, ``1e+09``), never a numpy repr."""
-    return f"{float(x):g}"
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -176,10 +176,17 @@ class Angles:
         return vals
 
 
-def parse_eps(text: str):
-    """A complex relative permittivity (``exp(-iωt)``, ``Im ε ≥ 0``) or the string ``"pec"``.
+class MaterialName(str):
+    """A material name from ``--eps`` (``Au``, ``concrete``, ``itu:glass``), checked to exist;
+    the API takes it as ``eps`` and evaluates it at the frequency of the call."""
 
-    Accepts ``17``, ``17+2j``, ``17+2i``, ``(17+2j)``, ``-5+1j``, ``pec`` (any case).
+
+def parse_eps(text: str):
+    """A complex relative permittivity (``exp(-iωt)``, ``Im ε ≥ 0``), ``"pec"``, or a material
+    name (:class:`MaterialName`: a Mitsuba metal such as ``Au``, an ITU-R P.2040 material such
+    as ``concrete``).
+
+    Accepts ``17``, ``17+2j``, ``17+2i``, ``(17+2j)``, ``-5+1j``, ``pec`` (any case), ``Au``.
     """
     t = str(text).strip().lower().replace(" ", "")
     if t == "pec":
@@ -187,6 +194,17 @@ def parse_eps(text: str):
     try:
         value = complex(t.replace("i", "j"))
     except ValueError:
+        if t[:1].isalpha():
+            from ..materials import as_material
+
+            try:
+                as_material(str(text).strip())
+            except (ValueError, TypeError) as exc:
+                raise argparse.ArgumentTypeError(
+                    f"expected a complex permittivity like 17+2j (exp(-iωt): Im ≥ 0), 'pec' or a "
+                    f"material name; {exc}"
+                ) from None
+            return MaterialName(str(text).strip())
         raise argparse.ArgumentTypeError(
             f"expected a complex permittivity like 17+2j (exp(-iωt): Im ≥ 0) or 'pec', got {text!r}"
         ) from None
@@ -352,9 +370,29 @@ def roughness_from_args(a):
     """The :class:`emscatter.spectra.Roughness` the options describe."""
     from ..spectra import roughness
 
+    reject_unless(a, a.kind == "power-law", ("--hurst",), "to --kind power-law only")
+    reject_unless(a, not a.profile, ("--length-y",), "to 2-D surfaces only (not with --profile)")
     params = {"sigma": a.sigma, "length": a.length, "dimension": 1 if a.profile else 2}
     if a.length_y is not None:
         params["length_y"] = a.length_y
     if a.kind == "power-law":
         params["hurst"] = a.hurst
     return roughness(a.kind, **params)
+
+
+def given_options(args) -> set[str]:
+    """The options typed on the command line (``{"--sigma", "--png", ...}``), from the argv
+    that :func:`emscatter.cli.main` keeps in ``args._argv``."""
+    out = set()
+    for tok in getattr(args, "_argv", []) or []:
+        if tok.startswith("--") and len(tok) > 2:
+            out.add(tok.split("=", 1)[0])
+    return out
+
+
+def reject_unless(args, condition: bool, options: tuple[str, ...], why: str) -> None:
+    """ValueError when any of ``options`` was given but does not apply (``condition`` False):
+    an option is honoured or rejected, never ignored."""
+    used = sorted(given_options(args) & set(options))
+    if used and not condition:
+        raise ValueError(f"{', '.join(used)} {'applies' if len(used) == 1 else 'apply'} {why}")
