@@ -88,10 +88,10 @@ def test_bad_input_is_a_clear_error_and_writes_nothing(tmp_path, capsys):
     png = tmp_path / "bad.png"
     rc = main(["curves", "--sigma", "-1", "--png", str(png)])
     assert rc == 2
-    assert "sigma must be > 0" in capsys.readouterr().err
+    assert "--sigma: must be > 0 m, got -1" in capsys.readouterr().err
     assert not png.exists() and not list(tmp_path.iterdir())
-    with pytest.raises(SystemExit):
-        main(["curves", "--eps", "seventeen"])
+    assert main(["curves", "--eps", "seventeen"]) == 2
+    assert "--eps: expected a complex permittivity" in capsys.readouterr().err
 
 
 def test_console_script_runs(tmp_path):
@@ -136,3 +136,23 @@ def test_demo_quick_writes_every_output(tmp_path):
     theta = [float(r["theta_s_deg"]) for r in rows]
     hh = [float(r["sigma0_hh_sigma0.045"]) for r in rows]
     assert 35 < theta[hh.index(max(hh))] < 50
+
+
+def test_a_new_command_is_a_new_module(tmp_path, monkeypatch, capsys):
+    """main() finds command modules with pkgutil: a file with register() is a command."""
+    import emscatter.cli as cli
+
+    (tmp_path / "hello.py").write_text(
+        "from emscatter.cli.args import Number, add_command\n"
+        "def register(sub):\n"
+        "    p = add_command(sub, 'hello', help='say hello')\n"
+        "    p.add_argument('--times', type=Number(low=0, high=10), default=1.0)\n"
+        "    p.set_defaults(func=lambda a: print('hello ' * int(a.times)) or 0)\n"
+    )
+    monkeypatch.setattr(cli, "__path__", [*cli.__path__, str(tmp_path)])
+    assert main(["hello", "--times", "2"]) == 0
+    assert capsys.readouterr().out.strip() == "hello hello"
+    assert main(["hello", "--times", "11"]) == 2
+    assert "argument --times: must be in (0, 10), got 11" in capsys.readouterr().err
+    names = [m.__name__.rsplit(".", 1)[1] for m in cli.command_modules()[0]]
+    assert {"curves", "demo", "surface", "validate", "hello"} <= set(names)
