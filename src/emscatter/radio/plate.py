@@ -205,3 +205,97 @@ def sionna_plate(
     mat = scene.get("em-plate")
     out["tables"] = mat.active_tables
     return out
+
+
+#: The published cross-check: frequencies [Hz] and two roughnesses (Gaussian correlation).
+FREQUENCIES = (3.5e9, 28e9, 140e9)
+TOLERANCE_DB = {"specular": 0.01, "diffuse": 0.2}
+
+
+def roughnesses() -> dict:
+    """The two roughnesses of the cross-check: σ = 0.2 mm, ℓ = 5 mm and σ = 1 mm, ℓ = 10 mm."""
+    from ..spectra import GaussianCorrelation
+
+    return {
+        "sigma0.2mm_l5mm": GaussianCorrelation(sigma=0.2e-3, length=5e-3),
+        "sigma1mm_l10mm": GaussianCorrelation(sigma=1e-3, length=10e-3),
+    }
+
+
+def check(cases: dict, *, samples: int, pairs=("VV", "HH", "HV"), table_options=None) -> list:
+    """Run Sionna and the predictions for ``{name: PlateCase}``; one row per comparison:
+    ``case, frequency_ghz, kind, pair, sionna_db, emscatter_db, diff_db, tolerance_db,
+    noise_db, method, valid, ok``."""
+    rows = []
+
+    def db(x):
+        return 10.0 * math.log10(x) if x > 0 else -math.inf
+
+    for name, case in cases.items():
+        spec_pred = specular_prediction(case)
+        spec = sionna_plate(case, samples=10_000, diffuse=False, table_options=table_options)
+        dif_pred = diffuse_prediction(case)
+        dif = sionna_plate(case, samples=samples, diffuse=True, table_options=table_options)
+        tab = dif["tables"]
+        common = {
+            "case": name,
+            "frequency_ghz": case.frequency / 1e9,
+            "method": tab.method,
+            "valid": bool(tab.valid),
+        }
+        for pair in ("VV", "HH"):
+            d = db(spec[pair]) - db(spec_pred[pair])
+            rows.append(
+                {**common, "kind": "specular", "pair": pair, "sionna_db": db(spec[pair]),
+                 "emscatter_db": db(spec_pred[pair]), "diff_db": d,
+                 "tolerance_db": TOLERANCE_DB["specular"], "noise_db": 0.0,
+                 "ok": abs(d) <= TOLERANCE_DB["specular"]}
+            )  # fmt: skip
+        for pair in pairs:
+            d = db(dif[pair]) - db(dif_pred[pair])
+            noise = 10.0 * math.log10(1.0 + dif["noise"][pair])
+            rows.append(
+                {**common, "kind": "diffuse", "pair": pair, "sionna_db": db(dif[pair]),
+                 "emscatter_db": db(dif_pred[pair]), "diff_db": d,
+                 "tolerance_db": TOLERANCE_DB["diffuse"], "noise_db": noise,
+                 "ok": abs(d) <= TOLERANCE_DB["diffuse"]}
+            )  # fmt: skip
+    return rows
+
+
+def write_outputs(rows: list, out_dir, stem: str = "plate_check") -> list:
+    """``<stem>.csv`` and ``<stem>.png`` (difference per comparison, tolerance and noise)."""
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..io import save_figure, write_csv
+
+    out = Path(out_dir)
+    keys = list(rows[0])
+    csv_path = write_csv(out / f"{stem}.csv", keys, [np.array([r[k] for r in rows]) for k in keys])
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=False)
+    for ax, kind in zip(axes, ("specular", "diffuse"), strict=True):
+        sel = [r for r in rows if r["kind"] == kind]
+        labels = [f"{r['frequency_ghz']:g} GHz\n{r['case'].split('_')[0]} {r['pair']}" for r in sel]
+        x = np.arange(len(sel))
+        ax.axhspan(-TOLERANCE_DB[kind], TOLERANCE_DB[kind], color="0.9", label="tolerance")
+        ax.errorbar(
+            x, [r["diff_db"] for r in sel], yerr=[r["noise_db"] for r in sel], fmt="o",
+            color="C0" if kind == "specular" else "C1", label="Sionna − emscatter (± noise)",
+        )  # fmt: skip
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_xticks(x, labels, rotation=90, fontsize=7)
+        ax.set_ylabel("difference [dB]")
+        ax.set_title(
+            "specular: image path × coherent reflection"
+            if kind == "specular"
+            else "diffuse: bistatic radar equation over the plate"
+        )
+        ax.legend(fontsize=8, loc="upper right")
+    fig.suptitle("Large plate, Sionna RT with the emscatter material vs emscatter alone")
+    png = save_figure(fig, out / f"{stem}.png")
+    return [csv_path, png]

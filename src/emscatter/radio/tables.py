@@ -28,6 +28,7 @@ import inspect
 import math
 import time
 import warnings
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,6 +47,7 @@ __all__ = [
     "interpolate_lobe",
     "build_log",
     "reset_build_log",
+    "clear_cache",
     "RadioValidityWarning",
     "EnergyWarning",
 ]
@@ -138,10 +140,19 @@ class RadioTables:
 _LOG: list[dict] = []
 
 
+_CACHE: OrderedDict = OrderedDict()
+_CACHE_SIZE = 64
+
+
+def clear_cache() -> None:
+    """Forget the tables kept for reuse (:func:`build_tables` reuses identical requests)."""
+    _CACHE.clear()
+
+
 def build_log() -> list[dict]:
     """Every table built in this process: ``{"label", "frequency", "method", "bistatic_points",
-    "coherent_points", "seconds"}`` (flat surfaces cost no solver evaluation and are logged
-    with zero points)."""
+    "coherent_points", "seconds"}`` (flat surfaces cost no solver evaluation and are not
+    logged; reused tables are not logged again)."""
     return list(_LOG)
 
 
@@ -304,10 +315,27 @@ def build_tables(
     call). ``eps`` — the medium's permittivity at ``frequency`` (``Im ε ≥ 0``). ``method`` —
     ``"auto"`` or a solver name; ``out_of_range`` — ``"warn"`` (default), ``"raise"`` or
     ``"ignore"`` when that solver is outside its validity range here.
+
+    Identical requests (same roughness, permittivity, frequency, method and grid) reuse the
+    tables already built in this process (several walls of one material cost one build); only
+    real builds enter :func:`build_log`.
     """
+    opts = options or TableOptions()
+    key = (repr(surface), complex(np.asarray(eps)), float(frequency), method, out_of_range, opts)
+    hit = _CACHE.get(key)
+    if hit is not None:
+        _CACHE.move_to_end(key)
+        return hit
+    tables = _build(surface, eps, frequency, method, out_of_range, label, opts)
+    _CACHE[key] = tables
+    while len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return tables
+
+
+def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioTables:
     from .. import api
 
-    opts = options or TableOptions()
     policy = _check_policy(out_of_range)
     k = wavenumber(frequency=frequency)
     eps = complex(np.asarray(eps))
@@ -319,17 +347,7 @@ def build_tables(
     alpha_nodes = np.linspace(0.0, math.pi, opts.n_alpha)
     s_nodes = np.linspace(0.0, 1.0, opts.n_s)
     n_lobe = (opts.n_theta, opts.n_alpha, opts.n_s, 4)
-    if surface is None:
-        _LOG.append(
-            {
-                "label": label,
-                "frequency": float(frequency),
-                "method": None,
-                "bistatic_points": 0,
-                "coherent_points": 0,
-                "seconds": 0.0,
-            }
-        )
+    if surface is None:  # no solver call, nothing to log
         rt, rvt = fresnel_cos(eps, np.cos(theta_nodes))
         return RadioTables(
             label=label,
