@@ -76,21 +76,45 @@ def _texture(array: np.ndarray, dim: int):
     )
 
 
+def _opaque(x) -> mi.Float:
+    """A host scalar as an opaque Dr.Jit variable: kernels do not embed it as a literal, so
+    a new frequency or table does not trigger a new kernel compilation."""
+    v = mi.Float(float(x))
+    dr.make_opaque(v)
+    return v
+
+
 class _Slice:
     """Dr.Jit textures of one frequency's tables (host object)."""
 
     def __init__(self, tables):
         self.tables = tables
         delta = to_sionna(tables.delta)  # (2, n_cos)
-        coh = np.stack([delta[0].real, delta[0].imag, delta[1].real, delta[1].imag], axis=-1)
+        inc = tables.incoherent_on_cos()
+        zero = np.zeros_like(inc[0])
+        # 8 channels: Dr.Jit pads other counts with a copy kernel, which fails when the table is
+        # first built inside a solver's symbolic loop (drjit 1.5: undefined '%mask').
+        per_cos = np.stack(
+            [
+                delta[0].real,
+                delta[0].imag,
+                delta[1].real,
+                delta[1].imag,
+                inc[0],
+                inc[1],
+                zero,
+                zero,
+            ],
+            axis=-1,
+        )
         self.n_cos = tables.cos_nodes.size
-        self.coherent = _texture(coh, 1)
+        self.per_cos = _texture(per_cos, 1)  # roughness correction + diffuse share, on cosθi
         self.n_theta = tables.theta_nodes.size
-        self.theta_max = float(tables.theta_nodes[-1])
-        self.incoherent = _texture(tables.incoherent.T, 1)
+        self.inv_theta_max = _opaque(1.0 / float(tables.theta_nodes[-1]))
         self.n_alpha = tables.alpha_nodes.size
         self.n_s = tables.s_nodes.size
-        self.inv_grading = 1.0 / tables.grading
+        self.linear_s = tables.grading == 1.0
+        self.inv_grading = _opaque(1.0 / tables.grading)
         self.lobe = _texture(tables.lobe, 3)
 
 
@@ -246,7 +270,19 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         self._eps = eps
         eta = complex(sionna_permittivity(eps))
         self._eta = mi.Complex2f(eta.real, eta.imag)
-        self._wavenumber = 2.0 * math.pi * frequency / 299_792_458.0
+        dr.make_opaque(self._eta)
+        k = 2.0 * math.pi * frequency / 299_792_458.0
+        self._wavenumber = k
+        self._k = _opaque(k)
+        self._lam = _opaque(2.0 * math.pi / k)
+        self._sig2 = _opaque(self._sigma**2)
+        d = self._thickness
+        self._d_op = None if d is None else _opaque(d)
+        # A rough wall so thick and lossy that one pass through it leaves < 1e-6 of the field
+        # (−120 dB) is a half-space: its back face and transmission are dropped (saves the
+        # slab arithmetic per ray). Flat materials keep Sionna's slab exactly.
+        one_pass = 0.0 if d is None else math.exp(-k * d * np.sqrt(eps + 0j).imag)
+        self._opaque_wall = self._surface is not None and d is not None and one_pass < 1e-6
 
     def frequency_update(self):
         """Check the medium at the scene frequency (raises out of band) and select that
@@ -290,36 +326,36 @@ class EmscatterRadioMaterial(RadioMaterialBase):
 
     # ------------------------------------------------------------------ per ray (Dr.Jit)
     def _coefficients(self, cos_i, sl: _Slice | None, active):
-        """Coherent ``(r_te, r_tm, t_te, t_tm)`` (Sionna convention) of the rough slab."""
+        """Coherent ``(r_te, r_tm, t_te, t_tm)`` (Sionna convention) of the rough slab, and the
+        diffuse share ``r_incoh,h + r_incoh,v`` at this incidence."""
         eta = self._eta
-        lam = 2.0 * math.pi / self._wavenumber
+        zero_f = mi.Float(0.0)
         if sl is None:  # flat: exactly Sionna's ITU slab (or its half-space limit)
             if self._thickness is not None:
-                return itu_coefficients_single_layer_slab(
-                    cos_i, eta, mi.Float(self._thickness), lam
+                return (
+                    *itu_coefficients_single_layer_slab(cos_i, eta, self._d_op, self._lam),
+                    zero_f,
                 )
         sin2 = 1.0 - dr.square(cos_i)
         a = complex_sqrt(eta - sin2)
         r_te = (cos_i - a) * dr.rcp(cos_i + a)
         r_tm = (eta * cos_i - a) * dr.rcp(eta * cos_i + a)
         if sl is not None:
-            d = sl.coherent.eval(mi.Point1f(_tex_coord(cos_i, sl.n_cos)), active)
-            r1_te = r_te + mi.Complex2f(d[0], d[1])
-            r1_tm = r_tm + mi.Complex2f(d[2], d[3])
+            v = sl.per_cos.eval(mi.Point1f(_tex_coord(cos_i, sl.n_cos)), active)
+            r1_te = r_te + mi.Complex2f(v[0], v[1])
+            r1_tm = r_tm + mi.Complex2f(v[2], v[3])
+            diffuse = dr.maximum(v[4] + v[5], 0.0)
         else:
-            r1_te, r1_tm = r_te, r_tm
+            r1_te, r1_tm, diffuse = r_te, r_tm, zero_f
         zero = mi.Complex2f(0.0, 0.0)
-        if self._thickness is None:
-            return r1_te, r1_tm, zero, zero
-        k = self._wavenumber
-        sig2 = self._sigma * self._sigma
+        if self._thickness is None or self._opaque_wall:
+            return r1_te, r1_tm, zero, zero, diffuse
+        k = self._k
         k2z = k * a
-        k2z2 = k2z * k2z
         q_t = k * cos_i - k2z
-        q_t2 = q_t * q_t
-        chi_t = self._mean_field(-0.5 * sig2 * q_t2)
-        chi_i = self._mean_field(-2.0 * sig2 * k2z2)
-        ph = dr.exp(mi.Complex2f(0.0, -1.0) * (k * self._thickness) * a)
+        chi_t = self._mean_field(-0.5 * self._sig2 * (q_t * q_t))
+        chi_i = self._mean_field(-2.0 * self._sig2 * (k2z * k2z))
+        ph = dr.exp(mi.Complex2f(0.0, -1.0) * (k * self._d_op) * a)
         ph2 = ph * ph
         out = []
         for r0, r1 in ((r_te, r1_te), (r_tm, r1_tm)):
@@ -327,20 +363,12 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             inv = dr.rcp(1.0 - r_in * r_in * ph2)
             tt = (1.0 - r0 * r0) * chi_t * chi_t
             out.append((r1 + tt * r_in * ph2 * inv, tt * ph * inv))
-        return out[0][0], out[1][0], out[0][1], out[1][1]
+        return out[0][0], out[1][0], out[0][1], out[1][1], diffuse
 
     @staticmethod
     def _mean_field(expo):
         """``exp(expo)`` with ``Re(expo)`` clipped at 0 (a passive mean field cannot grow)."""
         return dr.exp(mi.Complex2f(dr.minimum(dr.real(expo), 0.0), dr.imag(expo)))
-
-    def _incoherent(self, cos_i, sl: _Slice | None, active):
-        """``r_incoh,h + r_incoh,v`` at the incidence angle (diffuse event weight)."""
-        if sl is None:
-            return mi.Float(0.0)
-        th = dr.safe_acos(cos_i) * (1.0 / sl.theta_max)
-        v = sl.incoherent.eval(mi.Point1f(_tex_coord(dr.clip(th, 0.0, 1.0), sl.n_theta)), active)
-        return v[0] + v[1]
 
     def _lobe(self, ki, ko, sl: _Slice, active):
         """``(hh, hv, vh, vv)`` lobe values [1/sr] for local directions ``ki`` (incident,
@@ -363,8 +391,11 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         alpha = dr.atan2(sin_a, cos_a)
         rmax = -sin_i * cos_a + dr.safe_sqrt(1.0 - dr.square(sin_i * sin_a))
         t = dr.clip(rho * dr.rcp(dr.maximum(rmax, 1e-9)), 0.0, 1.0)
-        s = dr.select(t > 0.0, dr.exp(dr.log(dr.maximum(t, 1e-30)) * sl.inv_grading), 0.0)
-        th = dr.clip(dr.safe_acos(cos_i) * (1.0 / sl.theta_max), 0.0, 1.0)
+        if sl.linear_s:
+            s = t
+        else:
+            s = dr.select(t > 0.0, dr.exp(dr.log(dr.maximum(t, 1e-30)) * sl.inv_grading), 0.0)
+        th = dr.clip(dr.safe_acos(cos_i) * sl.inv_theta_max, 0.0, 1.0)
         pos = mi.Point3f(
             _tex_coord(s, sl.n_s),
             _tex_coord(alpha * (1.0 / math.pi), sl.n_alpha),
@@ -407,7 +438,10 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             m[1, 1],
         )
 
-    def _event_probabilities(self, r_te, r_tm, t_te, t_tm, diffuse_power, enabled):
+    def _event_probabilities(self, coefs, enabled):
+        """Probabilities of specular reflection, diffuse reflection and transmission, in
+        proportion to their powers (mean of the two polarizations) among the enabled events."""
+        r_te, r_tm, t_te, t_tm, diffuse_power = coefs
         r = dr.squared_norm(r_te) + dr.squared_norm(r_tm)
         t = dr.squared_norm(t_te) + dr.squared_norm(t_tm)
         prs = dr.select((enabled & InteractionType.SPECULAR) > 0, r, 0.0)
@@ -424,17 +458,36 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         to_world = mi.Matrix3f(si.sh_frame.s, si.sh_frame.t, si.sh_frame.n).T
         return ki, cos_i, to_world
 
+    def _jones(
+        self, si, to_world, ki, coefs, sl, events, ko_diff, ko_diffr, diffraction_on, active
+    ):
+        """Jones matrix (world implicit frame) of the event of each lane: specular reflection or
+        transmission, diffuse reflection into ``ko_diff``, diffraction into ``ko_diffr``."""
+        r_te, r_tm, t_te, t_tm, _ = coefs
+        reflection, diffuse, diffraction = events
+        ko_spec = dr.select(reflection, mi.reflect(-ki), ki)
+        jones = jones_matrix_to_world_implicit(
+            dr.select(reflection, r_te, t_te), dr.select(reflection, r_tm, t_tm), to_world, ki,
+            ko_spec,
+        )  # fmt: skip
+        if sl is not None:
+            jd = self._diffuse_matrix(to_world, ki, ko_diff, sl, si.t, mi.Bool(active) & diffuse)
+            jones = dr.select(diffuse, jd, jones)
+        if diffraction_on:
+            jf = RadioMaterial._diffraction_matrix(
+                self, to_world, ki, ko_diffr, si, self._eta, self._k
+            )
+            jones = dr.select(diffraction, jf, jones)
+        return jones
+
     def sample(self, ctx, si, sample1, sample2, active=True):
         sl = self._slice()
         ki, cos_i, to_world = self._context(si)
-        compute_jones = (ctx.component & NO_JONES_MATRIX) == 0
-        diffraction_enabled = (ctx.component & InteractionType.DIFFRACTION) > 0
+        diffraction_on = (ctx.component & InteractionType.DIFFRACTION) > 0
         enabled = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         diffraction = mi.Bool(active) & (enabled == InteractionType.DIFFRACTION)
-        r_te, r_tm, t_te, t_tm = self._coefficients(cos_i, sl, active)
-        prs, prd, pt, none = self._event_probabilities(
-            r_te, r_tm, t_te, t_tm, self._incoherent(cos_i, sl, active), enabled
-        )
+        coefs = self._coefficients(cos_i, sl, active)
+        prs, prd, pt, none = self._event_probabilities(coefs, enabled)
         specular = sample1 < prs
         diffuse = (sample1 >= prs) & (sample1 < prs + prd)
         transmission = ~specular & ~diffuse
@@ -448,29 +501,19 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         prob = dr.select(diffraction, 1.0, prob)
         diffuse &= ~diffraction & ~none
         reflection = specular | diffuse
-        ko_spec = dr.select(reflection, mi.reflect(-ki), ki)
         ko_diff = mi.warp.square_to_uniform_hemisphere(sample2)
         ko_diff.z = dr.abs(ko_diff.z)
-        ko = dr.select(diffuse, ko_diff, ko_spec)
-        if diffraction_enabled:
+        ko = dr.select(diffuse, ko_diff, dr.select(reflection, mi.reflect(-ki), ki))
+        ko_diffr = ko
+        if diffraction_on:
             ko_diffr = RadioMaterial._diffraction_direction(self, si, sample2.x, ki)
             ko = dr.select(diffraction, ko_diffr, ko)
-        if compute_jones:
-            jones = jones_matrix_to_world_implicit(
-                dr.select(reflection, r_te, t_te),
-                dr.select(reflection, r_tm, t_tm),
-                to_world,
-                ki,
-                ko_spec,
+        if (ctx.component & NO_JONES_MATRIX) == 0:
+            events = (reflection, diffuse, diffraction)
+            jones = self._jones(
+                si, to_world, ki, coefs, sl, events, ko_diff, ko_diffr, diffraction_on, active
             )
-            if sl is not None:
-                jd = self._diffuse_matrix(to_world, ki, ko_diff, sl, si.t, active & diffuse)
-                jones = dr.select(diffuse, jd, jones)
-            if diffraction_enabled:
-                jf = RadioMaterial._diffraction_matrix(
-                    self, to_world, ki, ko, si, self._eta, mi.Float(self._wavenumber)
-                )
-                jones = dr.select(diffraction, jf, jones)
+            # the sampled event is weighted by 1/√p (Sionna's convention for sample())
             jones *= dr.detach(dr.select(prob > 0.0, dr.rsqrt(prob), 0.0))
             jones = mi.Spectrum(jones)
         else:
@@ -486,29 +529,15 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     def eval(self, ctx, si, wo, active=True):
         sl = self._slice()
         ki, cos_i, to_world = self._context(si)
-        diffraction_enabled = (ctx.component & InteractionType.DIFFRACTION) > 0
         event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         diffuse = event == InteractionType.DIFFUSE
         reflection = (event == InteractionType.SPECULAR) | diffuse
+        diffraction = event == InteractionType.DIFFRACTION
         ko = si.to_local(wo)
-        r_te, r_tm, t_te, t_tm = self._coefficients(cos_i, sl, active)
-        ko_spec = dr.select(reflection, mi.reflect(-ki), ki)
-        jones = jones_matrix_to_world_implicit(
-            dr.select(reflection, r_te, t_te),
-            dr.select(reflection, r_tm, t_tm),
-            to_world,
-            ki,
-            ko_spec,
-        )
-        if sl is not None:
-            jd = self._diffuse_matrix(to_world, ki, ko, sl, si.t, mi.Bool(active) & diffuse)
-            jones = dr.select(diffuse, jd, jones)
-        if diffraction_enabled:
-            diffraction = event == InteractionType.DIFFRACTION
-            jf = RadioMaterial._diffraction_matrix(
-                self, to_world, ki, ko, si, self._eta, mi.Float(self._wavenumber)
-            )
-            jones = dr.select(diffraction, jf, jones)
+        coefs = self._coefficients(cos_i, sl, active)
+        diffraction_on = (ctx.component & InteractionType.DIFFRACTION) > 0
+        events = (reflection, diffuse, diffraction)
+        jones = self._jones(si, to_world, ki, coefs, sl, events, ko, ko, diffraction_on, active)
         return mi.Spectrum(jones)
 
     def pdf(self, ctx, si, wo, active=True):
@@ -517,12 +546,9 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         sl = self._slice()
         _, cos_i, _ = self._context(si)
         event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
-        r_te, r_tm, t_te, t_tm = self._coefficients(cos_i, sl, active)
-        every = mi.UInt(
-            InteractionType.SPECULAR | InteractionType.DIFFUSE | InteractionType.REFRACTION
-        )
+        every = InteractionType.SPECULAR | InteractionType.DIFFUSE | InteractionType.REFRACTION
         prs, prd, pt, _ = self._event_probabilities(
-            r_te, r_tm, t_te, t_tm, self._incoherent(cos_i, sl, active), every
+            self._coefficients(cos_i, sl, active), mi.UInt(every)
         )
         p = dr.select(event == InteractionType.SPECULAR, prs, prd)
         p = dr.select(event == InteractionType.REFRACTION, pt, p)

@@ -122,6 +122,12 @@ class RadioTables:
     seconds: float = 0.0
     flat: bool = False
 
+    def incoherent_on_cos(self) -> np.ndarray:
+        """``r_incoh,p`` (2, n_cos) carried to the coherent part's ``cosθi`` grid (linear in
+        ``cosθi``; held at ``theta_max`` beyond it), so the material reads both at once."""
+        c = np.cos(self.theta_nodes)[::-1]
+        return np.stack([np.interp(self.cos_nodes, c, self.incoherent[p][::-1]) for p in (0, 1)])
+
     @property
     def delta(self) -> np.ndarray:
         """``r_coh − r_Fresnel`` (2, n_cos), the smooth part the material interpolates."""
