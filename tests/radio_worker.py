@@ -233,11 +233,21 @@ def check_errors():
         out["conductivity"] = None
     except ValueError as exc:
         out["conductivity"] = str(exc)
-    try:
-        EmscatterRadioMaterial("w", medium="unobtainium")
-        out["unknown"] = None
-    except ValueError as exc:
-        out["unknown"] = str(exc)
+    for key, kwargs in (
+        ("unknown", {"medium": "unobtainium"}),
+        ("method", {"medium": "concrete", "method": "sqm"}),
+        ("policy", {"medium": "concrete", "out_of_range": "nan"}),
+        (
+            "anisotropic",
+            {"medium": "concrete",
+             "surface": em.GaussianCorrelation(sigma=1e-4, length=5e-3, length_y=1e-2)},
+        ),
+    ):  # fmt: skip
+        try:
+            EmscatterRadioMaterial("w", **kwargs)
+            out[key] = None
+        except ValueError as exc:
+            out[key] = str(exc)
     return out
 
 

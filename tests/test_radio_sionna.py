@@ -63,6 +63,9 @@ def test_flat_equals_builtin_convention_and_errors():
     assert "thickness must be a positive number" in err["thickness"]
     assert "conductivity must be >= 0" in err["conductivity"] and "-0.1 S/m" in err["conductivity"]
     assert "unknown material 'unobtainium'" in err["unknown"] and "concrete" in err["unknown"]
+    assert "method must be 'auto' or one of" in err["method"] and "'sqm'" in err["method"]
+    assert "NaN would reach the ray tracer" in err["policy"]
+    assert "isotropic 2-D roughness" in err["anisotropic"]
 
 
 def test_xml_scene_and_rough_materials_in_both_solvers():

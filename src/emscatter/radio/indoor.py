@@ -335,7 +335,7 @@ def write_outputs(result: dict, out_dir, stem: str = "indoor") -> list:
             )
             for ax, (img, title, cmap, lim) in zip(row, panels, strict=True):
                 kw = {"vmin": -lim, "vmax": lim} if lim else {}
-                im = ax.imshow(img.T, origin="lower", extent=ext, cmap=cmap, **kw)
+                im = ax.imshow(img, origin="lower", extent=ext, cmap=cmap, **kw)  # [y, x]
                 ax.plot(*setup.tx[:2], "r*", ms=9)
                 ax.set_title(title, fontsize=9)
                 fig.colorbar(im, ax=ax, shrink=0.85)

@@ -9,8 +9,8 @@
 
 :func:`load` loads any of them with Sionna, sets the frequency *before* the materials are
 attached (so a material whose band excludes Sionna's default 3.5 GHz can be used) and gives each
-object the material a callback makes for it. The XML holds loss-free placeholder materials
-(Sionna's ``radio-material``, valid at any frequency) that are replaced object by object.
+object the material a callback makes for it; the scene's own materials (the XML's placeholders,
+or Sionna's ITU materials) are removed, so that none of them is frequency-updated later.
 """
 
 from __future__ import annotations
@@ -233,10 +233,19 @@ def load(scene, frequency: float, make_material, *, workdir=None):
         xml = write_scene(d, scene)
         sc = rt.load_scene(os.fspath(xml), merge_shapes=False)
         media = scene.media
+    missing = sorted(set(sc.objects) - set(media))
+    if missing:
+        raise ValueError(f"objects {missing} of the scene have no medium in {sorted(media)}")
+    # The scene's own materials are updated at every frequency change even once unused, so an
+    # ITU one out of its band (Sionna's metal box at 140 GHz) would fail: swap in loss-free
+    # neutral materials, drop the originals, set the frequency, then attach the real ones.
+    original = list(sc.radio_materials)
+    for name, obj in sc.objects.items():
+        obj.radio_material = rt.RadioMaterial(f"neutral-{name}", relative_permittivity=1.0)
+    sc.remove(original)
     sc.frequency = frequency
     for name, obj in sc.objects.items():
-        if name not in media:
-            raise ValueError(f"object {name!r} of the scene has no medium in {sorted(media)}")
         medium, thickness = media[name]
         obj.radio_material = make_material(name, medium, thickness)
+    sc.remove([f"neutral-{name}" for name in sc.objects])
     return sc

@@ -288,7 +288,18 @@ def _validity_flags(module, rough, k, eps, theta):
     return None if flags is None else np.asarray(flags, dtype=bool)
 
 
-def _check_policy(out_of_range):
+def check_surface(surface) -> Roughness:
+    """Roughness the radio bridge can use: 2-D and isotropic (else a clear error)."""
+    rough = check_roughness(surface, "surface")
+    if rough.dimension != 2 or not rough.is_isotropic:
+        raise ValueError(
+            f"radio materials need isotropic 2-D roughness (Sionna's interaction frame has no "
+            f"surface orientation), got {rough.describe()}"
+        )
+    return rough
+
+
+def check_policy(out_of_range):
     allowed = ("warn", "raise", "ignore")
     if out_of_range not in allowed:
         raise ValueError(
@@ -342,7 +353,7 @@ def build_tables(
 def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioTables:
     from .. import api
 
-    policy = _check_policy(out_of_range)
+    policy = check_policy(out_of_range)
     k = wavenumber(frequency=frequency)
     eps = complex(np.asarray(eps))
     t0 = time.perf_counter()
@@ -374,12 +385,7 @@ def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioT
             coherent_power=np.stack([np.abs(rt) ** 2, np.abs(rvt) ** 2]),
             flat=True,
         )
-    rough = check_roughness(surface, "surface")
-    if rough.dimension != 2 or not rough.is_isotropic:
-        raise ValueError(
-            f"radio materials need isotropic 2-D roughness (Sionna's interaction frame has no "
-            f"surface orientation), got {rough.describe()}"
-        )
+    rough = check_surface(surface)
     name, module, report, _ = api.resolve_method(rough, k, method, "ignore", eps)
     if not report.get("valid", True):
         why = "; ".join(report.get("reasons", [])) or "outside its validity range"
