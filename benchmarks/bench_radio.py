@@ -55,15 +55,9 @@ def main(argv=None) -> int:
     f = a.frequency
     built = {}
     for kind in ("builtin", "emscatter"):
-        t0 = time.perf_counter()
         make = indoor.material_factory("sionna" if kind == "builtin" else "rough", f)
         sc = scenes.load(setup.scene, f, make)
-        arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization="V")
-        sc.tx_array = arr
-        sc.rx_array = arr
-        sc.add(rt.Transmitter("tx", position=list(setup.tx)))
-        for i, pos in enumerate(setup.rx):
-            sc.add(rt.Receiver(f"rx{i}", position=list(pos)))
+        indoor.add_devices(sc, setup)
         built[kind] = sc
 
     path_solver = rt.PathSolver()

@@ -138,6 +138,19 @@ def material_factory(kind: str, frequency: float, *, s: float = DEFAULT_S, table
     return make
 
 
+def add_devices(scene, setup: SceneSetup, polarization: str = "V") -> None:
+    """The setup's transmitter ``"tx"`` and receivers ``"rx0"``, ``"rx1"``, ... with isotropic
+    antennas of one polarization."""
+    import sionna.rt as rt
+
+    arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=polarization)
+    scene.tx_array = arr
+    scene.rx_array = arr
+    scene.add(rt.Transmitter("tx", position=list(setup.tx)))
+    for i, p in enumerate(setup.rx):
+        scene.add(rt.Receiver(f"rx{i}", position=list(p)))
+
+
 def delay_spread(power: np.ndarray, tau: np.ndarray) -> float:
     """RMS delay spread [s] of a power-delay profile (powers [linear], delays [s])."""
     p = np.asarray(power, dtype=float)
@@ -169,12 +182,7 @@ def run_scene(
     scene = scenes.load(
         setup.scene, frequency, material_factory(kind, frequency, s=s, table_options=table_options)
     )
-    arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization="V")
-    scene.tx_array = arr
-    scene.rx_array = arr
-    scene.add(rt.Transmitter("tx", position=list(setup.tx)))
-    for i, p in enumerate(setup.rx):
-        scene.add(rt.Receiver(f"rx{i}", position=list(p)))
+    add_devices(scene, setup)
     paths = rt.PathSolver()(
         scene,
         max_depth=max_depth,

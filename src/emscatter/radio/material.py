@@ -51,6 +51,7 @@ from sionna.rt.utils import (
     complex_sqrt,
     implicit_basis_vector,
     itu_coefficients_single_layer_slab,
+    jones_matrix_from_real_imag,
     jones_matrix_rotator,
     jones_matrix_to_world_implicit,
     transverse_basis_from_normal,
@@ -427,24 +428,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         m = mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv))
         m = w_out @ m @ w_in
         m = m * dr.sqrt(dr.maximum(solid_angle, 0.0))
-        return mi.Matrix4f(
-            m[0, 0],
-            m[0, 1],
-            0.0,
-            0.0,
-            m[1, 0],
-            m[1, 1],
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            m[0, 0],
-            m[0, 1],
-            0.0,
-            0.0,
-            m[1, 0],
-            m[1, 1],
-        )
+        return jones_matrix_from_real_imag(m, mi.Matrix2f(0.0))  # real: no phase
 
     def _event_probabilities(self, coefs, enabled):
         """Probabilities of specular reflection, diffuse reflection and transmission, in
