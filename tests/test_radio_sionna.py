@@ -4,6 +4,7 @@ pytest-xdist workers also run Mitsuba tests."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import subprocess
@@ -12,7 +13,9 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("sionna.rt", reason="Sionna RT is not installed")
+# Never import sionna here: it would set this worker's Dr.Jit variant (Mitsuba tests share it).
+if importlib.util.find_spec("sionna") is None:
+    pytest.skip("Sionna RT is not installed", allow_module_level=True)
 
 HERE = Path(__file__).parent
 SRC = HERE.parent / "src"

@@ -26,7 +26,10 @@ Tables are built lazily, the first time a solver traces the material at a freque
 if some object of the scene uses it (Dr.Jit traces every live material, used or not). Changing
 ``scene.frequency`` checks the medium's band at once (an out-of-band ITU material fails even
 if unused, as Sionna's own ITU materials do) and picks the cached table for that frequency on
-the host. A material instance belongs to one scene (Sionna enforces it).
+the host. A material instance belongs to one scene (Sionna enforces it). Sionna attaches the
+materials of an XML scene at its default 3.5 GHz, before you can set the frequency: a medium
+whose band excludes 3.5 GHz (ITU floorboard, 50–100 GHz) cannot be named in XML — assign it from
+Python after setting ``scene.frequency`` (:func:`emscatter.radio.scenes.load` does).
 
 A rough wall so thick and lossy that one pass through it keeps less than 1e-6 of the field
 (−120 dB; concrete at 140 GHz, 0.2 m) is treated as a half-space (no transmission, no back
