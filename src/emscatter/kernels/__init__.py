@@ -1,0 +1,54 @@
+"""Compiled kernels for the hottest loops (first-order SPM σ⁰, geometric-optics σ⁰ with
+Smith shadowing), selected automatically; the numpy code in :mod:`emscatter.solvers` stays
+the reference and can be forced.
+
+Selection (``EMSCATTER_KERNELS``, read at each call):
+
+* ``auto`` (default) — the compiled kernel where one covers the case and numba imports;
+* ``numpy`` — always the numpy reference path;
+* ``numba`` — like ``auto``, but a missing numba is an error instead of a silent fallback.
+
+Cases covered (others run the numpy path, identical results): 2-D surfaces, one permittivity
+(or ``"pec"``) per call, ``|φs − φi| ≤ 1e6`` rad; SPM1 with isotropic Gaussian or exponential
+correlation; GO with isotropic slopes, shadowing off / Smith / correlated.
+
+Agreement with numpy (tests/test_kernels.py): ``|Δσ⁰| ≤ 1e-12 |σ⁰| + 1e-14 max σ⁰_pq`` per
+polarization — relative 1e-12 except where the numpy formula itself loses digits to
+cancellation (``sin²Δφ = 1 − cos²Δφ`` near the plane of incidence, ``cos θ = √(1 − sin²θ)``
+at grazing, zeros of ``F_pq``): there the values differ by a few units of the last place of
+the polarization's largest value, as two numpy builds with different ``libm`` would.
+
+Nothing here imports numba or compiles at ``import emscatter``: kernels compile on first use
+and are cached on disk (see :mod:`._runtime`). This package is light to import.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+
+__all__ = ["backend", "BACKENDS", "numba_available"]
+
+BACKENDS = ("auto", "numba", "numpy")
+
+
+def numba_available() -> bool:
+    """Whether numba can be imported (checked without importing it)."""
+    return importlib.util.find_spec("numba") is not None
+
+
+def backend() -> str:
+    """``"numba"`` or ``"numpy"``: the path the solvers take now (``EMSCATTER_KERNELS``)."""
+    choice = os.environ.get("EMSCATTER_KERNELS", "auto").strip().lower() or "auto"
+    if choice not in BACKENDS:
+        raise ValueError(f"EMSCATTER_KERNELS must be one of {', '.join(BACKENDS)}, got {choice!r}")
+    if choice == "numpy":
+        return "numpy"
+    if numba_available():
+        return "numba"
+    if choice == "numba":
+        raise ImportError(
+            "EMSCATTER_KERNELS=numba but numba is not installed; "
+            "pip install 'emscatter[fast]' or set EMSCATTER_KERNELS=auto"
+        )
+    return "numpy"

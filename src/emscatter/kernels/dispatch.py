@@ -1,0 +1,104 @@
+"""The one place the solvers ask "is there a compiled kernel for this call?".
+
+Each function returns ``True`` after filling the caller's output arrays with the compiled
+kernel, or ``False`` (nothing touched) when the case is not covered or the numpy path is
+selected (:func:`emscatter.kernels.backend`); the solver then runs its numpy code.
+Light to import: numba is imported only when a kernel runs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import backend
+
+__all__ = ["spm1_sigma0", "go_sigma0", "covered_spm1", "covered_go"]
+
+MAX_AZIMUTH = 1.0e6  # |φs − φi| [rad] up to which the kernels' cos reduction is exact
+
+
+def _scalar_eps(eps):
+    """``"pec"``, a Python complex, or None when ``eps`` is an array with more than one value."""
+    if isinstance(eps, str):
+        return "pec" if eps.lower() == "pec" else None
+    arr = np.asarray(eps)
+    if arr.ndim == 0:
+        return complex(arr)
+    return None
+
+
+def _flat(a, n: int) -> np.ndarray:
+    a = np.asarray(a, dtype=np.float64)
+    if a.size == n and a.ndim == 1 and a.flags.c_contiguous:
+        return a
+    return np.ascontiguousarray(np.broadcast_to(a, (n,)).reshape(n))
+
+
+def _azimuth_ok(dphi: np.ndarray) -> bool:
+    return dphi.size == 0 or float(np.max(np.abs(dphi))) <= MAX_AZIMUTH
+
+
+def covered_spm1(rough, eps) -> bool:
+    """Whether :func:`spm1_sigma0` has a kernel for this roughness and permittivity."""
+    from ..spectra import ExponentialCorrelation, GaussianCorrelation
+
+    return (
+        rough.dimension == 2
+        and rough.is_isotropic
+        and type(rough) in (GaussianCorrelation, ExponentialCorrelation)
+        and _scalar_eps(eps) is not None
+    )
+
+
+def spm1_sigma0(rough, eps, k: float, ti, ts, dphi, out: np.ndarray) -> bool:
+    """First-order SPM σ⁰ into ``out`` (2, 2, n) for flat angle arrays [rad] (as
+    ``emscatter.solvers.spm._sigma0_first``)."""
+    if backend() != "numba" or not covered_spm1(rough, eps):
+        return False
+    n = out.shape[-1]
+    dphi = _flat(dphi, n)
+    if not _azimuth_ok(dphi) or not out.flags.c_contiguous:
+        return False
+    from ..spectra import GaussianCorrelation
+    from .spm import EXPONENTIAL, GAUSSIAN
+    from .spm import spm1_sigma0 as kernel
+
+    code = GAUSSIAN if type(rough) is GaussianCorrelation else EXPONENTIAL
+    kernel(
+        _flat(ti, n), _flat(ts, n), dphi, _scalar_eps(eps),
+        k=k, sigma=rough.sigma, length=rough.length, spectrum=code, out=out,
+    )  # fmt: skip
+    return True
+
+
+def covered_go(dimension: int, sx: float, sy: float, eps, shadowing) -> bool:
+    """Whether :func:`go_sigma0` has a kernel for this case."""
+    return (
+        dimension == 2
+        and sx == sy
+        and shadowing in (None, "smith", "correlated")
+        and _scalar_eps(eps) is not None
+    )
+
+
+def go_sigma0(
+    ti, ts, dphi, eps, *, dimension: int, sx: float, sy: float, shadowing,
+    out: np.ndarray, coherent_out: np.ndarray | None = None, k: float = 1.0, sigma: float = 0.0,
+) -> bool:  # fmt: skip
+    """GO σ⁰ into ``out`` (2, 2, n) and, when given, the Kirchhoff coherent reflectivity into
+    ``coherent_out`` (2, n) (as ``emscatter.solvers.kirchhoff_go.bistatic``)."""
+    if backend() != "numba" or not covered_go(dimension, sx, sy, eps, shadowing):
+        return False
+    n = out.shape[-1]
+    dphi = _flat(dphi, n)
+    if not _azimuth_ok(dphi) or not out.flags.c_contiguous:
+        return False
+    if coherent_out is not None and not coherent_out.flags.c_contiguous:
+        return False
+    from .go import go_sigma0 as kernel
+
+    kernel(
+        _flat(ti, n), _flat(ts, n), dphi, _scalar_eps(eps), slope_variance=sx,
+        shadowing=shadowing, out=out, coherent_out=coherent_out, k=k, sigma=sigma,
+    )  # fmt: skip
+    return True
