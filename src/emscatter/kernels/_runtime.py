@@ -21,7 +21,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-__all__ = ["jit", "run_chunked", "cache_dir", "NUMBA_VERSION"]
+__all__ = ["jit", "inline", "run_chunked", "run_fused", "cache_dir", "NUMBA_VERSION"]
 
 NUMBA_VERSION = numba.__version__
 
@@ -107,3 +107,16 @@ def run_chunked(part, n: int, threads: int | None = None) -> None:
         ]
         for f in futs:
             f.result()
+
+
+def run_fused(kernel, inputs: tuple, consts: tuple, outputs: tuple, threads: int | None = None):
+    """``kernel(*inputs[a:b], *consts, *outputs[a:b])`` over contiguous chunks on threads.
+
+    ``inputs`` and ``outputs``: 1-D C-contiguous arrays of one length n (each output a
+    separate array, so the vectorized loop's overlap check passes)."""
+    n = inputs[0].size
+
+    def part(a: int, b: int) -> None:
+        kernel(*(x[a:b] for x in inputs), *consts, *(y[a:b] for y in outputs))
+
+    run_chunked(part, n, threads)

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ._runtime import inline, jit, run_chunked
+from ._runtime import inline, jit, run_fused
 from ._vmath import vcos, verfcx, vexp, vsin
 
 NO_SHADOWING, SMITH, CORRELATED = 0, 1, 2
@@ -161,29 +161,13 @@ def go_sigma0(
     e = 0j if pec else complex(eps)
     code = SHADOWING_CODES[shadowing]
     two_ks = 2.0 * k * sigma if coherent_out is not None else -1.0
-    dummy = np.empty(0)
 
-    def part(a, b):
-        sl = slice(a, b)
-        outs = (out[0, 0, sl], out[0, 1, sl], out[1, 0, sl], out[1, 1, sl])
-        coh = (
-            (coherent_out[0, sl], coherent_out[1, sl])
-            if coherent_out is not None
-            else (dummy, dummy)
-        )
-        _go_kernel(
-            ti[sl],
-            ts[sl],
-            dphi[sl],
-            pec,
-            e.real,
-            e.imag,
-            float(slope_variance),
-            code,
-            two_ks,
-            *outs,
-            *coh,
-        )
-
-    run_chunked(part, ti.size, threads)
+    n = ti.size
+    if coherent_out is not None:
+        coh = (coherent_out[0], coherent_out[1])
+    else:  # not written; full-length scratch so the vectorized loop's overlap check passes
+        coh = (np.empty(n), np.empty(n))
+    consts = (pec, e.real, e.imag, float(slope_variance), code, two_ks)
+    outs = (out[0, 0], out[0, 1], out[1, 0], out[1, 1], *coh)
+    run_fused(_go_kernel, (ti, ts, dphi), consts, outs, threads)
     return out

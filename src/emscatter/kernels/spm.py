@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ._runtime import jit
+from ._runtime import jit, run_fused
 from ._vmath import vcos, vexp, vsin
 
 GAUSSIAN, EXPONENTIAL = 0, 1
@@ -97,17 +97,11 @@ def spm1_sigma0(
     ``ti, ts, dphi`` [rad]: flat float64 arrays of one length n (``|dphi| ≤ 1e6``);
     ``eps``: complex scalar or ``"pec"``; ``k`` [rad/m]; ``sigma``, ``length`` [m];
     ``spectrum``: :data:`GAUSSIAN` or :data:`EXPONENTIAL`."""
-    from ._runtime import run_chunked
-
     pec = isinstance(eps, str)
     e = 0j if pec else complex(eps)
     pref = 16.0 * math.pi * k**4 * sigma**2  # same expression as the numpy path
     consts = (pec, e.real, e.imag, k * length, length * length, pref, spectrum)
 
-    def part(a, b):
-        sl = slice(a, b)
-        outs = (out[0, 0, sl], out[0, 1, sl], out[1, 0, sl], out[1, 1, sl])
-        _spm1_kernel(ti[sl], ts[sl], dphi[sl], *consts, *outs)
-
-    run_chunked(part, ti.size, threads)
+    outs = (out[0, 0], out[0, 1], out[1, 0], out[1, 1])
+    run_fused(_spm1_kernel, (ti, ts, dphi), consts, outs, threads)
     return out
