@@ -5,9 +5,11 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from emscatter.cli import main
+from emscatter.io import read_csv
 
 
 def test_surface_command_draws_and_measures(tmp_path, capsys):
@@ -57,9 +59,10 @@ def test_curves_bistatic_writes_png_csv_json(tmp_path):
         ]
     )
     assert rc == 0
-    rows = list(csv.DictReader(out["csv"].read_text().splitlines()))
-    assert len(rows) == 10 and float(rows[5]["sigma0_hh"]) > 0
-    assert json.loads(out["json"].read_text())["method"] == "spm"
+    header, cols, meta = read_csv(out["csv"])
+    assert cols["theta_s_deg"].size == 10 and cols["sigma0_hh"][5] > 0
+    assert meta["schema"] == "emscatter.curves/1"
+    assert json.loads(out["json"].read_text())["result"]["method"] == "spm"
 
 
 def test_curves_emissivity(tmp_path):
@@ -80,18 +83,19 @@ def test_curves_emissivity(tmp_path):
         ]
     )
     assert rc == 0
-    rows = list(csv.DictReader(csv_path.read_text().splitlines()))
-    assert all(0 < float(r["e_h"]) < 1 for r in rows)
+    _, cols, _ = read_csv(csv_path)
+    assert cols["theta_i_deg"].tolist() == [0, 20, 40, 60]
+    assert np.all((0 < cols["e_h"]) & (cols["e_h"] < 1)) and np.all(cols["energy_ok"] == 1)
 
 
 def test_bad_input_is_a_clear_error_and_writes_nothing(tmp_path, capsys):
     png = tmp_path / "bad.png"
     rc = main(["curves", "--sigma", "-1", "--png", str(png)])
     assert rc == 2
-    assert "sigma must be > 0" in capsys.readouterr().err
+    assert "--sigma: must be > 0 m, got -1" in capsys.readouterr().err
     assert not png.exists() and not list(tmp_path.iterdir())
-    with pytest.raises(SystemExit):
-        main(["curves", "--eps", "seventeen"])
+    assert main(["curves", "--eps", "seventeen"]) == 2
+    assert "--eps: expected a complex permittivity" in capsys.readouterr().err
 
 
 def test_console_script_runs(tmp_path):
@@ -136,3 +140,23 @@ def test_demo_quick_writes_every_output(tmp_path):
     theta = [float(r["theta_s_deg"]) for r in rows]
     hh = [float(r["sigma0_hh_sigma0.045"]) for r in rows]
     assert 35 < theta[hh.index(max(hh))] < 50
+
+
+def test_a_new_command_is_a_new_module(tmp_path, monkeypatch, capsys):
+    """main() finds command modules with pkgutil: a file with register() is a command."""
+    import emscatter.cli as cli
+
+    (tmp_path / "hello.py").write_text(
+        "from emscatter.cli.args import Number, add_command\n"
+        "def register(sub):\n"
+        "    p = add_command(sub, 'hello', help='say hello')\n"
+        "    p.add_argument('--times', type=Number(low=0, high=10), default=1.0)\n"
+        "    p.set_defaults(func=lambda a: print('hello ' * int(a.times)) or 0)\n"
+    )
+    monkeypatch.setattr(cli, "__path__", [*cli.__path__, str(tmp_path)])
+    assert main(["hello", "--times", "2"]) == 0
+    assert capsys.readouterr().out.strip() == "hello hello"
+    assert main(["hello", "--times", "11"]) == 2
+    assert "argument --times: must be in (0, 10), got 11" in capsys.readouterr().err
+    names = [m.__name__.rsplit(".", 1)[1] for m in cli.command_modules()[0]]
+    assert {"curves", "demo", "surface", "validate", "hello"} <= set(names)

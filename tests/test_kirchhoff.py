@@ -375,7 +375,9 @@ def test_bad_inputs():
         with pytest.raises(ValueError, match="eps"):
             solver(g, "metal", K0, 0.1, 0.2, 0.0)
     with pytest.raises(ValueError, match="k_max"):
-        go.bistatic(ExponentialCorrelation(0.1, 1.0), 4.0, K0, 0.1, 0.2, 0.0)
+        go.bistatic(ExponentialCorrelation(0.1, 1.0), 4.0, K0, 0.1, 0.2, 0.0, k_max=-1.0)
+    with pytest.raises(ValueError, match="coherent"):
+        go.bistatic(g, 4.0, K0, 0.1, 0.2, 0.0, coherent="no")
     with pytest.raises(ValueError, match="shadowing"):
         go.bistatic(g, 4.0, K0, 0.1, 0.2, 0.0, shadowing="walter")
     with pytest.raises(ValueError, match="slope_variance"):
@@ -385,7 +387,7 @@ def test_bad_inputs():
     with pytest.raises(ValueError, match="max_terms"):
         po.bistatic(g, 4.0, K0, 0.1, 0.2, 0.0, max_terms=0)
     with pytest.raises(RuntimeError, match="max_terms"):
-        po.bistatic(GaussianCorrelation(30 / K0, 1.0), 4.0, K0, 0.1, 0.2, 0.0, max_terms=5)
+        po.bistatic(GaussianCorrelation(3 / K0, 1.0), 4.0, K0, 0.1, 0.2, 0.0, max_terms=5)
 
 
 def test_slope_overrides_and_validity():
@@ -401,8 +403,11 @@ def test_slope_overrides_and_validity():
     assert not rep["valid"] and any("kσ" in r for r in rep["reasons"])
     rep = po.check_validity(GaussianCorrelation(0.01, 2.0), K0)
     assert rep["valid"]
+    # non-differentiable spectra: the slope of the spectrum the wave sees, |K| ≤ 2k
     rep = po.check_validity(ExponentialCorrelation(0.01, 2.0), K0)
-    assert not rep["valid"] and any("k_max" in r for r in rep["reasons"])
+    assert rep["slope_cutoff"] == pytest.approx(2 * K0) and math.isfinite(rep["excess"])
+    sx, sy = ExponentialCorrelation(0.01, 2.0).mean_square_slope(2 * K0)
+    assert rep["rms_slope"] == pytest.approx(math.sqrt(sx + sy), rel=1e-6)
     assert set(go.VALIDITY) >= {"k_l_min"} and set(po.VALIDITY) >= {"rms_slope_max"}
 
 

@@ -51,9 +51,10 @@ order ``(kσ)²``). Far outside validity
 (``kσ ≳ 0.5`` or rms slope ≫ 1) this expansion can leave ``[0, 1]``; it is then clipped
 and ``info["coherent_clipped"]`` (in :func:`bistatic`) counts the clipped points.
 
-Validity (:data:`VALIDITY`): ``kσ ≤ 0.3`` and rms slope ``≤ 0.3`` (Ulaby, Moore & Fung 1982,
-vol. II ch. 12: ``kσ < 0.3`` and ``√2 σ/ℓ < 0.3``; Thorsos & Jackson, JASA 86 (1989) 261, who
-find first-order SPM accurate for ``kσ ≲ 0.3`` at moderate ``kℓ``).
+Validity (:data:`VALIDITY`, :func:`check_validity`, in :mod:`.spm_validity`): ``kσ ≤ 0.3`` and
+rms slope ``≤ 0.3`` (Ulaby, Moore & Fung 1982, vol. II ch. 12; Thorsos & Jackson, JASA 86 (1989)
+261), and per incidence angle a first-order scattered fraction ``r₁(θi) ≤ 0.36`` (which fails
+near grazing for a conductor in TM).
 """
 
 from __future__ import annotations
@@ -67,14 +68,10 @@ from ..conventions import broadcast_angles, check_angle, check_positive
 from ..fresnel import PEC, check_eps, fresnel_cos, is_pec
 from ..scattering import Scattering
 from ..spectra import GaussianCorrelation, Roughness, check_roughness
+from .spm_validity import OPTIONS, VALIDITY, check_validity  # noqa: F401 (re-exported)
 
 __all__ = ["VALIDITY", "bistatic", "coherent_reflectivity", "check_validity"]
 
-#: Documented validity limits of first-order SPM (Ulaby, Moore & Fung 1982 vol. II ch. 12:
-#: kσ < 0.3 and rms slope < 0.3; Thorsos & Jackson 1989). ``rms_slope`` is the per-direction
-#: rms slope √⟨h_x²⟩ (for a Gaussian correlation √2 σ/ℓ); for non-differentiable spectra it is
-#: computed with the short-wavelength cutoff ``k_max = 2k`` (the Bragg band the wave sees).
-VALIDITY = {"k_sigma_max": 0.3, "rms_slope_max": 0.3, "slope_cutoff_factor": 2.0}
 
 _CHUNK = 1 << 15  # geometries per vectorized block (cache-friendly)
 
@@ -690,59 +687,4 @@ def bistatic(
         k=k,
         dimension=rough.dimension,
         info=info,
-    )
-
-
-def check_validity(roughness: Roughness, k: float) -> dict:
-    """SPM validity report: ``{"valid", "k_sigma", "k_length", "rms_slope", "reasons"}``.
-
-    Criteria (:data:`VALIDITY`; Ulaby, Moore & Fung 1982 vol. II ch. 12, Thorsos & Jackson
-    1989): ``kσ ≤ 0.3`` and per-direction rms slope ``≤ 0.3`` (the largest of the two
-    directions for anisotropic surfaces; for non-differentiable correlations the slope of the
-    spectrum below ``k_max = 2k``).
-    """
-    rough = _check_roughness(roughness)
-    k = check_positive("k", k, unit="rad/m")
-    ks = k * rough.sigma
-    kl = k * min(rough.length, rough.length_y)
-    try:
-        mss = rough.mean_square_slope()
-    except ValueError:
-        mss = _mss_cutoff(rough, VALIDITY["slope_cutoff_factor"] * k)
-    slope = math.sqrt(max(mss))
-    reasons = []
-    if ks > VALIDITY["k_sigma_max"]:
-        reasons.append(f"k*sigma = {ks:.3g} > {VALIDITY['k_sigma_max']}")
-    if slope > VALIDITY["rms_slope_max"]:
-        reasons.append(f"rms slope = {slope:.3g} > {VALIDITY['rms_slope_max']}")
-    ratios = (ks / VALIDITY["k_sigma_max"], slope / VALIDITY["rms_slope_max"])
-    return {
-        "valid": not reasons,
-        "k_sigma": ks,
-        "k_length": kl,
-        "rms_slope": slope,
-        "reasons": reasons,
-        # log of the largest factor by which a criterion is exceeded (ranks fallbacks)
-        "excess": max([0.0, *(math.log(r) for r in ratios if r > 0)]),
-    }
-
-
-@lru_cache(maxsize=128)
-def _mss_cutoff(rough: Roughness, k_max: float) -> tuple[float, float]:
-    """Per-direction mean-square slopes of the spectrum restricted to |K| < k_max, by fixed
-    Gauss–Legendre quadrature (fast; the generic spectra method uses adaptive quad)."""
-    x, w = _segment_nodes(0.0, k_max, 200)
-    if rough.dimension == 1:
-        val = 2.0 * np.sum(w * x * x * rough.spectrum(x))
-        return rough.sigma**2 * val, 0.0
-    t, wt = _gl(128)
-    psi = 2 * math.pi * t
-    wpsi = 2 * math.pi * wt
-    KR, PS = np.meshgrid(x, psi, indexing="ij")
-    W = np.outer(w * x, wpsi)
-    kx, ky = KR * np.cos(PS), KR * np.sin(PS)
-    sp = rough.spectrum(kx, ky)
-    return (
-        rough.sigma**2 * float(np.sum(W * kx * kx * sp)),
-        rough.sigma**2 * float(np.sum(W * ky * ky * sp)),
     )
