@@ -32,9 +32,28 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import numpy as np  # noqa: E402
 from common import command, machine, save, stamp, timeit, write  # noqa: E402
 
-SIMPLE = ("fadd", "fsub", "fmul", "fneg", "fcmp", "select", "floor", "minnum", "maxnum",
-          "fptosi", "sitofp", "add", "sub", "shl", "and", "or", "xor", "bitcast", "fabs",
-          "icmp")  # fmt: skip
+SIMPLE = (
+    "fadd",
+    "fsub",
+    "fmul",
+    "fneg",
+    "fcmp",
+    "select",
+    "floor",
+    "minnum",
+    "maxnum",
+    "fptosi",
+    "sitofp",
+    "add",
+    "sub",
+    "shl",
+    "and",
+    "or",
+    "xor",
+    "bitcast",
+    "fabs",
+    "icmp",
+)
 DIVSQRT = ("fdiv", "sqrt")
 
 
@@ -150,8 +169,10 @@ def spm_counts(pec: bool) -> dict:
 
     x = np.full(64, 0.5)
     outs = [np.empty(64) for _ in range(4)]
-    rep = {"        if pec:\n": f"        if {pec}:\n",
-           "        if spectrum == GAUSSIAN:\n": "        if True:\n"}  # fmt: skip
+    rep = {
+        "        if pec:\n": f"        if {pec}:\n",
+        "        if spectrum == GAUSSIAN:\n": "        if True:\n",
+    }
     return op_counts(ks._spm1_kernel, rep, (x, x, x, pec, 17.0, 2.0, 2.0, 1.0, 1.0, 0, *outs))
 
 
@@ -160,9 +181,11 @@ def go_counts(pec: bool) -> dict:
 
     x = np.full(64, 0.5)
     outs = [np.empty(64) for _ in range(6)]
-    rep = {"        if two_k_sigma >= 0:\n": "        if False:\n",
-           "            if shadowing == 1:\n": "            if True:\n",
-           "        if shadowing != 0:\n": "        if True:\n"}  # fmt: skip
+    rep = {
+        "        if two_k_sigma >= 0:\n": "        if False:\n",
+        "            if shadowing == CORRELATED:\n": "            if False:\n",
+        "        if shadowing != 0:\n": "        if True:\n",
+    }
     args = (x, x, x, pec, 17.0, 2.0, 0.02, 1, -1.0, *outs)
     c = op_counts(kg._go_kernel, rep, args)
     if pec:  # the Fresnel part of a PEC is constant (its ops are still in the IR copy)
@@ -198,10 +221,20 @@ def main(argv=None) -> dict:
     cores = os.cpu_count() or 1
 
     t0 = time.perf_counter()  # compile (or load from the numba cache) once, timed
-    spm1_sigma0(ti[:8], ts[:8], dphi[:8], "pec", k=k_spm, sigma=g_spm.sigma,
-                length=g_spm.length, spectrum=GAUSSIAN, out=out[:, :, :8])  # fmt: skip
-    go_sigma0(ti[:8], ts[:8], dphi[:8], "pec", slope_variance=s2, shadowing="smith",
-              out=out[:, :, :8])  # fmt: skip
+    spm1_sigma0(
+        ti[:8],
+        ts[:8],
+        dphi[:8],
+        "pec",
+        k=k_spm,
+        sigma=g_spm.sigma,
+        length=g_spm.length,
+        spectrum=GAUSSIAN,
+        out=out[:, :, :8],
+    )
+    go_sigma0(
+        ti[:8], ts[:8], dphi[:8], "pec", slope_variance=s2, shadowing="smith", out=out[:, :, :8]
+    )
     first_call_s = time.perf_counter() - t0
 
     cases = {}
@@ -215,12 +248,30 @@ def main(argv=None) -> dict:
             go.bistatic(g_go, eps, 2 * math.pi, ti, ts, dphi, shadowing=True)
 
         for name, ref_fn, kern in (
-            ("spm1", np_spm, lambda th, eps=eps: spm1_sigma0(
-                ti, ts, dphi, eps, k=k_spm, sigma=g_spm.sigma, length=g_spm.length,
-                spectrum=GAUSSIAN, out=out, threads=th)),
-            ("go_smith", np_go, lambda th, eps=eps: go_sigma0(
-                ti, ts, dphi, eps, slope_variance=s2, shadowing="smith", out=out, threads=th)),
-        ):  # fmt: skip
+            (
+                "spm1",
+                np_spm,
+                lambda th, eps=eps: spm1_sigma0(
+                    ti,
+                    ts,
+                    dphi,
+                    eps,
+                    k=k_spm,
+                    sigma=g_spm.sigma,
+                    length=g_spm.length,
+                    spectrum=GAUSSIAN,
+                    out=out,
+                    threads=th,
+                ),
+            ),
+            (
+                "go_smith",
+                np_go,
+                lambda th, eps=eps: go_sigma0(
+                    ti, ts, dphi, eps, slope_variance=s2, shadowing="smith", out=out, threads=th
+                ),
+            ),
+        ):
             r_np = timeit(ref_fn, repeat=max(3, rep // 2))
             r_1 = timeit(lambda k=kern: k(1), repeat=rep)
             r_all = timeit(lambda k=kern: k(cores), repeat=rep)
@@ -232,14 +283,19 @@ def main(argv=None) -> dict:
                 "timings": {"numpy": r_np, "compiled_1thread": r_1, "compiled": r_all},
             }
             c = cases[f"{name}/{tag}"]
-            print(f"{name:9s} {tag:10s} numpy {c['numpy_per_s']:.3g}/s  compiled "
-                  f"{c['compiled_1thread_per_s']:.3g}/s (1 thread) {c['compiled_per_s']:.3g}/s "
-                  f"({cores} threads)  ×{c['speedup']:.1f}", flush=True)  # fmt: skip
+            print(
+                f"{name:9s} {tag:10s} numpy {c['numpy_per_s']:.3g}/s  compiled "
+                f"{c['compiled_1thread_per_s']:.3g}/s (1 thread) {c['compiled_per_s']:.3g}/s "
+                f"({cores} threads)  ×{c['speedup']:.1f}",
+                flush=True,
+            )
 
     pk = peaks(cores)
-    print(f"peaks ({cores} threads): simple {pk['simple_ops_per_s']:.3g}/s, FMA flops "
-          f"{pk['fma_flops_per_s']:.3g}/s, div/sqrt {pk['divsqrt_per_s']:.3g}/s, copy "
-          f"{pk['copy_bytes_per_s'] / 1e9:.3g} GB/s")  # fmt: skip
+    print(
+        f"peaks ({cores} threads): simple {pk['simple_ops_per_s']:.3g}/s, FMA flops "
+        f"{pk['fma_flops_per_s']:.3g}/s, div/sqrt {pk['divsqrt_per_s']:.3g}/s, copy "
+        f"{pk['copy_bytes_per_s'] / 1e9:.3g} GB/s"
+    )
     bytes_per_eval = 3 * 8 + 4 * 8  # three angles in, four σ⁰ out
     for key, c in cases.items():
         name, tag = key.split("/")
@@ -249,20 +305,32 @@ def main(argv=None) -> dict:
         t_div = cnt["divsqrt"] / pk["divsqrt_per_s"]
         t_mem = bytes_per_eval / pk["copy_bytes_per_s"]
         roof = 1.0 / max(t_simple, t_div, t_mem)
-        c.update(ops_per_eval={"simple": cnt["simple"], "divsqrt": cnt["divsqrt"]},
-                 vector_lanes=lanes, bytes_per_eval=bytes_per_eval, roofline_per_s=roof,
-                 roofline_bound=["arithmetic", "div/sqrt", "memory"][
-                     int(np.argmax([t_simple, t_div, t_mem]))],
-                 fraction_of_roofline=c["compiled_per_s"] / roof)  # fmt: skip
+        c.update(
+            ops_per_eval={"simple": cnt["simple"], "divsqrt": cnt["divsqrt"]},
+            vector_lanes=lanes,
+            bytes_per_eval=bytes_per_eval,
+            roofline_per_s=roof,
+            roofline_bound=["arithmetic", "div/sqrt", "memory"][
+                int(np.argmax([t_simple, t_div, t_mem]))
+            ],
+            fraction_of_roofline=c["compiled_per_s"] / roof,
+        )
         print(
             f"{key:20s} ops/eval {c['ops_per_eval']}  roofline {roof:.3g}/s "
             f"({c['roofline_bound']})  reached {c['fraction_of_roofline']:.2f}"
         )
     info = machine()
     cmd = command()
-    data = {"benchmark": "sigma0 throughput, numpy vs compiled, roofline", "command": cmd,
-            "machine": info, "n": n, "repeat": rep, "first_call_s": first_call_s,
-            "peaks": pk, "cases": cases}  # fmt: skip
+    data = {
+        "benchmark": "sigma0 throughput, numpy vs compiled, roofline",
+        "command": cmd,
+        "machine": info,
+        "n": n,
+        "repeat": rep,
+        "first_call_s": first_call_s,
+        "peaks": pk,
+        "cases": cases,
+    }
     write("kernels", data)
     _plot(data, cmd)
     return data
@@ -276,24 +344,40 @@ def _plot(data, cmd):
     x = np.arange(len(names))
     fig, ax = plt.subplots(figsize=(8, 4.6))
     w = 0.2
-    series = [("numpy", "numpy_per_s"), ("compiled, 1 thread", "compiled_1thread_per_s"),
-              (f"compiled, {data['machine']['cores']} threads", "compiled_per_s"),
-              ("roofline", "roofline_per_s")]  # fmt: skip
+    series = [
+        ("numpy", "numpy_per_s"),
+        ("compiled, 1 thread", "compiled_1thread_per_s"),
+        (f"compiled, {data['machine']['cores']} threads", "compiled_per_s"),
+        ("roofline", "roofline_per_s"),
+    ]
     for j, (lab, key) in enumerate(series):
         vals = [cases[c][key] for c in names]
-        bars = ax.bar(x + (j - 1.5) * w, vals, w, label=lab,
-                      color=["0.6", "C0", "C1", "none"][j], edgecolor="k" if j == 3 else None,
-                      hatch="//" if j == 3 else None)  # fmt: skip
+        bars = ax.bar(
+            x + (j - 1.5) * w,
+            vals,
+            w,
+            label=lab,
+            color=["0.6", "C0", "C1", "none"][j],
+            edgecolor="k" if j == 3 else None,
+            hatch="//" if j == 3 else None,
+        )
         if key == "compiled_per_s":
             for b, c in zip(bars, names, strict=True):
-                ax.annotate(f"×{cases[c]['speedup']:.0f}\n{cases[c]['fraction_of_roofline']:.0%}",
-                            (b.get_x() + b.get_width() / 2, b.get_height()), ha="center",
-                            va="bottom", fontsize=7)  # fmt: skip
+                ax.annotate(
+                    f"×{cases[c]['speedup']:.0f}\n{cases[c]['fraction_of_roofline']:.0%}",
+                    (b.get_x() + b.get_width() / 2, b.get_height()),
+                    ha="center",
+                    va="bottom",
+                    fontsize=7,
+                )
     ax.set_yscale("log")
     ax.set_xticks(x, names)
     ax.set_ylabel("full-polarization σ⁰ evaluations per second")
-    ax.set_title("σ⁰ throughput: numpy vs compiled kernels (label: speed-up over numpy, "
-                 "fraction of roofline)", fontsize=9)  # fmt: skip
+    ax.set_title(
+        "σ⁰ throughput: numpy vs compiled kernels (label: speed-up over numpy, "
+        "fraction of roofline)",
+        fontsize=9,
+    )
     ax.legend(fontsize=8)
     ax.grid(True, axis="y", which="both", alpha=0.3)
     stamp(fig, data["machine"], cmd, data["repeat"])

@@ -97,11 +97,14 @@ def mc_throughput(n_real: int) -> dict:
     t0 = time.perf_counter()
     with (
         LocalCluster(
-            n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
+            n_workers=2,
+            threads_per_worker=1,
+            host="127.0.0.1",
+            dashboard_address=None,
             silence_logs=40,
         ) as cluster,
         Client(cluster) as client,
-    ):  # fmt: skip
+    ):
         t_start = time.perf_counter() - t0
         ex = client.get_executor()
         t1 = time.perf_counter()

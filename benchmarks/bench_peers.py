@@ -61,10 +61,11 @@ def main(argv=None) -> dict:
     ap.add_argument("--label", default="current")
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args(argv)
-    import emscatter as em
     from smrt.interface.geometrical_optics import GeometricalOptics
     from smrt.interface.geometrical_optics_backscatter import GeometricalOpticsBackscatter
     from smrt.interface.iem_fung92 import IEM_Fung92
+
+    import emscatter as em
 
     k = 2 * math.pi * FREQ / C_SPEED
     mu = np.cos(THETA)
@@ -72,33 +73,48 @@ def main(argv=None) -> dict:
 
     # ---- backscatter, slightly rough (SPM / auto vs IEM)
     small = em.GaussianCorrelation(0.2 / k, 2.0 / k)
-    iem = IEM_Fung92(roughness_rms=small.sigma, corr_length=small.length,
-                     autocorrelation_function="gaussian", warning_handling="none")  # fmt: skip
+    iem = IEM_Fung92(
+        roughness_rms=small.sigma,
+        corr_length=small.length,
+        autocorrelation_function="gaussian",
+        warning_handling="none",
+    )
 
     def smrt_iem():
         return to_sigma0(iem.diffuse_reflection_matrix(FREQ, 1.0, EPS, mu, mu, math.pi, 2), mu)
 
     def ems(method, rough, **kw):
         def f():
-            return em.backscatter(rough, EPS, frequency=FREQ, theta_i=THETA, method=method,
-                                  out_of_range="ignore", **kw)  # fmt: skip
+            return em.backscatter(
+                rough,
+                EPS,
+                frequency=FREQ,
+                theta_i=THETA,
+                method=method,
+                out_of_range="ignore",
+                **kw,
+            )
 
         return f
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t = _interleaved({"smrt_iem": smrt_iem, "spm": ems("spm", small),
-                          "auto": ems("auto", small)}, args.repeat)  # fmt: skip
+        t = _interleaved(
+            {"smrt_iem": smrt_iem, "spm": ems("spm", small), "auto": ems("auto", small)},
+            args.repeat,
+        )
         ref = smrt_iem()
         for m in ("spm", "auto"):
             res = ems(m, small)()
             ours = np.stack([res.sigma0[0, 0], res.sigma0[1, 1]])
             cases[f"backscatter_{m}_vs_smrt_iem_fung92"] = {
-                "geometries": THETA.size, "emscatter_s": t[m], "smrt_s": t["smrt_iem"],
+                "geometries": THETA.size,
+                "emscatter_s": t[m],
+                "smrt_s": t["smrt_iem"],
                 "speed_ratio_smrt_over_emscatter": t["smrt_iem"] / t[m],
                 "max_abs_diff_db": _db_diff(ours[:, :60], ref[:, :60]),  # θ < 60°
                 "method_used": res.method,
-            }  # fmt: skip
+            }
 
         # ---- backscatter, very rough (GO vs GO backscatter)
         big = em.GaussianCorrelation(10.0 / k, 60.0 / k)
@@ -108,23 +124,28 @@ def main(argv=None) -> dict:
         mu_go = np.cos(th_go)
 
         def smrt_gob():
-            return to_sigma0(gob.diffuse_reflection_matrix(FREQ, 1.0, EPS, mu_go, mu_go,
-                                                           math.pi, 2), mu_go)  # fmt: skip
+            return to_sigma0(
+                gob.diffuse_reflection_matrix(FREQ, 1.0, EPS, mu_go, mu_go, math.pi, 2), mu_go
+            )
 
         def ems_go():
-            return em.backscatter(big, EPS, frequency=FREQ, theta_i=th_go, method="go",
-                                  out_of_range="ignore")  # fmt: skip
+            return em.backscatter(
+                big, EPS, frequency=FREQ, theta_i=th_go, method="go", out_of_range="ignore"
+            )
 
         t = _interleaved({"smrt": smrt_gob, "go": ems_go}, args.repeat)
         res = ems_go()
         cases["backscatter_go_vs_smrt_geometrical_optics_backscatter"] = {
-            "geometries": th_go.size, "emscatter_s": t["go"], "smrt_s": t["smrt"],
+            "geometries": th_go.size,
+            "emscatter_s": t["go"],
+            "smrt_s": t["smrt"],
             "speed_ratio_smrt_over_emscatter": t["smrt"] / t["go"],
-            "max_abs_diff_db": _db_diff(np.stack([res.sigma0[0, 0], res.sigma0[1, 1]])[:, :70],
-                                        smrt_gob()[:, :70]),
+            "max_abs_diff_db": _db_diff(
+                np.stack([res.sigma0[0, 0], res.sigma0[1, 1]])[:, :70], smrt_gob()[:, :70]
+            ),
             "note": "SMRT GO-backscatter uses the normal-incidence |R(0)|² (as emscatter GO at "
-                    "backscatter); compared for θ < 70°",
-        }  # fmt: skip
+            "backscatter); compared for θ < 70°",
+        }
 
         # ---- bistatic GO grid
         go = GeometricalOptics(mean_square_slope=mss, shadow_correction=True)
@@ -136,32 +157,54 @@ def main(argv=None) -> dict:
         ps_g = dphi[:, None, None]
 
         def smrt_go():
-            return to_sigma0(go.diffuse_reflection_matrix(FREQ, 1.0, EPS, mu_s, mu_i, dphi, 2),
-                             mu_i[None, None, :])  # fmt: skip
+            return to_sigma0(
+                go.diffuse_reflection_matrix(FREQ, 1.0, EPS, mu_s, mu_i, dphi, 2),
+                mu_i[None, None, :],
+            )
 
         def ems_bi():
-            return em.bistatic(big, EPS, frequency=FREQ, theta_i=ti_g, theta_s=ts_g, phi_s=ps_g,
-                               method="go", shadowing="correlated", out_of_range="ignore")  # fmt: skip
+            return em.bistatic(
+                big,
+                EPS,
+                frequency=FREQ,
+                theta_i=ti_g,
+                theta_s=ts_g,
+                phi_s=ps_g,
+                method="go",
+                shadowing="correlated",
+                out_of_range="ignore",
+            )
 
         t = _interleaved({"smrt": smrt_go, "go": ems_bi}, args.repeat)
         keep = np.degrees(np.arccos(mu_s)) <= 84.0  # SMRT clips cosθ at 0.1 (θ > 84.3°)
         a, b = ems_bi().sigma0[:, :, :, keep], smrt_go()[:, :, :, keep]
         cases["bistatic_go_vs_smrt_geometrical_optics"] = {
-            "geometries": int(np.prod(a.shape[2:])), "emscatter_s": t["go"], "smrt_s": t["smrt"],
+            "geometries": int(np.prod(a.shape[2:])),
+            "emscatter_s": t["go"],
+            "smrt_s": t["smrt"],
             "speed_ratio_smrt_over_emscatter": t["smrt"] / t["go"],
             "max_abs_diff_db_copol": max(_db_diff(a[0, 0], b[0, 0]), _db_diff(a[1, 1], b[1, 1])),
             "max_abs_diff_db_crosspol": max(_db_diff(a[0, 1], b[0, 1]), _db_diff(a[1, 0], b[1, 0])),
             "note": "agreement over θs ≤ 84° (SMRT's GO clips cosθ at 0.1)",
-        }  # fmt: skip
+        }
     for name, c in cases.items():
-        print(f"{name:56s} emscatter {c['emscatter_s'] * 1e3:8.2f} ms  SMRT {c['smrt_s'] * 1e3:8.2f}"
-              f" ms  SMRT/emscatter ×{c['speed_ratio_smrt_over_emscatter']:.2f}  "
-              f"Δ {c.get('max_abs_diff_db', c.get('max_abs_diff_db_copol')):.3g} dB")  # fmt: skip
+        print(
+            f"{name:56s} emscatter {c['emscatter_s'] * 1e3:8.2f} ms  SMRT {c['smrt_s'] * 1e3:8.2f}"
+            f" ms  SMRT/emscatter ×{c['speed_ratio_smrt_over_emscatter']:.2f}  "
+            f"Δ {c.get('max_abs_diff_db', c.get('max_abs_diff_db_copol')):.3g} dB"
+        )
     info = machine("smrt")
     cmd = command()
-    data = {"benchmark": "emscatter vs SMRT", "label": args.label, "command": cmd,
-            "machine": info, "repeat": args.repeat, "eps": EPS, "frequency_hz": FREQ,
-            "cases": cases}  # fmt: skip
+    data = {
+        "benchmark": "emscatter vs SMRT",
+        "label": args.label,
+        "command": cmd,
+        "machine": info,
+        "repeat": args.repeat,
+        "eps": EPS,
+        "frequency_hz": FREQ,
+        "cases": cases,
+    }
     write("peers", data)
     write(f"peers_{args.label}", data)
     _plot(data, cmd)
@@ -179,9 +222,14 @@ def _plot(data, cmd):
     ax.barh(y, r, color=["C2" if v >= 1 else "C3" for v in r])
     for yy, v, n in zip(y, r, names, strict=True):
         c = cases[n]
-        ax.annotate(f"×{v:.2f}  ({c['emscatter_s'] * 1e3:.2f} ms vs {c['smrt_s'] * 1e3:.2f} ms)",
-                    (v, yy), xytext=(4, 0), textcoords="offset points", va="center",
-                    fontsize=7)  # fmt: skip
+        ax.annotate(
+            f"×{v:.2f}  ({c['emscatter_s'] * 1e3:.2f} ms vs {c['smrt_s'] * 1e3:.2f} ms)",
+            (v, yy),
+            xytext=(4, 0),
+            textcoords="offset points",
+            va="center",
+            fontsize=7,
+        )
     ax.axvline(1, color="k", lw=0.8)
     ax.axvline(3, color="0.5", ls=":", lw=0.8)
     ax.set_xscale("log")

@@ -52,10 +52,14 @@ def sigma0_series(kernels: str, quick: bool):
     rng = np.random.default_rng(0)
     out = {}
     for name, fn in (
-        ("spm1", lambda g: spm.bistatic(GaussianCorrelation(0.005, 0.05), 17 + 2j, 60.0, *g,
-                                        coherent=False)),
+        (
+            "spm1",
+            lambda g: spm.bistatic(
+                GaussianCorrelation(0.005, 0.05), 17 + 2j, 60.0, *g, coherent=False
+            ),
+        ),
         ("go", lambda g: go.bistatic(GaussianCorrelation(0.1, 1.0), 17 + 2j, 6.3, *g)),
-    ):  # fmt: skip
+    ):
         rows = []
         for n in sizes:
             g = (rng.uniform(0, 1.5, n), rng.uniform(0, 1.5, n), rng.uniform(0, 6.28, n))
@@ -80,8 +84,19 @@ def mom_series(quick: bool):
             warnings.simplefilter("ignore")
 
             def run(length=length):
-                mom.bistatic(rough, "pec", k, 0.3, 0.3, 0.0, realizations=2, seed=0,
-                             length=length, progress=False, polarizations=("h",))  # fmt: skip
+                mom.bistatic(
+                    rough,
+                    "pec",
+                    k,
+                    0.3,
+                    0.3,
+                    0.0,
+                    realizations=2,
+                    seed=0,
+                    length=length,
+                    progress=False,
+                    polarizations=("h",),
+                )
 
             t, mem = measure(run, 1)
         rows.append({"size": n, "seconds": t, "peak_bytes": mem})
@@ -100,8 +115,12 @@ def brdf_series(quick: bool):
     for n in (8, 16, 32, 64) + (() if quick else (90,)):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            t, mem = measure(lambda n=n: build_table(rough, 17 + 2j, [1.0], method="go",
-                                                     resolution=(n, 2 * n), energy=None), 1)  # fmt: skip
+            t, mem = measure(
+                lambda n=n: build_table(
+                    rough, 17 + 2j, [1.0], method="go", resolution=(n, 2 * n), energy=None
+                ),
+                1,
+            )
         rows.append({"size": 2 * n**3, "seconds": t, "peak_bytes": mem})
     return {"BRDF table nodes (GO, n × n × 2n)": rows}
 
@@ -132,10 +151,20 @@ def main(argv=None):
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 4.4))
     for j, (name, s) in enumerate(series.items()):
         xs = [r["size"] for r in s["rows"]]
-        ax0.loglog(xs, [r["seconds"] for r in s["rows"]], "o-", color=f"C{j}",
-                   label=f"{name}: n^{s['time_exponent']:.2f}")  # fmt: skip
-        ax1.loglog(xs, [max(r["peak_bytes"], 1) / 2**20 for r in s["rows"]], "s-", color=f"C{j}",
-                   label=f"{name}: n^{s['memory_exponent']:.2f}")  # fmt: skip
+        ax0.loglog(
+            xs,
+            [r["seconds"] for r in s["rows"]],
+            "o-",
+            color=f"C{j}",
+            label=f"{name}: n^{s['time_exponent']:.2f}",
+        )
+        ax1.loglog(
+            xs,
+            [max(r["peak_bytes"], 1) / 2**20 for r in s["rows"]],
+            "s-",
+            color=f"C{j}",
+            label=f"{name}: n^{s['memory_exponent']:.2f}",
+        )
     ax0.set_ylabel("wall time [s]")
     ax1.set_ylabel("peak numpy allocations [MiB] (tracemalloc)")
     for ax in (ax0, ax1):

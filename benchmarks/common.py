@@ -93,8 +93,11 @@ def stamp(fig, info: dict, cmd: str, repeat: int | None = None) -> None:
     """Footer on a figure: machine, versions, load average, repeats, the command."""
     v = info["versions"]
     vs = ", ".join(f"{k} {v[k]}" for k in ("emscatter", "numpy", "scipy", "numba") if v.get(k))
-    extra = [f"{k} {val}" for k, val in v.items() if k not in ("python", "emscatter", "numpy",
-                                                               "scipy", "numba") and val]  # fmt: skip
+    extra = [
+        f"{k} {val}"
+        for k, val in v.items()
+        if k not in ("python", "emscatter", "numpy", "scipy", "numba") and val
+    ]
     load = ", ".join(f"{x:.1f}" for x in info["load_average"])
     rep = f"median of {repeat} runs · " if repeat else ""
     lines = [
@@ -103,8 +106,9 @@ def stamp(fig, info: dict, cmd: str, repeat: int | None = None) -> None:
         f"{rep}load average {load} · {info['date']}",
         f"$ {cmd}",
     ]
-    fig.text(0.01, 0.005, "\n".join(lines), fontsize=6.5, family="monospace", va="bottom",
-             color="0.3")  # fmt: skip
+    fig.text(
+        0.01, 0.005, "\n".join(lines), fontsize=6.5, family="monospace", va="bottom", color="0.3"
+    )
     fig.subplots_adjust(bottom=max(fig.subplotpars.bottom, 0.2))
 
 

@@ -76,7 +76,7 @@ def covered_go(dimension: int, sx: float, sy: float, eps, shadowing) -> bool:
     return (
         dimension == 2
         and sx == sy
-        and shadowing in (None, "smith", "correlated")
+        and shadowing in (None, "smith", "separable", "correlated")
         and _scalar_eps(eps) is not None
     )
 
@@ -84,6 +84,7 @@ def covered_go(dimension: int, sx: float, sy: float, eps, shadowing) -> bool:
 def go_sigma0(
     ti, ts, dphi, eps, *, dimension: int, sx: float, sy: float, shadowing,
     out: np.ndarray, coherent_out: np.ndarray | None = None, k: float = 1.0, sigma: float = 0.0,
+    threads: int | None = None,
 ) -> bool:  # fmt: skip
     """GO σ⁰ into ``out`` (2, 2, n) and, when given, the Kirchhoff coherent reflectivity into
     ``coherent_out`` (2, n) (as ``emscatter.solvers.kirchhoff_go.bistatic``)."""
@@ -99,6 +100,6 @@ def go_sigma0(
 
     kernel(
         _flat(ti, n), _flat(ts, n), dphi, _scalar_eps(eps), slope_variance=sx,
-        shadowing=shadowing, out=out, coherent_out=coherent_out, k=k, sigma=sigma,
+        shadowing=shadowing, out=out, coherent_out=coherent_out, k=k, sigma=sigma, threads=threads,
     )  # fmt: skip
     return True

@@ -6,7 +6,8 @@ The arithmetic of the numpy reference — :class:`emscatter.solvers.kirchhoff_co
 :func:`~emscatter.solvers.kirchhoff_common.fresnel_factors` (equations and sources there:
 Tsang, Kong & Ding 2001 vol. III ch. 2; Ulaby, Moore & Fung 1982 vol. II §12-4; Smith 1967)
 — fused into one loop per geometry. Covered: 2-D surfaces with isotropic slopes
-(``⟨ζx²⟩ = ⟨ζy²⟩``), one permittivity or PEC, shadowing off / ``"smith"`` / ``"correlated"``.
+(``⟨ζx²⟩ = ⟨ζy²⟩``), one permittivity or PEC, shadowing off / ``"smith"`` (monostatic at
+exact backscatter) / ``"separable"`` / ``"correlated"``.
 With isotropic slopes σ⁰ depends on ``φs − φi`` only, so the rotation by ``φi`` that the
 numpy path applies to ``q`` is skipped (rounding-level difference).
 
@@ -23,8 +24,15 @@ import numpy as np
 from ._runtime import inline, jit, run_fused
 from ._vmath import vcos, verfcx, vexp, vsin
 
-NO_SHADOWING, SMITH, CORRELATED = 0, 1, 2
-SHADOWING_CODES = {None: NO_SHADOWING, "smith": SMITH, "correlated": CORRELATED}
+NO_SHADOWING, SEPARABLE, CORRELATED, SMITH = 0, 1, 2, 3
+#: kirchhoff_common.check_shadowing's modes: "smith" is the separable product except in the
+#: exact backscatter direction (|q|² > 4(1 − 1e-12)), where the monostatic 1/(1 + Λi) applies
+SHADOWING_CODES = {
+    None: NO_SHADOWING,
+    "separable": SEPARABLE,
+    "correlated": CORRELATED,
+    "smith": SMITH,
+}
 _SQRT_PI = math.sqrt(math.pi)
 _TAU_EPS = 1e-28  # as kirchhoff_common._TAU_EPS
 
@@ -103,10 +111,12 @@ def _go_kernel(ti, ts, dphi, pec, er, ei, s2, shadowing, two_k_sigma, hh, hv, vh
         if shadowing != 0:
             lam_i = _smith_lambda(_shadow_a(ci, si, s2))
             lam_s = _smith_lambda(_shadow_a(cs, ss, s2))
-            if shadowing == 1:
-                val = val * ((1.0 / (1.0 + lam_i)) * (1.0 / (1.0 + lam_s)))
-            else:
+            if shadowing == CORRELATED:
                 val = val * (1.0 / (1.0 + lam_i + lam_s))
+            elif shadowing == SMITH and q2 > 4.0 * (1.0 - 1e-12):
+                val = val * (1.0 / (1.0 + lam_i))
+            else:
+                val = val * ((1.0 / (1.0 + lam_i)) * (1.0 / (1.0 + lam_s)))
         # fresnel_factors (2-D)
         rh2, rv2, cross = _fast_fresnel(pec, er, ei, cos_l)
         a_h = rh2 * val

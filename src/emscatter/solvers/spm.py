@@ -66,6 +66,7 @@ import numpy as np
 
 from ..conventions import broadcast_angles, check_angle, check_positive
 from ..fresnel import PEC, check_eps, fresnel_cos, is_pec
+from ..kernels import dispatch
 from ..scattering import Scattering
 from ..spectra import GaussianCorrelation, Roughness, check_roughness
 from .spm_validity import OPTIONS, VALIDITY, check_validity  # noqa: F401 (re-exported)
@@ -656,10 +657,12 @@ def bistatic(
     fpi = pi_b.ravel()
     fe = eps_c if scalar_eps else eps_b.ravel()
     coh = np.empty((2, n)) if order < 2 else None
+    compiled = scalar_eps and dispatch.spm1_sigma0(rough, eps_c, k, fi, fs, dphi, sig)
     for s in range(0, n, _CHUNK):
         sl = slice(s, s + _CHUNK)
         e = fe if scalar_eps else fe[sl]
-        _sigma0_first(rough, e, k, fi[sl], fs[sl], dphi[sl], fpi[sl], sig[:, :, sl])
+        if not compiled:  # numpy reference path (emscatter.kernels covers the common cases)
+            _sigma0_first(rough, e, k, fi[sl], fs[sl], dphi[sl], fpi[sl], sig[:, :, sl])
         if coh is not None:
             coh[:, sl] = _fresnel_power(e, fi[sl])
     if rough.dimension == 1:
