@@ -174,3 +174,38 @@ def test_two_processes_filling_the_same_entry(fresh_cache, tmp_path):
     np.testing.assert_array_equal(cache.cached("race", {"k": 1}, c), np.arange(50_000.0))
     assert c.calls == 0
     assert not list(fresh_cache.rglob("*.tmp"))  # no temporary file left behind
+
+
+def test_cached_step_replays_the_files_a_step_wrote(tmp_path):
+    calls = []
+
+    def produce(folder):
+        calls.append(folder)
+        (folder / "sub").mkdir()
+        (folder / "sub" / "a.csv").write_text("x,y\n1,2\n")
+        (folder / "b.png").write_bytes(b"\x89PNG fake")
+        return {"rows": 1}
+
+    v1, f1 = cache.cached_step("steps", {"step": "t"}, tmp_path / "one", produce)
+    v2, f2 = cache.cached_step("steps", {"step": "t"}, tmp_path / "two", produce)
+    assert len(calls) == 1 and v1 == v2 == {"rows": 1}
+    assert sorted(p.relative_to(tmp_path / "two") for p in f2) == sorted(
+        p.relative_to(tmp_path / "one") for p in f1
+    )
+    assert (tmp_path / "two" / "sub" / "a.csv").read_text() == "x,y\n1,2\n"
+    assert (tmp_path / "two" / "b.png").read_bytes() == b"\x89PNG fake"
+
+
+def test_emissivity_is_served_from_the_cache_unchanged():
+    import emscatter as em
+
+    kw = dict(wavelength=1.0, theta_i=np.radians([10.0, 50.0]), method="spm")
+    rough = GaussianCorrelation(0.02, 0.5)
+    hits = cache.stats.hits
+    e1 = em.emissivity(rough, 17 + 2j, **kw)
+    e2 = em.emissivity(rough, 17 + 2j, **kw)
+    assert cache.stats.hits == hits + 1
+    np.testing.assert_array_equal(e1.emissivity, e2.emissivity)
+    np.testing.assert_array_equal(e1.error, e2.error)
+    e3 = em.emissivity(rough, 17 + 2.001j, **kw)  # another input: computed, not served
+    assert cache.stats.hits == hits + 1 and not np.array_equal(e3.emissivity, e1.emissivity)

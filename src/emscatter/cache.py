@@ -52,6 +52,7 @@ __all__ = [
     "evict",
     "stats",
     "CacheStats",
+    "cached_step",
 ]
 
 T = TypeVar("T")
@@ -70,6 +71,7 @@ class CacheStats:
     writes: int = 0
     corrupt: int = 0
     evicted: int = 0
+    uncacheable: int = 0
 
 
 stats = CacheStats()
@@ -277,10 +279,16 @@ def cached(namespace: str, key: Any, compute: Callable[[], T]) -> T:
 
     ``namespace``: what is cached (``"emissivity"``, ``"brdf-table"``, ...); ``key``: every
     input the result depends on (see :func:`key_of`); ``compute``: a pure function of them.
-    With the cache off, this is ``compute()``. The value must pickle."""
+    With the cache off, this is ``compute()``. The value must pickle. A key that cannot be
+    encoded (e.g. an executor among the options) is not an error: the value is computed and
+    not stored (``stats.uncacheable`` counts it)."""
     if not enabled():
         return compute()
-    digest = key_of(namespace, key)
+    try:
+        digest = key_of(namespace, key)
+    except TypeError:
+        stats.uncacheable += 1
+        return compute()
     _ensure_root()
     path = _entry_path(namespace, digest)
     found, value = _read(path)
@@ -345,6 +353,36 @@ def clear(namespace: str | None = None) -> int:
             p.with_suffix(".lock").unlink(missing_ok=True)
             n += 1
     return n
+
+
+def cached_step(
+    namespace: str, key: Any, out, produce: Callable[[Path], T]
+) -> tuple[T, list[Path]]:
+    """A step that writes files: ``produce(folder)`` writes them under ``folder`` and returns a
+    value. Run (on a miss) in a temporary folder; the value and every file's bytes are cached;
+    then the files are written atomically under ``out`` at the same relative paths. Returns
+    ``(value, paths under out)``. Paths inside the value are not translated: return data, not
+    paths, from ``produce``."""
+    from .io import atomic_path
+
+    def run() -> tuple[T, dict[str, bytes]]:
+        with tempfile.TemporaryDirectory(prefix="emscatter-step-") as tmp:
+            value = produce(Path(tmp))
+            files = {
+                str(p.relative_to(tmp)): p.read_bytes()
+                for p in sorted(Path(tmp).rglob("*"))
+                if p.is_file()
+            }
+        return value, files
+
+    value, files = cached(namespace, key, run)
+    written = []
+    for rel, blob in files.items():
+        dest = Path(out) / rel
+        with atomic_path(dest) as tmp_path:
+            tmp_path.write_bytes(blob)
+        written.append(dest)
+    return value, written
 
 
 def timed(namespace: str, key: Any, compute: Callable[[], T]) -> tuple[T, float, bool]:
