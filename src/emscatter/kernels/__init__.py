@@ -24,6 +24,7 @@ and are cached on disk (see :mod:`._runtime`). This package is light to import.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import os
 
@@ -32,8 +33,9 @@ __all__ = ["backend", "BACKENDS", "numba_available"]
 BACKENDS = ("auto", "numba", "numpy")
 
 
+@functools.cache
 def numba_available() -> bool:
-    """Whether numba can be imported (checked without importing it)."""
+    """Whether numba can be imported (checked once, without importing it)."""
     return importlib.util.find_spec("numba") is not None
 
 

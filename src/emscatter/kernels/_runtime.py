@@ -115,6 +115,9 @@ def run_fused(kernel, inputs: tuple, consts: tuple, outputs: tuple, threads: int
     ``inputs`` and ``outputs``: 1-D C-contiguous arrays of one length n (each output a
     separate array, so the vectorized loop's overlap check passes)."""
     n = inputs[0].size
+    if n < 2 * _MIN_CHUNK or threads == 1:  # one chunk: no pool, no closure (µs matter here)
+        kernel(*inputs, *consts, *outputs)
+        return
 
     def part(a: int, b: int) -> None:
         kernel(*(x[a:b] for x in inputs), *consts, *(y[a:b] for y in outputs))

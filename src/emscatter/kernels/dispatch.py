@@ -8,6 +8,8 @@ Light to import: numba is imported only when a kernel runs.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from . import backend
@@ -35,17 +37,23 @@ def _flat(a, n: int) -> np.ndarray:
 
 
 def _azimuth_ok(dphi: np.ndarray) -> bool:
-    return dphi.size == 0 or float(np.max(np.abs(dphi))) <= MAX_AZIMUTH
+    return dphi.size == 0 or -MAX_AZIMUTH <= dphi.min() and dphi.max() <= MAX_AZIMUTH
+
+
+@functools.cache
+def _spm1_spectra() -> dict:
+    from ..spectra import ExponentialCorrelation, GaussianCorrelation
+    from .spm import EXPONENTIAL, GAUSSIAN
+
+    return {GaussianCorrelation: GAUSSIAN, ExponentialCorrelation: EXPONENTIAL}
 
 
 def covered_spm1(rough, eps) -> bool:
     """Whether :func:`spm1_sigma0` has a kernel for this roughness and permittivity."""
-    from ..spectra import ExponentialCorrelation, GaussianCorrelation
-
     return (
         rough.dimension == 2
+        and type(rough) in _spm1_spectra()
         and rough.is_isotropic
-        and type(rough) in (GaussianCorrelation, ExponentialCorrelation)
         and _scalar_eps(eps) is not None
     )
 
@@ -59,11 +67,9 @@ def spm1_sigma0(rough, eps, k: float, ti, ts, dphi, out: np.ndarray) -> bool:
     dphi = _flat(dphi, n)
     if not _azimuth_ok(dphi) or not out.flags.c_contiguous:
         return False
-    from ..spectra import GaussianCorrelation
-    from .spm import EXPONENTIAL, GAUSSIAN
     from .spm import spm1_sigma0 as kernel
 
-    code = GAUSSIAN if type(rough) is GaussianCorrelation else EXPONENTIAL
+    code = _spm1_spectra()[type(rough)]
     kernel(
         _flat(ti, n), _flat(ts, n), dphi, _scalar_eps(eps),
         k=k, sigma=rough.sigma, length=rough.length, spectrum=code, out=out,
