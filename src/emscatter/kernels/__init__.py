@@ -1,5 +1,5 @@
 """Compiled kernels for the hottest loops (first-order SPM σ⁰, geometric-optics σ⁰ with
-Smith shadowing), selected automatically; the numpy code in :mod:`emscatter.solvers` stays
+Smith shadowing, the physical-optics series), selected automatically; the numpy code in :mod:`emscatter.solvers` stays
 the reference and can be forced.
 
 Selection (``EMSCATTER_KERNELS``, read at each call):
@@ -10,7 +10,9 @@ Selection (``EMSCATTER_KERNELS``, read at each call):
 
 Cases covered (others run the numpy path, identical results): 2-D surfaces, one permittivity
 (or ``"pec"``) per call, ``|φs − φi| ≤ 1e6`` rad; SPM1 with isotropic Gaussian or exponential
-correlation; GO with isotropic slopes, shadowing off / Smith / correlated.
+correlation; GO with isotropic slopes, shadowing off / smith / separable / correlated; the PO
+series for Gaussian and exponential correlations, 1-D and 2-D (peaks at n ≥ 400 stay with the
+reference's continuum integral).
 
 Agreement with numpy (tests/test_kernels.py): ``|Δσ⁰| ≤ 1e-12 |σ⁰| + 1e-14 max σ⁰_pq`` per
 polarization — relative 1e-12 except where the numpy formula itself loses digits to

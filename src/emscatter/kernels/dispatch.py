@@ -14,7 +14,7 @@ import numpy as np
 
 from . import backend
 
-__all__ = ["spm1_sigma0", "go_sigma0", "covered_spm1", "covered_go"]
+__all__ = ["spm1_sigma0", "go_sigma0", "po_log_series", "covered_spm1", "covered_go"]
 
 MAX_AZIMUTH = 1.0e6  # |φs − φi| [rad] up to which the kernels' cos reduction is exact
 
@@ -109,3 +109,30 @@ def go_sigma0(
         shadowing=shadowing, out=out, coherent_out=coherent_out, k=k, sigma=sigma, threads=threads,
     )  # fmt: skip
     return True
+
+
+def po_log_series(rough, log_w, Q, K, *, rtol: float, max_terms: int, series_sum):
+    """The physical-optics ``log T`` (as ``kirchhoff_po.series_sum``) or None when not
+    covered; geometries the kernel leaves (peak at n ≥ 400, long walks) are computed by the
+    reference ``series_sum(log_w, Q, K, ...)`` passed in."""
+    if backend() != "numba":
+        return None
+    from ..spectra import ExponentialCorrelation, GaussianCorrelation
+    from . import po
+
+    kinds = {
+        (GaussianCorrelation, 2): po.GAUSSIAN_2D,
+        (GaussianCorrelation, 1): po.GAUSSIAN_1D,
+        (ExponentialCorrelation, 2): po.EXPONENTIAL_2D,
+        (ExponentialCorrelation, 1): po.EXPONENTIAL_1D,
+    }
+    kind = kinds.get((type(rough), rough.dimension))
+    if kind is None:
+        return None
+    n = np.size(Q)
+    q, kk = _flat(Q, n), _flat(K, n)
+    out = po.log_series(q, kk, kind, rtol=rtol, max_terms=max_terms)
+    rest = np.isnan(out)
+    if rest.any():
+        out[rest] = series_sum(log_w, q[rest], kk[rest], rtol=rtol, max_terms=max_terms)
+    return out
