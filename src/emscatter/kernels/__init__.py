@@ -1,6 +1,6 @@
 """Compiled kernels for the hottest loops (first-order SPM σ⁰, geometric-optics σ⁰ with
-Smith shadowing, the physical-optics series), selected automatically; the numpy code in :mod:`emscatter.solvers` stays
-the reference and can be forced.
+Smith shadowing, the physical-optics series), selected automatically; the numpy code in
+:mod:`emscatter.solvers` stays the reference and can be forced.
 
 Selection (``EMSCATTER_KERNELS``, read at each call):
 
