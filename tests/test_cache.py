@@ -209,3 +209,16 @@ def test_emissivity_is_served_from_the_cache_unchanged():
     np.testing.assert_array_equal(e1.error, e2.error)
     e3 = em.emissivity(rough, 17 + 2.001j, **kw)  # another input: computed, not served
     assert cache.stats.hits == hits + 1 and not np.array_equal(e3.emissivity, e1.emissivity)
+
+
+def test_an_unusable_folder_or_value_never_stops_the_computation(tmp_path, monkeypatch):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("EMSCATTER_CACHE_DIR", str(blocker / "cache"))  # cannot be created
+    c = Counter(7)
+    assert cache.cached("test", "k", c) == 7 and cache.cached("test", "k", c) == 7
+    assert c.calls == 2
+    monkeypatch.setenv("EMSCATTER_CACHE_DIR", str(tmp_path / "ok"))
+    before = cache.stats.unusable
+    assert cache.cached("test", "lambda", lambda: lambda: 1)() == 1  # does not pickle
+    assert cache.stats.unusable == before + 1

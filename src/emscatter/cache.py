@@ -17,6 +17,8 @@ second-order coherent reflectivity, BRDF/radio tables, Monte Carlo runs, the dem
   the first and read its result instead of computing it again.
 * **Size limit** ``EMSCATTER_CACHE_MAX_MB`` (default 1024): after each write the least
   recently used entries (a hit refreshes an entry's time) are removed until the total fits.
+* **Never in the way**: an unusable folder (read-only, full disk) or a value that does not
+  pickle means the value is computed and returned, not stored (``stats.unusable``).
 * **Switches**: ``EMSCATTER_CACHE=0`` (or ``off``/``false``/``no``) or :func:`set_enabled`
   (``False``) / ``with cache.disabled():`` turn it off; ``EMSCATTER_CACHE_DIR`` moves it
   (default ``~/.cache/emscatter/results``, created with mode 0700: entries are pickles, so the
@@ -64,7 +66,8 @@ _override: bool | None = None
 
 @dataclasses.dataclass
 class CacheStats:
-    """Counters of this process (hits, misses, writes, corrupt entries found, evictions)."""
+    """Counters of this process: hits, misses, writes, corrupt entries found, evictions,
+    keys that could not be encoded, and times the folder could not be used (computed anyway)."""
 
     hits: int = 0
     misses: int = 0
@@ -72,6 +75,7 @@ class CacheStats:
     corrupt: int = 0
     evicted: int = 0
     uncacheable: int = 0
+    unusable: int = 0
 
 
 stats = CacheStats()
@@ -289,21 +293,40 @@ def cached(namespace: str, key: Any, compute: Callable[[], T]) -> T:
     except TypeError:
         stats.uncacheable += 1
         return compute()
-    _ensure_root()
     path = _entry_path(namespace, digest)
-    found, value = _read(path)
+    try:
+        _ensure_root()
+        found, value = _read(path)
+    except OSError:  # an unusable cache folder never stops a computation
+        stats.unusable += 1
+        return compute()
     if found:
         stats.hits += 1
         return value
-    with _locked(path):
+    try:
+        lock = _locked(path)
+        lock.__enter__()
+    except OSError:
+        stats.unusable += 1
+        return compute()
+    try:
         found, value = _read(path)  # another process may have filled it while we waited
         if found:
             stats.hits += 1
             return value
         stats.misses += 1
         value = compute()
-        _write(path, value)
-    evict()
+        try:
+            _write(path, value)
+        except (OSError, pickle.PicklingError, TypeError, AttributeError):
+            stats.unusable += 1  # full disk, read-only folder, unpicklable value: not stored
+            return value
+    finally:
+        lock.__exit__(None, None, None)
+    try:
+        evict()
+    except OSError:
+        pass
     return value
 
 

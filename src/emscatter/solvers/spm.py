@@ -64,6 +64,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .. import cache
 from ..conventions import broadcast_angles, check_angle, check_positive
 from ..fresnel import PEC, check_eps, fresnel_cos, is_pec
 from ..kernels import dispatch
@@ -589,7 +590,14 @@ def _coherent(rough, eps_c, k, ti, shape, n_radial, n_azimuth, phi_i=0.0):
     for e, mask in groups:
         pairs = np.stack([ti_b[mask], np.mod(pi_b[mask], 2 * math.pi)], axis=1)
         uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
-        r0, r2 = _second_order_R(rough, e, k, uniq[:, 0], n_radial, n_azimuth, phi_i=uniq[:, 1])
+        key = {"surface": rough, "eps": e, "k": k, "angles": uniq, "nodes": (n_radial, n_azimuth)}
+        r0, r2 = cache.cached(  # the quadrature costs ms per angle: kept on disk (emscatter.cache)
+            "spm2-coherent",
+            key,
+            lambda e=e, u=uniq: _second_order_R(
+                rough, e, k, u[:, 0], n_radial, n_azimuth, phi_i=u[:, 1]
+            ),
+        )
         r2 = r2 * rough.sigma**2
         refl = np.abs(r0) ** 2 + 2.0 * (np.conj(r0) * r2).real
         clipped += int(np.count_nonzero((refl < 0) | (refl > 1)))
