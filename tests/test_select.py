@@ -70,7 +70,9 @@ def test_check_options_maps_or_rejects():
     assert select.check_options("po", {"shadowing": False}, picked_by_auto=True) == {}
     with pytest.raises(ValueError, match=r"shadowing=True.*method='auto' picked 'po'"):
         select.check_options("po", {"shadowing": True}, picked_by_auto=True)
-    with pytest.raises(ValueError, match=r"slope_variance.*picked 'spm'.*\['coherent', 'order'\]"):
+    with pytest.raises(
+        ValueError, match=r"slope_variance.*picked 'spm'.*\['coherent', 'k_max', 'order'\]"
+    ):
         select.check_options("spm", {"slope_variance": 0.1}, picked_by_auto=True)
     with pytest.raises(ValueError, match="method 'spm', which takes"):
         select.check_options("spm", {"threads": 2}, picked_by_auto=False)

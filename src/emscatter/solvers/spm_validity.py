@@ -23,6 +23,13 @@ Angle criterion (with ``theta_i`` and ``eps``):
   perturbation theory for the Neumann problem (Thorsos & Jackson 1991, Waves Random Media 1,
   S165). ``r₁`` is computed once per (roughness, k, ε) on 24 incidence angles and
   interpolated as ``cosθi · r₁`` (smooth up to grazing), so later calls cost nothing.
+
+Spectral cutoff of the coherent term (a note, not a failed check): over a lossy medium the
+second-order coherent reflectivity of an exponential or power-law spectrum depends on the
+cutoff ``k_max`` (default ``2k``, :func:`emscatter.solvers.spm.coherent_cutoff`;
+validation/spm2_cutoff). The report then carries ``coherent_depends_on_cutoff = True`` and a
+note; with ``coherent=True`` and ``theta_i`` it also measures ``cutoff_sensitivity``, the
+change of the coherent reflectivity (larger of h, v) when ``k_max`` grows tenfold, per angle.
 """
 
 from __future__ import annotations
@@ -50,7 +57,7 @@ VALIDITY = {
 }
 
 #: Options of :func:`emscatter.solvers.spm.bistatic` (what ``check_validity`` accepts).
-OPTIONS = ("order", "coherent")
+OPTIONS = ("order", "coherent", "k_max")
 
 _SRC_KS = "Ulaby, Moore & Fung 1982 vol. II ch. 12; Thorsos & Jackson 1989 JASA 86 261"
 _SRC_R1 = "Rice 1951; Thorsos & Jackson 1989 (energy at O(σ²)); Thorsos & Jackson 1991 WRM 1 S165"
@@ -105,7 +112,14 @@ def check_validity(
     check_solver_options("spm", solver_options, OPTIONS)
     v = VALIDITY
     ks = k * rough.sigma
-    k_max = None if rough._mss_closed() is not None else v["slope_cutoff_factor"] * k
+    user_cut = solver_options.get("k_max")
+    if user_cut is not None:
+        user_cut = check_positive("k_max", user_cut, unit="rad/m")
+    k_max = None
+    if rough._mss_closed() is None:
+        k_max = v["slope_cutoff_factor"] * k
+        if user_cut is not None:
+            k_max = min(k_max, user_cut)
     sx, sy, k_cut = wave_slope_variances(rough, k, k_max)
     slope = math.sqrt(max(sx, sy))
     below = "" if k_cut is None else f" (spectrum below {k_cut / k:g}k)"
@@ -140,6 +154,28 @@ def check_validity(
                     _SRC_R1,
                 )
             )
+    extra = {}
+    if eps is not None and rough._mss_closed() is None:
+        e = check_eps(eps)
+        lossy = not is_pec(e) and bool(np.any(np.imag(np.asarray(e)) > 0))
+        if lossy:
+            from .spm import coherent_cutoff
+
+            cut = coherent_cutoff(rough, k, user_cut)
+            extra["coherent_depends_on_cutoff"] = True
+            notes.append(
+                f"spm2_cutoff: the coherent reflectivity over this lossy medium depends on the "
+                f"spectral cutoff k_max = {cut / k:.3g}k (log-divergent kernel for exponential/"
+                "power-law spectra; pass k_max, the surface's inner scale; "
+                "validation/spm2_cutoff)"
+            )
+            if solver_options.get("coherent") is True and ti is not None:
+                sens = _cutoff_sensitivity(rough, k, e, ti, cut)
+                extra["cutoff_sensitivity"] = sens
+                notes.append(
+                    f"spm2_cutoff: ×10 in k_max changes the coherent reflectivity by up to "
+                    f"{float(np.max(sens)):.2g}"
+                )
     return build_report(
         rough,
         k,
@@ -150,4 +186,14 @@ def check_validity(
         rms_slope=slope,
         slope_cutoff=k_cut,
         notes=notes,
+        **extra,
     )
+
+
+def _cutoff_sensitivity(rough, k, eps, theta_i, cut) -> np.ndarray:
+    """``max_p |r_coh,p(k_max) − r_coh,p(10 k_max)|`` per angle (theta_i's shape)."""
+    from .spm import coherent_reflectivity
+
+    a = coherent_reflectivity(rough, eps, k, theta_i, k_max=cut)
+    b = coherent_reflectivity(rough, eps, k, theta_i, k_max=10 * cut)
+    return np.max(np.abs(a - b), axis=0)
