@@ -2,6 +2,7 @@
 
 import csv
 import json
+import re
 import subprocess
 import sys
 
@@ -160,3 +161,143 @@ def test_a_new_command_is_a_new_module(tmp_path, monkeypatch, capsys):
     assert "argument --times: must be in (0, 10), got 11" in capsys.readouterr().err
     names = [m.__name__.rsplit(".", 1)[1] for m in cli.command_modules()[0]]
     assert {"curves", "demo", "surface", "validate", "hello"} <= set(names)
+
+
+@pytest.mark.parametrize(
+    "quantity, angles, expected",
+    [
+        ("emissivity", "30", [30.0]),
+        ("emissivity", "10,20,30", [10.0, 20.0, 30.0]),
+        ("backscatter", "0:60:4", [0.0, 20.0, 40.0, 60.0]),
+        ("backscatter", "25", [25.0]),
+    ],
+)
+def test_every_angle_form_is_honoured(quantity, angles, expected, tmp_path):
+    path = tmp_path / "x.csv"
+    rc = main(["curves", "--quantity", quantity, "--theta-i-deg", angles, "--csv", str(path)])
+    assert rc == 0
+    _, cols, meta = read_csv(path)
+    assert cols["theta_i_deg"].tolist() == expected
+    assert meta["inputs"]["theta_i_deg"] == expected
+
+
+def test_bistatic_computes_every_incidence_angle(tmp_path):
+    path = tmp_path / "b.csv"
+    argv = ["curves", "--theta-i-deg", "10:40:4", "--theta-s-deg", "0,30", "--csv", str(path)]
+    assert main(argv) == 0
+    _, cols, _ = read_csv(path)
+    assert cols["theta_i_deg"].tolist() == [10, 10, 20, 20, 30, 30, 40, 40]
+    assert cols["theta_s_deg"].tolist() == [0, 30] * 4
+    import emscatter as em
+
+    ref = em.bistatic(
+        em.GaussianCorrelation(0.03, 1.0),
+        17 + 2j,
+        wavelength=1.0,
+        theta_i=np.radians(40),
+        theta_s=np.radians([0, 30]),
+        phi_s=0.0,
+    )
+    np.testing.assert_allclose(cols["sigma0_hh"][-2:], ref.hh, rtol=1e-9)
+
+
+def test_outputs_carry_every_input_and_reproduce_with_from(tmp_path, capsys):
+    js, csv_path = tmp_path / "e.json", tmp_path / "e.csv"
+    argv = [
+        "curves",
+        "--quantity",
+        "emissivity",
+        "--kind",
+        "exponential",
+        "--sigma",
+        "0.004",
+        "--length",
+        "0.05",
+        "--eps",
+        "5+0.5i",
+        "--frequency",
+        "1.5e9",
+        "--theta-i-deg",
+        "0:60:3",
+        "--json",
+        str(js),
+        "--csv",
+        str(csv_path),
+    ]
+    assert main(argv) == 0
+    data = json.loads(js.read_text())
+    assert data["schema"] == "emscatter.curves/1" and data["emscatter_version"]
+    inp = data["inputs"]
+    assert inp["roughness"]["kind"] == "exponential" and inp["roughness"]["sigma_m"] == 0.004
+    assert inp["eps"] == {"re": 5.0, "im": 0.5}
+    assert inp["frequency_hz"] == 1.5e9 and abs(inp["wavelength_m"] - 0.19986163866666667) < 1e-12
+    assert inp["method"] == "auto" and data["result"]["method"] == "spm"
+    _, cols, meta = read_csv(csv_path)
+    assert meta["inputs"] == inp
+    for src, ext in ((js, "json"), (csv_path, "csv")):
+        again = tmp_path / f"again_{ext}.json"
+        png = tmp_path / f"again_{ext}.png"
+        assert main(["curves", "--from", str(src), "--json", str(again), "--png", str(png)]) == 0
+        re_data = json.loads(again.read_text())
+        assert re_data["inputs"] == inp and re_data["columns"] == data["columns"]
+        assert png.read_bytes()[:4] == b"\x89PNG"
+    capsys.readouterr()
+
+
+def test_help_shows_defaults_choices_and_only_real_commands(capsys):
+    from emscatter.cli import command_modules
+
+    assert main(["--help"]) == 0
+    top = capsys.readouterr().out
+    names = sorted(m.__name__.rsplit(".", 1)[1] for m in command_modules()[0])
+    listed = re.findall(r"^    (\w+)\s", top, re.M)
+    assert listed == names  # every command module, and nothing else
+    for name in names:
+        assert main([name, "--help"]) == 0
+        text = capsys.readouterr().out
+        assert "``" not in text and ":func:" not in text and ":class:" not in text
+    assert main(["curves", "--help"]) == 0
+    text = capsys.readouterr().out
+    assert "(default: 0.03)" in text and "{bistatic,backscatter,emissivity}" in text
+    assert "{warn,raise,nan,ignore}" in text and "auto" in text
+
+
+def test_warnings_are_one_line_and_flagged_rows(tmp_path, capsys):
+    path = tmp_path / "g.csv"
+    argv = [
+        "curves",
+        "--quantity",
+        "emissivity",
+        "--method",
+        "go",
+        "--sigma",
+        "0.6",
+        "--length",
+        "4",
+        "--theta-i-deg",
+        "60,85,88",
+        "--csv",
+        str(path),
+    ]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert (
+        "emscatter curves: warning: method 'go' at θi = 85°, 88°" in err and "Traceback" not in err
+    )
+    _, cols, _ = read_csv(path)
+    assert cols["energy_ok"].tolist() == [1, 0, 0] and cols["valid"][1:].tolist() == [0, 0]
+    assert cols["e_h"][2] < 0  # the data is shown as computed, flagged — never hidden
+
+
+def test_emissivity_figure_shows_the_data_it_is_given():
+    from emscatter.plots import emissivity_figure
+
+    th = np.array([0.0, 45.0, 85.0, 88.0])
+    eh, ev = np.array([0.6, 0.5, -0.27, -0.61]), np.array([0.65, 0.6, 0.1, -0.2])
+    fig = emissivity_figure(th, {"go": (eh, ev)}, title="t", flagged=eh < 0)
+    lo, hi = fig.axes[0].get_ylim()
+    assert lo < -0.61 and hi >= 1.0
+    assert any("energy not conserved" in t.get_text() for t in fig.axes[0].get_legend().get_texts())
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)

@@ -27,20 +27,17 @@ from . import cache, solvers
 from .conventions import broadcast_angles, check_angle, check_finite, wavenumber
 from .dispatch import angle_policy, angles_deg, rank_methods, validity_report
 from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
-from .frequency import Group, eps_at, frequency_groups, is_material
-from .fresnel import check_eps, is_pec
+from .frequency import Group, as_eps_or_material, eps_at, frequency_groups
+from .fresnel import is_pec
 from .scattering import Scattering
 from .solvers import select
 from .spectra import Roughness, check_roughness
 
 __all__ = ["bistatic", "backscatter", "emissivity", "resolve_method"]
 
+
 def _check_roughness(surface) -> Roughness:
     return check_roughness(surface, "surface")
-
-
-def _check_eps_or_material(eps):
-    return eps if is_material(eps) else check_eps(eps)
 
 
 def _check_method(method) -> str:
@@ -102,8 +99,9 @@ def _takes(func, name: str) -> bool:
 def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scattering:
     """One frequency: resolve the method, run the solver, apply the validity policies."""
     ti, ts, ps, pi_ = angles
-    name, module, report, make_nan = resolve_method(rough, k, method, out_of_range, eps, theta_i=ti)
-    opts = _map_options(name, options, method == "auto")
+    name = rank_methods(rough, k, eps=eps)[0][0] if method == "auto" else method
+    opts = _map_options(name, options, method == "auto")  # before any warning
+    name, module, report, make_nan = resolve_method(rough, k, name, out_of_range, eps, theta_i=ti)
     lazy = _takes(module.bistatic, "coherent")  # BOARD interface 3
     extra = {"coherent": False} if lazy else {}
     result = module.bistatic(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
@@ -239,7 +237,7 @@ def bistatic(
     ``k`` [rad/m] (an array when the frequencies vary).
     """
     rough = _check_roughness(surface)
-    eps = _check_eps_or_material(eps)
+    eps = as_eps_or_material(eps)
     k = wavenumber(frequency, wavelength)
     select.check_out_of_range(out_of_range)
     method = _check_method(method)
@@ -372,14 +370,14 @@ def _energy_fallback(rough, eps, k, ti, pi_, tol, options, ranking, primary, sta
 
 def _emissivity_one(rough, eps, k, ti, pi_, method, tol, out_of_range, options) -> Emissivity:
     """One frequency; ``ti`` and ``pi_`` broadcast to the same shape."""
-    if method == "auto":
-        ranking = rank_methods(rough, k, eps=eps, theta_i=ti)
+    if method == "auto":  # the regime's ranking; angles are handled one by one below
+        ranking = rank_methods(rough, k, eps=eps)
     else:
         ranking = [(method, None)]
+    opts = _map_options(ranking[0][0], options, method == "auto")  # before any warning
     name, module, report, make_nan = resolve_method(
         rough, k, ranking[0][0], out_of_range, eps, theta_i=ti
     )
-    opts = _map_options(name, options, method == "auto")
     r_coh, r_inc, err, evals = _integrate(module, rough, eps, k, ti, pi_, tol, opts)
     state = {
         "r_coh": np.array(r_coh, dtype=float),
@@ -474,7 +472,7 @@ def emissivity(
     that an approximation gets wrong (typically near grazing) get one that holds there.
     """
     rough = _check_roughness(surface)
-    eps = _check_eps_or_material(eps)
+    eps = as_eps_or_material(eps)
     k = wavenumber(frequency, wavelength)
     select.check_out_of_range(out_of_range)
     method = _check_method(method)

@@ -57,6 +57,8 @@ def fmt(x, digits: int = 6) -> str:
     """A number as a person writes it: ``0.5``, ``1e+09``, ``(17+2j)`` — never a numpy repr."""
     if isinstance(x, complex | np.complexfloating):
         z = complex(x)
+        if z.imag == 0:
+            return f"{z.real:.{digits}g}"
         sign = "+" if z.imag >= 0 or math.isnan(z.imag) else "-"
         return f"({z.real:.{digits}g}{sign}{abs(z.imag):.{digits}g}j)"
     if isinstance(x, bool | np.bool_):
@@ -156,8 +158,7 @@ def check_permittivity(value, name: str = "eps") -> np.ndarray:
     """
     if isinstance(value, bool | np.bool_) or np.asarray(value).dtype == bool:
         raise TypeError(
-            f"{name} must be a complex permittivity (a number, e.g. 17+2j) or 'pec', "
-            f"got {value!r}"
+            f"{name} must be a complex permittivity (a number, e.g. 17+2j) or 'pec', got {value!r}"
         )
     arr = check_finite(name, value)
     arr = arr.astype(complex)

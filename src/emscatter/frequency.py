@@ -19,7 +19,14 @@ from .constants import SPEED_OF_LIGHT
 from .conventions import broadcast_angles
 from .fresnel import check_eps, is_pec
 
-__all__ = ["Group", "is_material", "eps_at", "frequency_groups", "frequency_of"]
+__all__ = [
+    "Group",
+    "is_material",
+    "as_eps_or_material",
+    "eps_at",
+    "frequency_groups",
+    "frequency_of",
+]
 
 
 def is_material(eps) -> bool:
@@ -32,9 +39,27 @@ def frequency_of(k):
     return np.asarray(k) * SPEED_OF_LIGHT / (2 * math.pi)
 
 
+def as_eps_or_material(eps):
+    """``eps`` checked: ``"pec"``, a complex array (``Im ε ≥ 0``), or a material — an object
+    with ``.eps(frequency=...)`` or a material name (``"Au"``, ``"concrete"``, ``"itu:glass"``;
+    :func:`emscatter.materials.as_material`)."""
+    if is_material(eps):
+        return eps
+    if isinstance(eps, str) and not is_pec(eps):
+        from .materials import as_material
+
+        return as_material(eps)
+    return check_eps(eps)
+
+
 def _material_eps(material, frequency):
     name = getattr(material, "name", type(material).__name__)
-    value = material.eps(frequency=frequency)
+    from .materials import Material, eps_at
+
+    if isinstance(material, Material):
+        value = eps_at(material, frequency=frequency)  # "pec" for a perfect conductor
+    else:
+        value = material.eps(frequency=frequency)
     if isinstance(value, str):  # a perfect conductor
         return check_eps(value, f"eps of material {name!r}")
     return check_eps(np.asarray(value), f"eps of material {name!r}")
