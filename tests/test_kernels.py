@@ -220,10 +220,11 @@ def test_po_series_kernel_matches_numpy_reference(rough, monkeypatch):
     ref = po.bistatic(*args, rtol=1e-13, coherent=False).sigma0
     monkeypatch.setenv("EMSCATTER_KERNELS", "numba")
     _agree(po.bistatic(*args, rtol=1e-13, coherent=False).sigma0, ref)
-    # at the default tolerance both meet the same tail bound: within rtol of each other
+    # at the default rtol = 1e-8 both meet the tail bound: within rtol of each other (at small
+    # Q, where the reference's blocks over-sum most, within ~1e-12)
     monkeypatch.setenv("EMSCATTER_KERNELS", "numpy")
     ref8 = po.bistatic(*args, coherent=False).sigma0
     monkeypatch.setenv("EMSCATTER_KERNELS", "numba")
     got8 = po.bistatic(*args, coherent=False).sigma0
     peak = ref8.max(axis=-1, keepdims=True)
-    assert np.all(np.abs(got8 - ref8) <= 3e-8 * np.abs(ref8) + 1e-14 * peak)
+    assert np.all(np.abs(got8 - ref8) <= 2e-8 * np.abs(ref8) + 1e-14 * peak)
