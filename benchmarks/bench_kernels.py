@@ -9,13 +9,14 @@ warm-up (so compile time is excluded; it is reported separately), numpy and comp
 interleaved in the same run, compiled on 1 and on all cores.
 
 Roofline (a simple one, for this machine): the operations of one evaluation are counted in
-the kernel's own vectorized LLVM IR (vector instructions per 8 lanes, both branches of a
-case-specialized copy), split in *simple* ops (add, sub, mul, neg, compare, select, floor,
-min/max, conversions, integer ops) and *div/sqrt* (separate, slower unit); the machine's peaks
-for each class and its memory bandwidth are measured here by small numba kernels on all
-cores. Roofline time per evaluation = max(simple / peak_simple, divsqrt / peak_divsqrt,
-bytes / bandwidth); the kernels are compiled without FMA contraction (identical rounding to
-numpy), so peak_simple is the mul+add peak (the FMA peak, twice that, is recorded too).
+the kernel's own vectorized LLVM IR (one vector instruction = one operation per lane; both
+branches of a case-specialized copy), split in *simple* ops (add, sub, mul, FMA — a
+contractible mul whose only use is an add counts once with it —, neg, compare, select, floor,
+min/max, conversions, integer ops) and *div/sqrt* (a separate, slower unit); the machine's
+peaks are measured here by small numba kernels on all cores: vector instructions per second
+(chains of mul and add; an FMA chain issues at the same instruction rate, twice the flops —
+recorded too), div+sqrt per second, and copy bandwidth. Roofline time per evaluation =
+max(simple / peak_simple, divsqrt / peak_divsqrt, bytes / bandwidth).
 """
 
 from __future__ import annotations
@@ -65,7 +66,7 @@ def peaks(threads: int) -> dict:
 
     from emscatter.kernels._runtime import jit, run_chunked
 
-    @jit(cache=False)
+    @jit(cache=False, fastmath=False)
     def muladd(x, out):
         for i in range(x.size):
             a = x[i]
@@ -93,7 +94,7 @@ def peaks(threads: int) -> dict:
                 d = d * 0.999 + 0.001
             out[i] = a + b + c + d
 
-    @jit(cache=False)
+    @jit(cache=False, fastmath=False)
     def divsqrt(x, out):
         for i in range(x.size):
             a = x[i] + 1.0
@@ -103,7 +104,7 @@ def peaks(threads: int) -> dict:
                 b = math.sqrt(b) / 1.0001
             out[i] = a + b
 
-    @jit(cache=False)
+    @jit(cache=False, fastmath=False)
     def copy(x, out):
         for i in range(x.size):
             out[i] = x[i]
@@ -144,22 +145,40 @@ def op_counts(func, replacements: dict, args: tuple) -> dict:
         src = src.replace(old, new)
     ns = dict(func.py_func.__globals__)
     exec(compile(src, "<bench>", "exec"), ns)
-    f = njit(nogil=True, fastmath=False, error_model="numpy")(ns[func.py_func.__name__])
+    from emscatter.kernels._runtime import FASTMATH
+
+    f = njit(nogil=True, fastmath=FASTMATH, error_model="numpy")(ns[func.py_func.__name__])
     f(*args)
     ir = f.inspect_llvm(f.signatures[0])
     lanes = sorted({int(m) for m in re.findall(r"<(\d+) x double>", ir)}, reverse=True)[0]
-    counts = {"simple": 0, "divsqrt": 0, "lanes": lanes}
-    pat = re.compile(r"=\s+(?:tail\s+)?(?:call\s[^@]*@llvm\.(\w+)|(\w+)\s)")
+    line_re = re.compile(
+        r"^\s*(%[\w.]+)\s*=\s*(?:tail\s+)?(?:call\s[^@]*@llvm\.(\w+)|(\w+)\s)(.*)$"
+    )
+    ops, uses = [], {}
     for line in ir.splitlines():
         if f"<{lanes} x " not in line:
             continue
-        m = pat.search(line)
+        m = line_re.match(line)
         if not m:
             continue
-        op = m.group(1) or m.group(2)
+        name, op, rest = m.group(1), m.group(2) or m.group(3), m.group(4)
+        for operand in re.findall(r"%[\w.]+", rest):
+            uses[operand] = uses.get(operand, 0) + 1
+        ops.append((name, op, rest, "contract" in rest.split("<")[0]))
+    # an fmul (contract) whose only use is an fadd/fsub (contract) becomes one FMA instruction
+    muls = {n for n, op, _, c in ops if op == "fmul" and c}
+    fused = set()
+    for _, op, rest, c in ops:
+        if op in ("fadd", "fsub") and c:
+            for operand in re.findall(r"%[\w.]+", rest):
+                if operand in muls and uses.get(operand) == 1:
+                    fused.add(operand)
+                    break
+    counts = {"simple": 0, "divsqrt": 0, "lanes": lanes, "fma": len(fused)}
+    for name, op, _, _ in ops:
         if op in DIVSQRT:
             counts["divsqrt"] += 1
-        elif op in SIMPLE:
+        elif op in SIMPLE and name not in fused:
             counts["simple"] += 1
     return counts
 
