@@ -156,7 +156,7 @@ def brdf_resolution(repeat):
 
             def build(n=n):
                 return build_table(
-                    rough, 17 + 2j, [1.0], method="go", resolution=(n, 2 * n), energy=None
+                    rough, 17 + 2j, [1.0], method="go", resolution=(n, 2 * n), energy="off"
                 )
 
             t = timeit(build, repeat=1, warmup=0)

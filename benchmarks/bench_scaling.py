@@ -117,7 +117,7 @@ def brdf_series(quick: bool):
             warnings.simplefilter("ignore")
             t, mem = measure(
                 lambda n=n: build_table(
-                    rough, 17 + 2j, [1.0], method="go", resolution=(n, 2 * n), energy=None
+                    rough, 17 + 2j, [1.0], method="go", resolution=(n, 2 * n), energy="off"
                 ),
                 1,
             )
