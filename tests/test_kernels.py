@@ -124,7 +124,7 @@ def test_spm_bistatic_same_with_and_without_kernels(monkeypatch):
     args = (rough, 17 + 2j, 2 * math.pi / 0.05, ti, ts, dphi)
     monkeypatch.setenv("EMSCATTER_KERNELS", "numpy")
     ref = spm.bistatic(*args, coherent=False).sigma0
-    monkeypatch.setenv("EMSCATTER_KERNELS", "auto")
+    monkeypatch.setenv("EMSCATTER_KERNELS", "numba")
     _agree(spm.bistatic(*args, coherent=False).sigma0, ref)
 
 
@@ -171,6 +171,28 @@ def test_dispatch_honours_the_switch_and_covers_only_its_cases(monkeypatch):
     monkeypatch.setenv("EMSCATTER_KERNELS", "fortran")
     with pytest.raises(ValueError, match="EMSCATTER_KERNELS.*fortran"):
         kernels.backend()
+
+
+def test_auto_keeps_a_small_one_off_call_on_numpy():
+    """In a fresh process a 90-angle call does not import numba; a large one does."""
+    code = (
+        "import sys, numpy as np, emscatter as em; from emscatter.solvers import spm; "
+        "g = em.GaussianCorrelation(0.002, 0.02); t = np.radians(np.arange(90.0)); "
+        "spm.bistatic(g, 4.0, 125.0, t, t, t + np.pi, coherent=False); "
+        "small = 'numba' in sys.modules; "
+        "x = np.random.default_rng(0).uniform(0, 1.5, 5000); "
+        "spm.bistatic(g, 4.0, 125.0, x, x, x, coherent=False); "
+        "print(small, 'numba' in sys.modules)"
+    )
+    env = {**__import__("os").environ, "EMSCATTER_KERNELS": "auto"}
+    out = subprocess.run(
+        [sys.executable, "-W", "ignore", "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=env,
+    )
+    assert out.stdout.split() == ["False", "True"]
 
 
 def test_kernels_package_is_light_and_compiles_nothing_at_import():

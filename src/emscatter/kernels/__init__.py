@@ -4,9 +4,12 @@ Smith shadowing, the physical-optics series), selected automatically; the numpy 
 
 Selection (``EMSCATTER_KERNELS``, read at each call):
 
-* ``auto`` (default) — the compiled kernel where one covers the case and numba imports;
+* ``auto`` (default) — the compiled kernel where one covers the case and numba imports, for
+  calls of ≥ 4096 geometries or once the kernels are loaded in the process (a small one-off
+  call is not worth importing numba for);
 * ``numpy`` — always the numpy reference path;
-* ``numba`` — like ``auto``, but a missing numba is an error instead of a silent fallback.
+* ``numba`` — the compiled kernel wherever one covers the case, any size; a missing numba is an
+  error instead of a fallback.
 
 Cases covered (others run the numpy path, identical results): 2-D surfaces, one permittivity
 (or ``"pec"``) per call, ``|φs − φi| ≤ 1e6`` rad; SPM1 with isotropic Gaussian or exponential
@@ -30,9 +33,11 @@ import functools
 import importlib.util
 import os
 
-__all__ = ["backend", "BACKENDS", "numba_available"]
+__all__ = ["backend", "selection", "BACKENDS", "numba_available"]
 
 BACKENDS = ("auto", "numba", "numpy")
+#: spectrum codes of the SPM1 kernel (here, so that choosing a path imports nothing heavy)
+SPM_GAUSSIAN, SPM_EXPONENTIAL = 0, 1
 
 
 @functools.cache
@@ -41,11 +46,17 @@ def numba_available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
-def backend() -> str:
-    """``"numba"`` or ``"numpy"``: the path the solvers take now (``EMSCATTER_KERNELS``)."""
+def selection() -> str:
+    """``EMSCATTER_KERNELS`` checked: ``"auto"``, ``"numba"`` or ``"numpy"``."""
     choice = os.environ.get("EMSCATTER_KERNELS", "auto").strip().lower() or "auto"
     if choice not in BACKENDS:
         raise ValueError(f"EMSCATTER_KERNELS must be one of {', '.join(BACKENDS)}, got {choice!r}")
+    return choice
+
+
+def backend() -> str:
+    """``"numba"`` or ``"numpy"``: the path the solvers take now (``EMSCATTER_KERNELS``)."""
+    choice = selection()
     if choice == "numpy":
         return "numpy"
     if numba_available():

@@ -9,14 +9,25 @@ Light to import: numba is imported only when a kernel runs.
 from __future__ import annotations
 
 import functools
+import sys
 
 import numpy as np
 
-from . import backend
+from . import SPM_EXPONENTIAL, SPM_GAUSSIAN, backend, selection
 
 __all__ = ["spm1_sigma0", "go_sigma0", "po_log_series", "covered_spm1", "covered_go"]
 
 MAX_AZIMUTH = 1.0e6  # |φs − φi| [rad] up to which the kernels' cos reduction is exact
+#: Below this many geometries a call takes the numpy path unless the kernels are already
+#: loaded in this process: a 90-angle curve costs ~0.2 ms in numpy, while the first kernel call
+#: imports numba and loads the compiled code (~0.5 s; 3–4 s if it must compile).
+MIN_GEOMETRIES = 4096
+
+
+def _worth_it(n: int) -> bool:
+    if n >= MIN_GEOMETRIES or "emscatter.kernels._runtime" in sys.modules:
+        return True
+    return selection() == "numba"
 
 
 def _scalar_eps(eps):
@@ -43,9 +54,8 @@ def _azimuth_ok(dphi: np.ndarray) -> bool:
 @functools.cache
 def _spm1_spectra() -> dict:
     from ..spectra import ExponentialCorrelation, GaussianCorrelation
-    from .spm import EXPONENTIAL, GAUSSIAN
 
-    return {GaussianCorrelation: GAUSSIAN, ExponentialCorrelation: EXPONENTIAL}
+    return {GaussianCorrelation: SPM_GAUSSIAN, ExponentialCorrelation: SPM_EXPONENTIAL}
 
 
 def covered_spm1(rough, eps) -> bool:
@@ -61,9 +71,9 @@ def covered_spm1(rough, eps) -> bool:
 def spm1_sigma0(rough, eps, k: float, ti, ts, dphi, out: np.ndarray) -> bool:
     """First-order SPM σ⁰ into ``out`` (2, 2, n) for flat angle arrays [rad] (as
     ``emscatter.solvers.spm._sigma0_first``)."""
-    if backend() != "numba" or not covered_spm1(rough, eps):
-        return False
     n = out.shape[-1]
+    if backend() != "numba" or not _worth_it(n) or not covered_spm1(rough, eps):
+        return False
     dphi = _flat(dphi, n)
     if not _azimuth_ok(dphi) or not out.flags.c_contiguous:
         return False
@@ -94,9 +104,13 @@ def go_sigma0(
 ) -> bool:  # fmt: skip
     """GO σ⁰ into ``out`` (2, 2, n) and, when given, the Kirchhoff coherent reflectivity into
     ``coherent_out`` (2, n) (as ``emscatter.solvers.kirchhoff_go.bistatic``)."""
-    if backend() != "numba" or not covered_go(dimension, sx, sy, eps, shadowing):
-        return False
     n = out.shape[-1]
+    if (
+        backend() != "numba"
+        or not _worth_it(n)
+        or not covered_go(dimension, sx, sy, eps, shadowing)
+    ):
+        return False
     dphi = _flat(dphi, n)
     if not _azimuth_ok(dphi) or not out.flags.c_contiguous:
         return False
@@ -115,7 +129,7 @@ def po_log_series(rough, log_w, Q, K, *, rtol: float, max_terms: int, series_sum
     """The physical-optics ``log T`` (as ``kirchhoff_po.series_sum``) or None when not
     covered; geometries the kernel leaves (peak at n ≥ 400, long walks) are computed by the
     reference ``series_sum(log_w, Q, K, ...)`` passed in."""
-    if backend() != "numba":
+    if backend() != "numba" or not _worth_it(np.size(Q)):
         return None
     from ..spectra import ExponentialCorrelation, GaussianCorrelation
     from . import po
