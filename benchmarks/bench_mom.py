@@ -18,6 +18,7 @@ import json
 import math
 import os
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -192,6 +193,10 @@ def main(argv=None) -> None:
     ax.set_title("1-D MoM, PEC, 10 pts/λ (2-core machine)")
     ax.legend(fontsize=8)
     fig.tight_layout()
+    sys.path.insert(0, str(HERE))
+    from common import command, machine, stamp
+
+    stamp(fig, machine(), command(), None)
     fig.savefig(HERE / "mom_solve_time.png", dpi=120)
     print(f"wrote {out_dir / 'mom.json'} and {HERE / 'mom_solve_time.png'}")
 

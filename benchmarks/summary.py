@@ -90,6 +90,38 @@ def rows() -> list[tuple]:
                     "peers",
                 )
             )
+    g = _load("generate")
+    if g:
+        r = g["ratios"]
+        for peer in (
+            "surfacetopography_fourier_synthesis_4096",
+            "tamaas_filter_4096",
+            "tamaas_random_phase_4096",
+        ):
+            key = f"{peer}_over_periodic"
+            if key in r:
+                out.append(
+                    (
+                        f"surface 4096²: {peer.replace('_4096', '')} time / emscatter periodic",
+                        "≥ 2×",
+                        f"×{r[key]:.2f}",
+                        _met(r[key] >= 2),
+                        g["command"],
+                        "generate",
+                    )
+                )
+        if "periodic_over_filter_pass" in r:
+            v = r["periodic_over_filter_pass"]
+            out.append(
+                (
+                    "surface 4096²: emscatter periodic / one scipy.fft filter pass",
+                    "≤ 1.2×",
+                    f"×{v:.2f}",
+                    _met(v <= 1.2),
+                    g["command"],
+                    "generate",
+                )
+            )
     d = _load("demo")
     if d:
         out.append(
