@@ -222,8 +222,16 @@ _U_SCALE = 2.0 / (_ERFCX_T1 + 1.0)
 
 @inline
 def verfcx(a):
-    """``e^{a²} erfc(a)`` for ``0 ≤ a ≤ ERFCX_HI``: unrolled Clenshaw sum, branch-free and
-    without table look-ups so the loop it sits in vectorizes."""
+    """``e^{a²} erfc(a)`` for ``0 ≤ a ≤ ERFCX_HI`` (see :func:`verfcx_parts`)."""
+    p, d = verfcx_parts(a)
+    return p / d
+
+
+@inline
+def verfcx_parts(a):
+    """``(p, d)`` with ``erfcx(a) = p / d``, ``d = 1 + 2a``, for ``0 ≤ a ≤ ERFCX_HI``:
+    unrolled Clenshaw sum, branch-free and without table look-ups so the loop it sits in
+    vectorizes (callers fold the division into their own)."""
     t = (a - _ERFCX_K) / (a + _ERFCX_K)
     u = (t + 1.0) * _U_SCALE - 1.0
     u2 = 2.0 * u
@@ -289,4 +297,4 @@ def verfcx(a):
     b0 = _X1 + u2 * b1 - b2
     b2 = b1
     b1 = b0
-    return (_X0 + u * b1 - b2) / (1.0 + 2.0 * a)
+    return _X0 + u * b1 - b2, 1.0 + 2.0 * a

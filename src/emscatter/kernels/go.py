@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from ._runtime import inline, jit, run_fused
-from ._vmath import vcos, verfcx, vexp, vsin
+from ._vmath import vcos, verfcx_parts, vexp, vsin
 
 NO_SHADOWING, SEPARABLE, CORRELATED, SMITH = 0, 1, 2, 3
 #: kirchhoff_common.check_shadowing's modes: "smith" is the separable product except in the
@@ -39,10 +39,13 @@ _TAU_EPS = 1e-28  # as kirchhoff_common._TAU_EPS
 
 @inline
 def _smith_lambda(a):
-    """Λ(a), 0 for a ≥ 6 (as kirchhoff_common.smith_lambda); branch-free."""
+    """Λ(a), 0 for a ≥ 6 (as kirchhoff_common.smith_lambda); branch-free, one division:
+    ``Λ = e^{−a²} [1/(a√π) − p/d] / 2 = e^{−a²} (d − a√π p) / (2 a√π d)``."""
     an = min(max(a, 1e-300), 6.0)
     e = vexp(-an * an)
-    lam = max(0.5 * (e / (an * _SQRT_PI) - e * verfcx(an)), 0.0)
+    p, d = verfcx_parts(an)
+    w = an * _SQRT_PI
+    lam = max(0.5 * e * (d - w * p) / (w * d), 0.0)
     return lam if a < 6.0 else 0.0
 
 
@@ -74,13 +77,14 @@ def _fast_fresnel(pec, er, ei, c):
     v2 = v * v
     hd2 = max(hd_r * hd_r + v2, 1e-300)
     vd2 = max(vd_r * vd_r + vd_i * vd_i, 1e-300)
-    rh2 = (hn_r * hn_r + v2) / hd2
-    rv2 = (vn_r * vn_r + vn_i * vn_i) / vd2
+    inv = 1.0 / (hd2 * vd2)  # one division for the three ratios (the reference divides 3×)
+    rh2 = (hn_r * hn_r + v2) * vd2 * inv
+    rv2 = (vn_r * vn_r + vn_i * vn_i) * hd2 * inv
     h_r = hn_r * hd_r - v2
     h_i = -v * (hd_r + hn_r)
     w_r = vn_r * vd_r + vn_i * vd_i
     w_i = vn_i * vd_r - vn_r * vd_i
-    return rh2, rv2, (h_r * w_r + h_i * w_i) / (hd2 * vd2)
+    return rh2, rv2, (h_r * w_r + h_i * w_i) * inv
 
 
 @jit
@@ -88,6 +92,7 @@ def _go_kernel(ti, ts, dphi, pec, er, ei, s2, shadowing, two_k_sigma, hh, hv, vh
     """σ⁰ [-] into the four 1-D outputs; coherent ``|R_p|² e^{−(2kσ cosθi)²}`` into ch, cv
     when ``two_k_sigma`` (= 2kσ) ≥ 0."""
     pref = 0.5 / math.sqrt(s2 * s2)  # π · 1/(2π√(sx sy))
+    inv_s2 = 1.0 / s2
     for j in range(ti.size):
         si = vsin(ti[j])
         ci = math.sqrt((1.0 - si) * (1.0 + si))
@@ -105,7 +110,7 @@ def _go_kernel(ti, ts, dphi, pec, er, ei, s2, shadowing, two_k_sigma, hh, hv, vh
         inv = 1.0 / (qz if ok else 1.0)
         zx = qx * inv
         zy = qy * inv
-        expo = -0.5 * (zx * zx / s2 + zy * zy / s2)
+        expo = -0.5 * (zx * zx * inv_s2 + zy * zy * inv_s2)
         r = q2 * inv * inv
         val = pref * r * r * vexp(expo) if ok else 0.0
         if shadowing != 0:
@@ -116,7 +121,7 @@ def _go_kernel(ti, ts, dphi, pec, er, ei, s2, shadowing, two_k_sigma, hh, hv, vh
             elif shadowing == SMITH and q2 > 4.0 * (1.0 - 1e-12):
                 val = val * (1.0 / (1.0 + lam_i))
             else:
-                val = val * ((1.0 / (1.0 + lam_i)) * (1.0 / (1.0 + lam_s)))
+                val = val * (1.0 / ((1.0 + lam_i) * (1.0 + lam_s)))
         # fresnel_factors (2-D)
         rh2, rv2, cross = _fast_fresnel(pec, er, ei, cos_l)
         a_h = rh2 * val
