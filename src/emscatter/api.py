@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from . import solvers
+from . import cache, solvers
 from .conventions import broadcast_angles, check_angle, check_finite, wavenumber
 from .dispatch import angle_policy, angles_deg, rank_methods, validity_report
 from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
@@ -298,6 +298,18 @@ def backscatter(
 
 # ----------------------------------------------------------------------------- emissivity
 def _integrate(module, rough, eps, k, ti, pi_, tol, options):
+    """:func:`_integrate_uncached` through the on-disk result cache (:mod:`emscatter.cache`;
+    a Monte Carlo solver only with a fixed seed)."""
+    if hasattr(module, "reflectivity") and options.get("seed") is None:
+        return _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options)
+    key = {"method": module.__name__, "surface": rough, "eps": eps, "k": k, "theta_i": ti,
+           "phi_i": pi_, "tol": tol, "options": options}  # fmt: skip
+    return cache.cached(
+        "emissivity", key, lambda: _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options)
+    )
+
+
+def _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options):
     """(r_coh, r_incoh, error, evaluations) by the shared hemispherical quadrature."""
     if hasattr(module, "reflectivity"):  # e.g. the method of moments: its own far-field sums
         r_coh, r_inc, err = module.reflectivity(rough, eps, k, ti, pi_, **options)

@@ -18,6 +18,7 @@ permittivity ε = 17 + 2i, TE (h) incidence at θi = 45°, rms height σ varied,
 from __future__ import annotations
 
 import math
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -352,8 +353,17 @@ def methods_comparison(out: Path, *, n_theta: int = 179) -> list[Path]:
     ]
 
 
+def _surface_step(folder: Path, *, size: int, rel: Path, params: dict) -> dict:
+    return _json_safe(surface_report(size=size, png=folder / rel, **params))
+
+
+def _files_step(step, folder: Path, **kwargs) -> None:
+    step(folder, **kwargs)
+
+
 def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
     """Run every part of the demo into ``out``; returns the files written."""
+    from . import cache
     from .io import write_json
 
     out = Path(out)
@@ -369,14 +379,19 @@ def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
     steps = list(surfaces) + ["figure 5.3", "emissivity", "methods"]
     for step in tqdm(steps, desc="emscatter demo", unit="step"):
         if step in surfaces:
-            png = surf_dir / f"{step}.png"
-            all_stats[step] = _json_safe(surface_report(size=size, png=png, **surfaces[step]))
-            written.append(png)
+            rel = Path("surfaces") / f"{step}.png"
+            produce = partial(_surface_step, size=size, rel=rel, params=surfaces[step])
         elif step == "figure 5.3":
-            written += figure_5_3(out, n_theta=89 if quick else 179)
+            produce = partial(_files_step, figure_5_3, n_theta=89 if quick else 179)
         elif step == "emissivity":
-            written += emissivity_curves(out, n_theta=10 if quick else 18)
+            produce = partial(_files_step, emissivity_curves, n_theta=10 if quick else 18)
         else:
-            written += methods_comparison(out, n_theta=60 if quick else 179)
+            produce = partial(_files_step, methods_comparison, n_theta=60 if quick else 179)
+        # each step is a pure function of its parameters: cached on disk (emscatter.cache)
+        key = {"step": step, "quick": quick, "size": size}
+        value, files = cache.cached_step("demo", key, out, produce)
+        written += files
+        if step in surfaces:
+            all_stats[step] = value
     written.append(write_json(surf_dir / "stats.json", all_stats))
     return written
