@@ -45,6 +45,9 @@ BENCHES = {
     ),
     "emissivity": ("bench_emissivity.py", [], [], False),
     "mom": ("bench_mom.py", [], ["--quick"], False),
+    "brdf": ("bench_brdf.py", ["--repeat", "3"], ["--repeat", "1"], False),
+    "render": ("bench_render.py", ["--repeat", "7"], ["--repeat", "2", "--width", "128"], False),
+    "radio": ("bench_radio.py", [], ["--quick"], False),
 }
 
 

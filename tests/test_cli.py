@@ -1,5 +1,6 @@
 """The command-line tool, run for real (in-process through main(), and one subprocess)."""
 
+import csv
 import json
 import re
 import subprocess
@@ -143,6 +144,13 @@ def test_demo_quick_writes_every_output(tmp_path):
     assert meta["schema"] == "emscatter.demo/1" and meta["inputs"]["wavelength_m"] == 1.0
     _, cols, meta = read_csv(tmp_path / "emissivity.csv")
     assert np.all(cols["energy_ok_sigma0.045"] == 1) and meta["inputs"]["method"] == "spm"
+    # the bridges' steps (each in its own interpreter): a BRDF export + render, the radio plate
+    assert (tmp_path / "render" / "gold_go.bsdf").stat().st_size > 0
+    assert (tmp_path / "render" / "render_demo.png").read_bytes()[:4] == b"\x89PNG"
+    with open(tmp_path / "radio" / "radio_plate.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert rows and all(r["ok"] == "True" for r in rows)
+    assert {r["kind"] for r in rows} == {"specular", "diffuse"}
 
 
 def test_a_new_command_is_a_new_module(tmp_path, monkeypatch, capsys):

@@ -361,6 +361,36 @@ def _files_step(step, folder: Path, **kwargs) -> None:
     step(folder, **kwargs)
 
 
+#: The bridges' demo steps: module run as ``python -m <module> <args> <folder>``. Each runs in a
+#: fresh interpreter because Dr.Jit variants are per process (Mitsuba's spectral variant and
+#: Sionna RT's cannot share one), and always in its quick form (a small export + render, the
+#: plate check at one frequency): the full renders and radio comparisons are examples/.
+BRIDGE_STEPS = {
+    "brdf export + render": ("emscatter.render.demo", ["--quick"], "render", False),
+    "radio plate check": ("emscatter.radio.demo", ["--quick", "--out"], "radio", True),
+}
+
+
+def _bridge_step(folder: Path, *, module: str, args: list[str], sub: str, out_last: bool) -> dict:
+    """Run one bridge's demo in a subprocess into ``folder/sub``; a failure is one clear error."""
+    import subprocess
+    import sys
+
+    target = folder / sub
+    target.mkdir(parents=True, exist_ok=True)
+    argv = [*args, str(target)] if out_last else [str(target), *args]
+    proc = subprocess.run(
+        [sys.executable, "-m", module, *argv], capture_output=True, text=True, check=False
+    )
+    if proc.returncode != 0:
+        last = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
+        raise RuntimeError(
+            f"demo step {module} failed (exit {proc.returncode}): {last} — run "
+            f"`python -m {module} {' '.join(argv)}` to see it in full"
+        )
+    return {"module": module, "stdout": proc.stdout.strip().splitlines()[-20:]}
+
+
 def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
     """Run every part of the demo into ``out``; returns the files written."""
     from . import cache
@@ -376,7 +406,7 @@ def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
     }
     written: list[Path] = []
     all_stats = {}
-    steps = list(surfaces) + ["figure 5.3", "emissivity", "methods"]
+    steps = list(surfaces) + ["figure 5.3", "emissivity", "methods", *BRIDGE_STEPS]
     for step in tqdm(steps, desc="emscatter demo", unit="step"):
         if step in surfaces:
             rel = Path("surfaces") / f"{step}.png"
@@ -385,6 +415,9 @@ def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
             produce = partial(_files_step, figure_5_3, n_theta=89 if quick else 179)
         elif step == "emissivity":
             produce = partial(_files_step, emissivity_curves, n_theta=10 if quick else 18)
+        elif step in BRIDGE_STEPS:
+            module, args, sub, out_last = BRIDGE_STEPS[step]
+            produce = partial(_bridge_step, module=module, args=args, sub=sub, out_last=out_last)
         else:
             produce = partial(_files_step, methods_comparison, n_theta=60 if quick else 179)
         # each step is a pure function of its parameters: cached on disk (emscatter.cache)
