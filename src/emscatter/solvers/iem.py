@@ -108,6 +108,7 @@ from ..conventions import check_positive
 from ..fresnel import PEC, fresnel_cos, is_pec
 from ..scattering import Scattering
 from ..spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
+from . import iem_jit
 from . import iem_kernels as kern
 from .iem_series import _orders_needed as iem_series_orders
 from .iem_series import _too_many, direct_sum, iem_series, orders_table
@@ -149,7 +150,7 @@ class _Options:
     __slots__ = ("fresnel", "complementary", "first_order", "rtol", "max_terms")
 
 
-def _amplitudes(si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options):
+def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options):
     """Series components for flat geometries (k = 1, φi = 0): ``la, ph`` (4, N, J), ``lx, sx``
     (N, J) and the first-order amplitude ``d`` (4, N), pols ordered (hh, hv, vh, vv)."""
     pec = is_pec(eps)
@@ -158,7 +159,7 @@ def _amplitudes(si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options
     cos_l = np.sqrt(np.clip(0.5 * (1.0 + cs * css - si * ss * cf), 0.0, 1.0))
     rh_l, rv_l = fresnel_cos(eps, cos_l)
     if opt.fresnel == "transition" and not pec:
-        g_h, g_v = kern.transition_factor(eps, cs, ks, log_w, K)
+        g_h, g_v = _transition(rough, eps, cs, ks, log_w, K, opt.rtol)
         rh_t, rv_t = rh_i + (rh_l - rh_i) * g_h, rv_i + (rv_l - rv_i) * g_v
     else:
         rh_t, rv_t = rh_i, rv_i
@@ -264,6 +265,33 @@ def _spectral_args(rough, k, loc, n):
     return np.abs(qx) * (k * rough.length), math.log(0.5 * math.pi * k * rough.length)
 
 
+def _transition(rough, eps, cs, ks, log_w, K, rtol):
+    """Fresnel transition factors (γ_h, γ_v), compiled sums where covered."""
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is None:
+        return kern.transition_factor(eps, cs, ks, log_w, K)
+    with np.errstate(divide="ignore"):
+        lq = np.log((ks * cs) ** 2)
+    sums = [iem_jit.poisson_sums(lq + math.log(b), K, spec, rough.dimension, rtol=rtol * 1e-2)
+            for b in (1.0, 2.0, 4.0)]  # fmt: skip
+    return kern.transition_from_sums(eps, cs, ks, *sums)
+
+
+def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
+    """The series (:func:`.iem_series.iem_series`), compiled where :mod:`.iem_jit` covers it."""
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is not None:
+        ls, lp, status = iem_jit.series_rows(
+            la, lx, ph, sx, d, log_ks2, spec, rough.dimension, K, pref,
+            rtol=opt.rtol, max_terms=opt.max_terms,
+        )  # fmt: skip
+        if status:
+            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, log_ks2))
+        return ls, lp
+    return iem_series(la, lx, ph, sx, d, log_ks2, log_w, K, pref, rtol=opt.rtol,
+                      max_terms=opt.max_terms)  # fmt: skip
+
+
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     """Exact-backscatter σ⁰ (2, 2, n): the closed-form terms of
     :func:`.iem_kernels.backscatter_terms`, two components (Kirchhoff, lower medium) plus the
@@ -278,9 +306,20 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     si, cs = np.broadcast_to(loc.si, (n,)), np.broadcast_to(loc.ci, (n,))
     eps_f = eps if (is_pec(eps) or np.ndim(eps) == 0) else np.broadcast_to(eps, (n,))
     pec = is_pec(eps_f)
-    rh, rv = fresnel_cos(eps_f, cs)
     if opt.complementary != "aiem":  # the 1992 model: general terms
         return None
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is not None and (pec or np.ndim(eps_f) == 0):
+        l_hh, l_vv, lp, status = iem_jit.backscatter(
+            si, cs, eps_f, ks, K, pref, spec, rough.dimension,
+            transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
+        )  # fmt: skip
+        if status:
+            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
+        sig = np.zeros((2, 2, n))
+        sig[0, 0], sig[1, 1] = np.exp(l_hh), np.exp(l_vv)
+        return sig, 0.0, float(np.max(lp)) if n else -np.inf
+    rh, rv = fresnel_cos(eps_f, cs)
     (u_h, u_v), lower = kern.backscatter_terms(si, cs, eps_f, rh, rv)
     # components: Kirchhoff (base 2 kz), the lower-medium α⁺, α⁻ terms, (and d at n = 1)
     e_k = -2.0 * ks2 * cs * cs
@@ -301,8 +340,16 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
         sx[:, j] = np.where(x < 0, -1.0, 1.0)
     log_ks2 = 2.0 * math.log(ks)
     log_rtol = math.log(opt.rtol)
-    q_k = ks2 * 4.0 * cs * cs
-    N = int(np.max(iem_series_orders(q_k, log_rtol))) + 2 if n else 2
+    # orders: enough for every component whose mass bound is relevant (as in iem_series)
+    mass = [np.log(4.0 * np.maximum(np.abs(rh), np.abs(rv)) + 1e-300) * 2 + 2 * e_k]
+    if lower is not None:
+        for gh, gv in ((gp_h, gp_v), (gm_h, gm_v)):
+            mass.append(2 * (np.log(np.maximum(np.abs(gh), np.abs(gv)) + 1e-300) + e_g))
+    q_all = np.exp(log_ks2 + 2.0 * lx)
+    mass = np.stack(mass, axis=1) + q_all
+    relevant = mass >= np.max(mass, axis=1, keepdims=True) + log_rtol - 10.0
+    q_size = np.max(np.where(relevant & np.isfinite(lx), q_all, 0.0), axis=1)
+    N = int(np.max(iem_series_orders(q_size, log_rtol))) + 2 if n else 2
     if N > opt.max_terms:
         raise RuntimeError(_too_many(opt.rtol, opt.max_terms, N, log_ks2))
     table = orders_table(log_ks2, log_w, K, N)
@@ -388,12 +435,13 @@ def _single(rough, eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w):
         g_si, g_cs, g_ss, g_css, g_sf, g_cf = si, cs, ss, css, sf, cf
         g_K, g_pref, g_eps = K, np.broadcast_to(pref, (n,)), eps_f
     la, lx, ph, sxx, d = _amplitudes(
-        g_si, g_cs, g_ss, g_css, g_sf, g_cf, g_eps, ks, log_w, g_K, opt
+        rough, g_si, g_cs, g_ss, g_css, g_sf, g_cf, g_eps, ks, log_w, g_K, opt
     )
     pols = (0, 1, 2, 3) if dim == 2 and np.any(g_sf != 0) else (0, 3)
     m = la.shape[1]
     P = len(pols)
-    log_s, log_prec = iem_series(
+    log_s, log_prec = _series(
+        rough,
         la[list(pols)].reshape(P * m, -1),
         np.tile(lx, (P, 1)),
         ph[list(pols)].reshape(P * m, -1),
@@ -403,8 +451,7 @@ def _single(rough, eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w):
         log_w,
         np.tile(g_K, P),
         np.tile(g_pref, P),
-        rtol=opt.rtol,
-        max_terms=opt.max_terms,
+        opt,
     )
     vals = np.zeros((4, m))
     vals[list(pols)] = np.exp(log_s).reshape(P, m)
