@@ -22,6 +22,15 @@ reduced_i = inline(kern._reduced_i)
 reduced_s = inline(kern._reduced_s)
 combine = inline(kern._combine)
 l4pi, l2pi, lpi = math.log(4 * math.pi), math.log(2 * math.pi), math.log(math.pi)
+LOG_FACT = np.array([math.lgamma(n + 1.0) for n in range(2048)])  # log n!, looked up
+
+
+@inline
+def log_fact(n):
+    i = int(n)
+    return LOG_FACT[i] if i < 2048 and i == n else math.lgamma(n + 1.0)
+
+
 l2spi = math.log(2 * math.sqrt(math.pi))
 
 
@@ -67,7 +76,7 @@ def w_max(K, spec, dim):
 
 @inline
 def lnorm(n, pref, log_ks2, K, spec, dim):
-    return pref + n * log_ks2 - math.lgamma(n + 1.0) + log_w(n, K, spec, dim)
+    return pref + n * log_ks2 - log_fact(n) + log_w(n, K, spec, dim)
 
 
 @inline
@@ -145,14 +154,14 @@ def row_series(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_ter
                 best, jstar = 2.0 * la[j] + q, j
     if nok == 0:
         return ref + math.log(acc) if acc > 0 else -np.inf, ref + math.log(acc_e), 0
-    lj = math.log(float(nok))
     qs = math.exp(log_ks2 + 2.0 * lx[jstar])
     n0 = peak_order(pref, log_ks2, K, spec, dim, la[jstar], lx[jstar], qs)
     count = 0
     for direction in (1, -1):
         n = n0 if direction > 0 else n0 - 1.0
         first = True
-        lg = math.lgamma(n + 1.0)
+        ln_prev = 0.0
+        lg = log_fact(n)
         while n >= 2.0:
             ln = pref + n * log_ks2 - lg + log_w(n, K, spec, dim)
             big = -np.inf
@@ -180,27 +189,35 @@ def row_series(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_ter
                 w = math.exp(te - ref)
                 acc += w * (amp.real * amp.real + amp.imag * amp.imag) / (env * env)
                 acc_e += w
-            for j in range(J):
-                cur[j] = ln + 2.0 * cur[j] if ok[j] else -np.inf
-            if not first:
-                tail = -np.inf
+            # tail test every 4 orders (per component: geometric tail where it decreases in
+            # the walk direction, its whole-series bound otherwise)
+            if not first and count % 4 == 3:
+                S = ref + math.log(acc) if acc > 0 else -np.inf
+                dln = ln - ln_prev
+                tmax = -np.inf
                 for j in range(J):
                     if not ok[j]:
                         continue
-                    lr = cur[j] - prev[j]
+                    c = ln + 2.0 * cur[j]
+                    lr = dln + 2.0 * direction * lx[j]
+                    t = lmass[j]
                     if lr < 0:
-                        t = cur[j] + lr - math.log(-math.expm1(lr))
+                        g = c + lr - math.log(-math.expm1(lr))
                         if direction < 0:
-                            t = min(t, cur[j] + math.log(max(n - 2.0, 1e-300)))
-                    else:
-                        t = np.inf
-                    tail = logadd(tail, min(t, lmass[j]))
-                tail += lj
-                S = ref + math.log(acc) if acc > 0 else -np.inf
+                            g = min(g, c + math.log(max(n - 2.0, 1e-300)))
+                        t = min(t, g)
+                    prev[j] = t
+                    tmax = max(tmax, t)
+                tail = -np.inf
+                if tmax > -np.inf:
+                    tot = 0.0
+                    for j in range(J):
+                        if ok[j]:
+                            tot += math.exp(prev[j] - tmax)
+                    tail = tmax + math.log(tot * nok)
                 if tail <= log_rtol + S or logadd(S, tail) < -760.0:
                     break
-            for j in range(J):
-                prev[j] = cur[j]
+            ln_prev = ln
             first = False
             if direction > 0:
                 n += 1.0
@@ -231,11 +248,16 @@ def series_kernel(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_
 @inline
 def poisson_sum(logq, K, spec, dim, log_rtol):
     """log Σ_{n≥1} qⁿ/n! Ŵₙ(K) (log-concave past its peak)."""
-    S, prev = -np.inf, -np.inf
+    ref, acc, prev = -np.inf, 0.0, -np.inf
     n = 1.0
     while True:
-        t = n * logq - math.lgamma(n + 1.0) + log_w(n, K, spec, dim)
-        S = logadd(S, t)
+        t = n * logq - log_fact(n) + log_w(n, K, spec, dim)
+        if t > ref:
+            acc = acc * math.exp(ref - t) + 1.0 if ref > -np.inf else 1.0
+            ref = t
+        else:
+            acc += math.exp(t - ref)
+        S = ref + math.log(acc)
         lr = t - prev
         if n > 1.0 and lr < 0:
             if t + lr - math.log(-math.expm1(lr)) <= S + log_rtol or S < -760.0:
@@ -244,6 +266,44 @@ def poisson_sum(logq, K, spec, dim, log_rtol):
         n += 1.0
         if n > 1e7:
             return S
+
+
+@inline
+def transition_sums(logq, K, spec, dim, log_rtol):
+    """log S(βQ) for β = 1, 2, 4 in one pass (the β = 4 series is the longest)."""
+    r1 = r2 = r4 = -np.inf
+    a1 = a2 = a4 = 0.0
+    prev = -np.inf
+    l2, l4 = math.log(2.0), math.log(4.0)
+    n = 1.0
+    while True:
+        t = n * logq - log_fact(n) + log_w(n, K, spec, dim)
+        for which in range(3):
+            tb = t + n * (0.0 if which == 0 else (l2 if which == 1 else l4))
+            rr = r1 if which == 0 else (r2 if which == 1 else r4)
+            aa = a1 if which == 0 else (a2 if which == 1 else a4)
+            if tb > rr:
+                aa = aa * math.exp(rr - tb) + 1.0 if rr > -np.inf else 1.0
+                rr = tb
+            else:
+                aa += math.exp(tb - rr)
+            if which == 0:
+                r1, a1 = rr, aa
+            elif which == 1:
+                r2, a2 = rr, aa
+            else:
+                r4, a4 = rr, aa
+        t4 = t + n * l4
+        S4 = r4 + math.log(a4)
+        lr = t4 - prev
+        if n > 1.0 and lr < 0:
+            if t4 + lr - math.log(-math.expm1(lr)) <= S4 + log_rtol or S4 < -760.0:
+                break
+        prev = t4
+        n += 1.0
+        if n > 1e7:
+            break
+    return r1 + math.log(a1), r2 + math.log(a2), r4 + math.log(a4)
 
 
 @numba.njit(**opts)
@@ -293,9 +353,9 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
         rh_t, rv_t = rh, rv
         if transition and not pec:
             lq = math.log(ks2 * c * c) if c > 0 else -np.inf
-            l1 = poisson_sum(lq, K[r], spec, dim, log_rtol) if c > 0 else 0.0
-            l2 = poisson_sum(lq + math.log(2.0), K[r], spec, dim, log_rtol) if c > 0 else 0.0
-            l4 = poisson_sum(lq + math.log(4.0), K[r], spec, dim, log_rtol) if c > 0 else 0.0
+            l1 = l2 = l4 = 0.0
+            if c > 0:
+                l1, l2, l4 = transition_sums(lq, K[r], spec, dim, log_rtol - 4.6)
             Q = ks2 * c * c
             e2 = math.exp(min(l2 - l1 - Q, 700.0)) if c > 0 else 2.0
             e4 = math.exp(min(l4 - l1 - 2.0 * Q, 700.0)) if c > 0 else 4.0
