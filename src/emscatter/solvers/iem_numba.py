@@ -18,9 +18,10 @@ cacheable = _ctx.__enter__()
 
 opts = {"nogil": True, "cache": cacheable, "error_model": "numpy"}
 inline = numba.njit(inline="always", error_model="numpy")
-reduced_i = inline(kern._reduced_i)
-reduced_s = inline(kern._reduced_s)
-combine = inline(kern._combine)
+_plain = numba.njit(error_model="numpy", cache=cacheable)
+reduced_i = _plain(kern._reduced_i)
+reduced_s = _plain(kern._reduced_s)
+combine = _plain(kern._combine)
 l4pi, l2pi, lpi = math.log(4 * math.pi), math.log(2 * math.pi), math.log(math.pi)
 LOG_FACT = np.array([math.lgamma(n + 1.0) for n in range(2048)])  # log n!, looked up
 
@@ -111,7 +112,7 @@ def peak_order(pref, log_ks2, K, spec, dim, la_j, lx_j, qs):
     return max(2.0, float(round(math.exp(0.5 * (a + b)))))
 
 
-@inline
+@numba.njit(error_model="numpy", cache=cacheable)
 def row_series(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_terms,
                ok, lmass, prev, cur):  # fmt: skip
     """(log σ⁰, log envelope sum, status) of one geometry (see iem_series); ``ok, lmass,
@@ -245,7 +246,7 @@ def series_kernel(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_
     return status
 
 
-@inline
+@numba.njit(error_model="numpy", cache=cacheable)
 def poisson_sum(logq, K, spec, dim, log_rtol):
     """log Σ_{n≥1} qⁿ/n! Ŵₙ(K) (log-concave past its peak)."""
     ref, acc, prev = -np.inf, 0.0, -np.inf
@@ -268,7 +269,7 @@ def poisson_sum(logq, K, spec, dim, log_rtol):
             return S
 
 
-@inline
+@numba.njit(error_model="numpy", cache=cacheable)
 def transition_sums(logq, K, spec, dim, log_rtol):
     """log S(βQ) for β = 1, 2, 4 in one pass (the β = 4 series is the longest)."""
     r1 = r2 = r4 = -np.inf
