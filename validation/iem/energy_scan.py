@@ -27,7 +27,10 @@ K = 2 * math.pi
 THETA = np.radians([0.0, 20.0, 40.0, 50.0, 60.0, 70.0, 80.0])
 
 
-def main(out=Path(__file__).with_name("energy_scan.csv")):
+OUT = Path(__file__).with_name("energy_scan.csv")
+
+
+def main(out=OUT):
     rows = []
     for cls in (GaussianCorrelation, ExponentialCorrelation):
         for ks in (0.2, 0.5, 1.0, 2.0, 3.0):

@@ -124,7 +124,12 @@ from .kirchhoff_po import log_nfold
 __all__ = ["bistatic", "check_validity", "VALIDITY", "nominal_rms_slope"]
 
 #: Validity limits (see :func:`check_validity`).
-VALIDITY = {"k_sigma_max": 3.0, "rms_slope_max": 0.4, "theta_i_max_deg": 70.0}
+VALIDITY = {
+    "k_sigma_max": 3.0,
+    "rms_slope_max": 0.4,
+    "theta_i_max_deg": 70.0,
+    "theta_i_max_conductor_deg": 45.0,
+}
 
 _BACK_TOL = 1e-9
 _SPM_SIGN = (-1.0, 1.0, -1.0, 1.0)  # I₁(AIEM) ≈ s · 4 f_SPM (hh, hv, vh, vv): basis signs
@@ -655,8 +660,33 @@ def _add_crosspol(sig, rough, g, k, slope, order):
         sig[1, 0, idx[sub]] += hv
 
 
+def _conductor(eps) -> bool:
+    """PEC, a metal (Re ε < 0) or a good conductor (|ε| ≥ 100) — any element of an array."""
+    if eps is None:
+        return False
+    if isinstance(eps, str):
+        return is_pec(eps)
+    e = np.asarray(eps, dtype=complex)
+    return bool(np.any((e.real < 0) | (np.abs(e) >= 100.0)))
+
+
 def check_validity(roughness, k: float, *, eps=None, theta_i=None) -> dict:
-    """Validity report (BOARD interface 1)."""
+    """Validity report (BOARD interface 1): ``valid``, ``reasons`` (check, value, limit),
+    ``checks``, ``excess`` (max log(value/limit)); with ``theta_i`` [rad] also ``angle_valid``
+    (theta_i's shape) and ``angle_reasons``.
+
+    Limits (:data:`VALIDITY`), from the literature and this module's own checks:
+
+    * ``kσ ≤ 3`` — Fung et al. 1992/1994 and SMRT's ``iem_fung92``; Wu & Chen (2004) find AIEM
+      within ~1 dB of 3-D MoM backscatter up to kσ ≈ 3. (The 1992 model's extra condition
+      ``kσ·kℓ < 1.2√|ε|`` comes from dropping the Green's-function phase; AIEM keeps it.)
+    * nominal rms slope ``≤ 0.4`` (√2σ/ℓ Gaussian, σ/ℓ exponential; Ulaby & Long's I2EM codes
+      restrict σ/ℓ ≤ 0.25, i.e. 0.35 for a Gaussian): single scattering, no multiple bounces.
+    * ``θi ≤ 70°`` (dielectrics) or ``≤ 45°`` (PEC, metals, ``|ε| ≥ 100``, when ``eps`` is
+      given): energy. validation/iem/energy_scan.csv — over kσ = 0.2–3, kℓ = 2–20 inside the
+      two limits above, the emissivity of ε = 3 and 15 + 2i stays in [0, 1] up to 70°, while a
+      perfect conductor reflects more than it receives (e < −0.02, v) from 50–60° on.
+    """
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
     v = VALIDITY
@@ -671,12 +701,14 @@ def check_validity(roughness, k: float, *, eps=None, theta_i=None) -> dict:
     rep = validity_report(rough, k, checks)
     if theta_i is not None:
         th = np.asarray(theta_i, dtype=float)
-        lim = math.radians(v["theta_i_max_deg"])
-        ok = th <= lim
+        cond = _conductor(eps)
+        lim_deg = v["theta_i_max_conductor_deg"] if cond else v["theta_i_max_deg"]
+        ok = th <= math.radians(lim_deg)
         rep["angle_valid"] = ok & rep["valid"]
+        what = "conductor: energy" if cond else "energy, shadowing"
         rep["angle_reasons"] = (
             [] if np.all(ok) else [f"θi = {math.degrees(float(np.max(th))):.3g}° > "
-                                   f"{v['theta_i_max_deg']}° (energy, shadowing)"]
+                                   f"{lim_deg:g}° ({what})"]
         )  # fmt: skip
         if not np.all(ok):
             rep["valid"] = False
