@@ -96,6 +96,15 @@ spectrum, ``Ŵₙ = k² · 2π wₙ⁽¹ᴰ⁾/(2k)`` — the mapping between th
 first-order SPM and the physical-optics series obey (:mod:`.spm`, :mod:`.kirchhoff_po`).
 
 Numerics: the series sums to ``rtol`` in log space (:mod:`.iem_series`); no fixed term count.
+Compiled kernels (:mod:`.iem_jit`, numba, optional; ``EMSCATTER_KERNELS=numpy`` forces the
+reference path) cover Gaussian and exponential correlations.
+
+Known traits (validation/iem/README.md): for high-permittivity soils toward 60–70° AIEM's vv
+falls below the 1992 IEM/I2EM (the lower-medium terms are attenuated by ``e^{−σ² Re q₂²}``,
+which the versions without the lower-medium phase lack); for exponential spectra the model,
+like physical optics, loses energy at kσ ≳ 0.5 (a PEC "emits" 0.1–0.8): emissivities are upper
+bounds there; near grazing (θ > 70°, and > 45° for conductors) it can create energy — the
+validity report flags those angles.
 """
 
 from __future__ import annotations
