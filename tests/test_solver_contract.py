@@ -86,3 +86,63 @@ def test_power_law_spectrum_is_supported_by_spm_and_po():
         res = _solver(method).bistatic(rough, 17 + 2j, K, 0.4, np.radians([0, 20, 60]), 0.0, 0.0)
         assert_physical(res, where=method)
         assert res.hh[1] > 0
+
+
+# --------------------------------------------------------------------------- validity reports
+REPORT_KEYS = {"valid", "reasons", "checks", "excess"}
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize(
+    "rough",
+    [
+        GaussianCorrelation(0.2 / K, 1.0 / K),
+        ExponentialCorrelation(3.0 / K, 10.0 / K),
+        PowerLawCorrelation(1.0 / K, 8.0 / K, hurst=0.7, dimension=1),
+    ],
+    ids=["gauss", "exp", "powerlaw1d"],
+)
+def test_check_validity_interface(method, rough):
+    """BOARD interface 1: every report names the failed check, its value, its limit and the
+    factor; with theta_i the per-angle verdicts have theta_i's shape."""
+    mod = _solver(method)
+    rep = mod.check_validity(rough, K)
+    assert REPORT_KEYS <= set(rep) and isinstance(rep["valid"], bool)
+    assert math.isfinite(rep["excess"]) and rep["excess"] >= 0  # no infinite excess any more
+    assert rep["valid"] == (not rep["reasons"]) == (rep["excess"] == 0)
+    for name, d in rep["details"].items():
+        assert rep["checks"][name] == d["ok"] == (d["ratio"] <= 1)
+        if not d["ok"]:
+            text = next(r for r in rep["reasons"] if r.startswith(name + ":"))
+            assert f"{d['value']:.3g}" in text and f"{d['limit']:.3g}" in text and "×" in text
+    ti = np.radians([[0.0, 30.0], [70.0, 89.0]])
+    rep_a = mod.check_validity(rough, K, eps=17 + 2j, theta_i=ti)
+    assert rep_a["angle_valid"].shape == ti.shape and rep_a["angle_valid"].dtype == bool
+    assert rep_a["angle_excess"].shape == ti.shape
+    assert rep_a["valid"] == (rep["valid"] and bool(np.all(rep_a["angle_valid"])))
+    assert rep_a["excess"] >= rep["excess"]
+    for text in rep_a["angle_reasons"]:
+        assert "°" in text and "fails for θi" in text
+    with pytest.raises(ValueError, match=f"not accepted by method '{method}'"):
+        mod.check_validity(rough, K, no_such_option=1)
+
+
+@pytest.mark.parametrize(
+    ("method", "rough", "eps", "fails_above_deg"),
+    [
+        # SPM, PEC, TM near grazing: r₁ ∝ (kσ)²/cosθi (issue 11: e = −2.2 at 85–89°)
+        ("spm", GaussianCorrelation(0.2 / K, 1.0 / K), "pec", 80.0),
+        # GO: σ = 0.6 λ, ℓ = 4 λ (issue 11: e_h = −0.27 at 85°): Q = (2kσ cosθ)² < 10
+        ("go", GaussianCorrelation(0.6, 4.0), 17 + 2j, 65.0),
+        # PO: kσ = 1, kℓ = 10 (issue 11: e = −0.12 at 85°): shadowing no longer negligible
+        ("po", GaussianCorrelation(1.0 / K, 10.0 / K), 17 + 2j, 75.0),
+    ],
+)
+def test_angular_validity_flags_the_grazing_cases(method, rough, eps, fails_above_deg):
+    ti = np.radians(np.arange(0.0, 90.0, 1.0))
+    rep = _solver(method).check_validity(rough, K, eps=eps, theta_i=ti)
+    assert rep["checks"][next(iter(rep["details"]))] is not None
+    assert not rep["valid"]
+    bad = np.degrees(ti[~rep["angle_valid"]])
+    assert bad.min() <= fails_above_deg + 10 and bad.min() >= 20.0
+    assert np.all(rep["angle_valid"][ti < np.radians(20.0)])

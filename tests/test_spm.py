@@ -297,6 +297,37 @@ def test_second_order_quadrature_converged(rough):
         assert np.max(np.abs(a - b) / np.abs(b)) < 5e-6
 
 
+@pytest.mark.parametrize("dim", [2, 1])
+def test_second_order_cutoff(dim):
+    """Issue 7: the coherent term of an algebraic spectrum depends on how far the spectrum
+    extends; the cutoff is explicit (k_max, default the whole spectrum), the disc
+    |k⊥ − k_i⊥| ≤ k_max is integrated exactly (16 nodes within 1e-5 of 64), a PEC does not
+    depend on it (energy: r_coh = 1 − r_incoh, and r_incoh uses |K| ≤ 2k only) and a k_max
+    beyond the support is the whole spectrum."""
+    rough = ExponentialCorrelation(0.1 / K, 1.0 / K, dimension=dim)
+    th = np.radians([0.0, 40.0, 85.0])
+    assert spm.coherent_cutoff(rough, K) == pytest.approx(2e4 / rough.length)
+    assert spm.coherent_cutoff(gauss(), K) == pytest.approx(13 / gauss().length)
+    for km in (2 * K, 7 * K):
+        a = spm._second_order_R(rough, np.complex128(17 + 2j), K, th, 16, 16, k_max=km)[1]
+        b = spm._second_order_R(rough, np.complex128(17 + 2j), K, th, 64, 64, k_max=km)[1]
+        assert np.max(np.abs(a - b) / np.abs(b)) < 1e-5
+    pec = [spm.coherent_reflectivity(rough, "pec", K, th, k_max=c * K) for c in (2, 50)]
+    np.testing.assert_allclose(pec[0], pec[1], atol=1e-9)
+    lossy = [spm.coherent_reflectivity(rough, 17 + 2j, K, th, k_max=c * K) for c in (2, 1e3, 1e9)]
+    full = spm._coherent(rough, np.complex128(17 + 2j), K, th, th.shape, 16, 16)[0]
+    assert np.max(np.abs(lossy[0] - lossy[1])) > 5e-3  # a real dependence over a lossy medium
+    np.testing.assert_allclose(lossy[2], full, atol=1e-12)
+    res = spm.bistatic(rough, 17 + 2j, K, 0.3, 0.3, 0.0)
+    assert res.info["coherent_cutoff"] == pytest.approx(2e4 / rough.length)
+    rep = spm.check_validity(rough, K, eps=17 + 2j, theta_i=th, coherent=True, k_max=2 * K)
+    assert rep["coherent_depends_on_cutoff"] and any("k_max = 2k" in n for n in rep["notes"])
+    assert rep["cutoff_sensitivity"].shape == th.shape and np.all(rep["cutoff_sensitivity"] > 0)
+    assert "coherent_depends_on_cutoff" not in spm.check_validity(rough, K, eps="pec")
+    with pytest.raises(ValueError, match="k_max"):
+        spm.bistatic(rough, 17 + 2j, K, 0.3, 0.3, 0.0, k_max=-1.0)
+
+
 # ------------------------------------------------------------------ stability
 def test_stability_sweep():
     """No NaN/inf/negative σ⁰, coherent in [0, 1], and no warning over θ ∈ [0, 89.9°]

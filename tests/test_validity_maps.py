@@ -92,7 +92,7 @@ def test_committed_map_auto_never_loses_to_a_method_within_1dB(tag):
 def test_committed_map_auto_column_is_the_current_selector(tag):
     # the map must be regenerated (or `vm.reselect`) whenever a VALIDITY criterion changes
     for r in _committed(tag):
-        assert r["auto"] == vm.auto_choice(r["k_sigma"], r["k_l"]), r
+        assert r["auto"] == vm.auto_choice(r["k_sigma"], r["k_l"], PUBLISHED[tag]), r
 
 
 @pytest.mark.parametrize("tag", sorted(PUBLISHED))

@@ -197,12 +197,11 @@ def compute_cell(
     t0 = time.perf_counter()
     rough = _rough(ks, kl)
     slope = math.sqrt(2) * ks / kl
-    auto, _ = select_method(rough, K)
+    ti_cell = math.radians(cfg.theta_i_deg)
+    auto, _ = select_method(rough, K, eps=cfg.eps, theta_i=ti_cell)
     valid = {
-        "spm1": spm.check_validity(rough, K)["valid"],
-        "spm2": spm.check_validity(rough, K)["valid"],
-        "po": kirchhoff_po.check_validity(rough, K)["valid"],
-        "go": kirchhoff_go.check_validity(rough, K)["valid"],
+        m: mod.check_validity(rough, K, eps=cfg.eps, theta_i=ti_cell)["valid"]
+        for m, mod in (("spm1", spm), ("spm2", spm), ("po", kirchhoff_po), ("go", kirchhoff_go))
     }
     base = {"k_sigma": ks, "k_l": kl, "rms_slope": slope, "auto": AUTO_TO_MAP[auto]}
     if slope > cfg.max_slope:
@@ -650,11 +649,13 @@ def markdown_table(rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def auto_choice(k_sigma: float, k_l: float) -> str:
-    """The map name (``spm1``/``go``/``po``) of ``method="auto"``'s choice for a cell."""
+def auto_choice(k_sigma: float, k_l: float, cfg: MapConfig = FULL) -> str:
+    """The map name (``spm1``/``go``/``po``) of ``method="auto"``'s choice for a cell (at the
+    map's ε and θi)."""
     from .solvers.select import select_method
 
-    return AUTO_TO_MAP[select_method(_rough(k_sigma, k_l), K)[0]]
+    ti = math.radians(cfg.theta_i_deg)
+    return AUTO_TO_MAP[select_method(_rough(k_sigma, k_l), K, eps=cfg.eps, theta_i=ti)[0]]
 
 
 _NUMERIC = ("k_sigma", "k_l", "rms_slope", "error_dB", "max_error_dB", "mom_se_dB", "seconds")
@@ -689,8 +690,13 @@ def reselect(out: Path, cfg: MapConfig = FULL) -> list[Path]:
     rows = read_map(out / f"validity_{tag}.csv")
     checks = {"spm1": spm, "spm2": spm, "po": kirchhoff_po, "go": kirchhoff_go}
     for r in rows:
-        r["auto"] = auto_choice(r["k_sigma"], r["k_l"])
-        r["valid"] = checks[r["method"]].check_validity(_rough(r["k_sigma"], r["k_l"]), K)["valid"]
+        r["auto"] = auto_choice(r["k_sigma"], r["k_l"], cfg)
+        r["valid"] = checks[r["method"]].check_validity(
+            _rough(r["k_sigma"], r["k_l"]),
+            K,
+            eps=cfg.eps,
+            theta_i=math.radians(cfg.theta_i_deg),
+        )["valid"]
     old = json.loads((out / f"validity_{tag}.json").read_text())
     paths = write_map(rows, cfg, out, seconds=float(old.get("seconds", 0.0)))
     md = out / f"validity_{tag}.md"

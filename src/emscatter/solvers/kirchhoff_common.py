@@ -42,6 +42,7 @@ from scipy import special
 from ..conventions import check_angle, check_finite, check_positive
 from ..fresnel import PEC, check_eps, is_pec
 from ..spectra import Roughness, check_roughness
+from .validity import Check, angle_lower, build_report, lower, wave_slope_variances
 
 __all__ = [
     "Geometry",
@@ -52,8 +53,10 @@ __all__ = [
     "smith_lambda",
     "shadowing_factor",
     "check_roughness",
-    "validity_report",
     "tangent_plane_checks",
+    "illuminated_fraction",
+    "shadowing_angle_check",
+    "validity_report",
 ]
 
 _TAU_EPS = 1e-28  # |k̂_i × k̂_s|² below this is treated as exact backscatter
@@ -265,29 +268,43 @@ def coherent_reflectivity(roughness, eps, k: float, theta_i) -> np.ndarray:
     return np.stack([rh2 * att, rv2 * att])
 
 
-def slope_variances(roughness: Roughness, k_max=None, slope_variance=None) -> tuple[float, float]:
+def slope_variances(
+    roughness: Roughness, k_max=None, slope_variance=None, k=None
+) -> tuple[float, float]:
     """Per-direction slope variances ``(⟨ζx²⟩, ⟨ζy²⟩)`` [-] (``⟨ζy²⟩ = 0`` for a profile).
 
     ``slope_variance`` overrides: a float (the per-direction variance, isotropic) or a pair.
-    Otherwise ``roughness.mean_square_slope(k_max)``; exponential and power-law correlations
-    need ``k_max`` [rad/m] (or ``slope_variance``) since their slope variance is infinite.
+    Otherwise ``roughness.mean_square_slope()`` for a differentiable (Gaussian) correlation;
+    exponential and power-law correlations have an infinite slope variance and use the
+    spectrum below ``k_max`` [rad/m], by default ``2k`` (the spectrum the wave sees,
+    :mod:`emscatter.solvers.validity`; ``k`` [rad/m] must then be given).
     """
     if slope_variance is not None:
-        sv = np.atleast_1d(check_finite("slope_variance", slope_variance)).astype(float)
-        if sv.ndim != 1 or sv.size not in (1, 2) or np.any(sv <= 0) or np.iscomplexobj(sv):
+        sv = np.atleast_1d(check_finite("slope_variance", slope_variance))
+        if (
+            np.iscomplexobj(sv)
+            or sv.ndim != 1
+            or sv.size not in (1, 2)
+            or np.any(sv.astype(float) <= 0)
+        ):
             raise ValueError(
                 "slope_variance must be a positive float (per-direction ⟨ζx²⟩ = ⟨ζy²⟩) or a "
                 f"pair (⟨ζx²⟩, ⟨ζy²⟩), got {slope_variance!r}"
             )
+        sv = sv.astype(float)
         sx = float(sv[0])
         sy = float(sv[-1])
+    elif roughness._mss_closed() is not None and k_max is None:
+        sx, sy = roughness.mean_square_slope()
     else:
-        try:
-            sx, sy = roughness.mean_square_slope(k_max)
-        except ValueError as exc:
+        if k_max is not None:
+            k_max = check_positive("k_max", k_max, unit="rad/m")
+        elif k is None:
             raise ValueError(
-                f"{exc}; or pass slope_variance=(⟨ζx²⟩, ⟨ζy²⟩) to the Kirchhoff solver"
-            ) from None
+                f"{type(roughness).__name__} has an infinite slope variance: give k_max "
+                "[rad/m] (the spectral cutoff) or slope_variance=(⟨ζx²⟩, ⟨ζy²⟩)"
+            )
+        sx, sy, _ = wave_slope_variances(roughness, k, k_max)
     if roughness.dimension == 1:
         sy = 0.0
     return sx, sy
@@ -310,17 +327,22 @@ def smith_lambda(a: np.ndarray) -> np.ndarray:
 def _a(cos_t, sin_t, s2_dir):
     """``a = cotθ/(√2 s)`` (∞ at θ = 0, 0 at θ = π/2), clipped to [0, 1e300]."""
     den = sin_t * np.sqrt(2.0 * s2_dir)
-    return np.where(den > cos_t * 1e-300, cos_t / np.where(den > 0, den, 1.0), 1e300)
+    big = den > cos_t * 1e-300  # else a ≥ 1e300: no division (a subnormal θ overflowed)
+    return np.where(big, cos_t / np.where(big, den, 1.0), 1e300)
 
 
 def shadowing_factor(g: Local, sx: float, sy: float, mode="smith") -> np.ndarray:
-    """Bistatic shadowing/masking factor [-].
+    """Shadowing/masking factor [-].
 
-    ``"smith"``: separable ``G1(θi) G1(θs)`` with Smith's ``G1 = 1/(1+Λ(a))`` (Smith 1967;
-    the form of Mitsuba 3's microfacet models, Walter et al. 2007 eqs. 23–27);
-    ``"correlated"``: height-correlated ``1/(1+Λ(a_i)+Λ(a_s))`` (Sancer 1969, IEEE TAP 17,
-    577; Heitz 2014). The slope variance along each direction's azimuth is
-    ``sx cos²φ + sy sin²φ`` (anisotropic Gaussian slopes); for a profile it is ``sx``.
+    ``"smith"`` (default): separable ``G1(θi) G1(θs)`` with Smith's ``G1 = 1/(1+Λ(a))``
+    (Smith 1967; the form of Mitsuba 3's microfacet models, Walter et al. 2007 eqs. 23–27),
+    except in the exact backscatter direction, where shadowing and masking are one event and
+    the monostatic ``1/(1+Λ(a_i))`` applies (Sancer 1969; Bourlier, Berginc & Saillard 2002,
+    IEEE TAP 50, 312; SMRT's ``geometrical_optics_backscatter``); ``"separable"``: the
+    product everywhere (the previous default); ``"correlated"``: height-correlated
+    ``1/(1+Λ(a_i)+Λ(a_s))`` (Sancer 1969, IEEE TAP 17, 577; Heitz 2014). The slope variance
+    along each direction's azimuth is ``sx cos²φ + sy sin²φ`` (anisotropic Gaussian slopes);
+    for a profile it is ``sx``.
     """
     if sy > 0 and sx != sy:
         s2i = sx * np.cos(g.phi_i) ** 2 + sy * np.sin(g.phi_i) ** 2
@@ -329,9 +351,29 @@ def shadowing_factor(g: Local, sx: float, sy: float, mode="smith") -> np.ndarray
         s2i = s2s = sx
     lam_i = np.broadcast_to(smith_lambda(_a(g.ci, g.si, s2i)), (g.n,))
     lam_s = np.broadcast_to(smith_lambda(_a(g.cs, g.ss, s2s)), (g.n,))
+    if mode == "correlated":
+        return 1.0 / (1.0 + lam_i + lam_s)
+    out = (1.0 / (1.0 + lam_i)) * (1.0 / (1.0 + lam_s))
     if mode == "smith":
-        return (1.0 / (1.0 + lam_i)) * (1.0 / (1.0 + lam_s))
-    return 1.0 / (1.0 + lam_i + lam_s)
+        back = is_backscatter(g)
+        if np.any(back):
+            out = np.where(back, 1.0 / (1.0 + lam_i), out)
+    return out
+
+
+def is_backscatter(g: Local) -> np.ndarray:
+    """Exact monostatic directions (``k_s = −k_i``): ``|q|² = 4k²`` to rounding."""
+    return np.broadcast_to(g.q2 > 4.0 * (1.0 - 1e-12), (g.n,))
+
+
+def check_flag(name: str, value) -> bool:
+    """A boolean option, or a ValueError naming it."""
+    if not isinstance(value, bool | np.bool_):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+SHADOWING_CHOICES = ("smith", "separable", "correlated", False)
 
 
 def check_shadowing(shadowing_opt) -> str | None:
@@ -339,10 +381,11 @@ def check_shadowing(shadowing_opt) -> str | None:
         return "smith"
     if shadowing_opt is False or shadowing_opt is None:
         return None
-    if shadowing_opt == "correlated":
-        return "correlated"
+    if shadowing_opt in ("correlated", "separable"):
+        return shadowing_opt
     raise ValueError(
-        f"shadowing must be True/'smith', 'correlated', or False/None, got {shadowing_opt!r}"
+        "shadowing must be True/'smith' (separable, monostatic at backscatter), 'separable', "
+        f"'correlated', or False/None, got {shadowing_opt!r}"
     )
 
 
@@ -355,42 +398,46 @@ def workers_for(threads, n_chunks: int) -> int:
     return int(min(threads, n_chunks))
 
 
-def tangent_plane_checks(rough: Roughness, k: float, validity: dict) -> list[tuple]:
+_SRC_TP = "Ulaby, Moore & Fung 1982 vol. II §12-4, Table 12.2"
+
+
+def tangent_plane_checks(rough: Roughness, k: float, validity: dict) -> list[Check]:
     """The Kirchhoff tangent-plane criteria shared by GO and PO (Ulaby, Moore & Fung 1982
-    vol. II §12-4): ``kℓ > k_l_min`` and radius of curvature ``ℓ² > curvature_factor · σλ``
-    with the shorter correlation length; ``(name, ok, text, ratio)`` tuples."""
-    kl = k * rough.length
+    vol. II §12-4): ``kℓ ≥ k_l_min`` and radius of curvature ``ℓ² ≥ curvature_factor · σλ``
+    with the shorter correlation length."""
+    kl = k * min(rough.length, rough.length_y)
     ell2 = min(rough.length, rough.length_y) ** 2
-    curv = validity["curvature_factor"] * rough.sigma * 2 * math.pi / k
     return [
-        (
-            "k_l",
-            kl > validity["k_l_min"],
-            f"kℓ = {kl:.3g} ≤ {validity['k_l_min']} (tangent plane)",
-            validity["k_l_min"] / kl,
-        ),
-        (
+        lower("k_l", kl, validity["k_l_min"], "kℓ (tangent plane)", _SRC_TP),
+        lower(
             "curvature",
-            ell2 > curv,
-            f"ℓ² = {ell2:.3g} ≤ {validity['curvature_factor']} σλ = {curv:.3g} m²",
-            curv / ell2,
+            ell2 / (rough.sigma * 2 * math.pi / k),
+            validity["curvature_factor"],
+            "ℓ²/(σλ) (radius of curvature)",
+            _SRC_TP,
         ),
     ]
 
 
+def illuminated_fraction(theta_i, s2: float) -> np.ndarray:
+    """Smith's illuminated fraction ``G1(θi) = 1/(1 + Λ(cotθi/√(2 s2)))`` [-] for the
+    per-direction slope variance ``s2`` (Smith 1967)."""
+    ti = np.asarray(theta_i, dtype=float)
+    s, c = np.sin(ti), np.cos(ti)
+    return 1.0 / (1.0 + smith_lambda(_a(c, s, s2)))
+
+
+def shadowing_angle_check(name, theta_i, sx, sy, limit, what, source):
+    """Per-angle ``G1(θi) ≥ limit`` with the larger per-direction slope variance."""
+    return angle_lower(name, illuminated_fraction(theta_i, max(sx, sy)), limit, what, source)
+
+
 def validity_report(roughness: Roughness, k: float, checks: list[tuple]) -> dict:
-    """``{"valid", "reasons", "checks", "excess", "k_sigma", "k_l"}`` from
-    ``(name, ok, text[, ratio])`` tuples; ``ratio`` ≥ 1 says by what factor a failed criterion
-    is exceeded, and ``excess = max log(ratio)`` over failed criteria (0 when valid, inf when a
-    failed criterion gives no ratio) ranks out-of-range methods in ``select_method``."""
-    reasons = [c[2] for c in checks if not c[1]]
-    failed = [c[3] if len(c) > 3 else math.inf for c in checks if not c[1]]
-    excess = max((math.log(max(r, 1.0)) for r in failed), default=0.0)
-    return {
-        "valid": not reasons,
-        "reasons": reasons,
-        "checks": {c[0]: c[1] for c in checks},
-        "excess": excess,
-        "k_sigma": k * roughness.sigma,
-        "k_l": k * roughness.length,
-    }
+    """Compatibility wrapper: a report (:func:`emscatter.solvers.validity.build_report`) from
+    ``(name, ok, text[, ratio])`` tuples; prefer :mod:`emscatter.solvers.validity`'s
+    ``upper``/``lower`` checks, which also record the value and the limit."""
+    out = []
+    for c in checks:
+        ratio = c[3] if len(c) > 3 else (1.0 if c[1] else math.inf)
+        out.append(Check(c[0], bool(c[1]), math.nan, math.nan, float(ratio), c[2]))
+    return build_report(roughness, k, out)

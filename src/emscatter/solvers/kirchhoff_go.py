@@ -11,11 +11,16 @@ per-direction variances ``sx = ⟨ζx²⟩``, ``sy = ⟨ζy²⟩`` (anisotropic 
 
     p(ζx, ζy) = exp(−ζx²/(2 sx) − ζy²/(2 sy)) / (2π √(sx sy))
 
-and ``S`` an optional shadowing factor. Written with the half vector ``ĥ = q/|q|``,
+and ``S`` an optional shadowing factor (default: Smith's separable ``G1(θi) G1(θs)``, and in
+the exact backscatter direction the monostatic ``1/(1+Λ(θi))`` — one event, not two).
+Written with the half vector ``ĥ = q/|q|``,
 ``p / cos⁴θh = D(ĥ)`` is the Beckmann distribution of total mean-square slope
 ``m² = sx + sy`` (``α = m`` in Mitsuba 3; the seed's eq. 2.14 with ``m = 2σ/T``, eq. 3.1), so
 ``σ⁰ = π F D S`` and the BRDF ``f_r = σ⁰/(4π cosθi cosθs) = F D G / (4 cosθi cosθs)`` is exactly
-Cook–Torrance with Beckmann (seed eq. 2.13). Backscatter: ``|R(0)|² exp(−tan²θ/m²)/(m² cos⁴θ)``.
+Cook–Torrance with Beckmann (seed eq. 2.13). Backscatter (Ulaby, Moore & Fung 1982 eq. 12.59;
+the monostatic shadowing as SMRT's ``geometrical_optics_backscatter``)::
+
+    σ⁰_pp = |R(0)|² exp(−tan²θ/m²) / (m² cos⁴θ) / (1 + Λ(cotθ/m))
 
 Profile (``dimension=1``, per unit length, 2-D problem, only hh and vv): the facet picture with
 the 1-D slope density ``p₁(ζ) = exp(−ζ²/(2 sx))/√(2π sx)`` and ``dθs = 2 dθh`` gives::
@@ -42,66 +47,118 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from ..conventions import check_positive
+from ..conventions import check_angle, check_positive
+from ..kernels import dispatch
 from ..scattering import Scattering
 from .kirchhoff_common import (
+    check_flag,
     check_roughness,
     check_shadowing,
     coherent_local,
     fresnel_factors,
     geometry,
+    shadowing_angle_check,
     shadowing_factor,
     slope_variances,
     tangent_plane_checks,
-    validity_report,
     workers_for,
+)
+from .validity import (
+    SLOPE_CUTOFF_FACTOR,
+    angle_lower,
+    build_report,
+    check_solver_options,
+    lower,
+    upper,
 )
 
 __all__ = ["bistatic", "check_validity", "VALIDITY", "slope_pdf_factor"]
 
-#: Validity of the geometric-optics (stationary-phase) Kirchhoff solution: Ulaby, Moore &
-#: Fung (1982) vol. II §12-4 / Table 12.2: ``kℓ > 6``, ``ℓ² > 2.76 σ λ`` (tangent plane) and
-#: ``(kσ cosθ)² > 10`` (stationary phase; checked at θ = 0, i.e. ``kσ > √10``); shadowing
-#: matters beyond ``m ≈ 0.5``.
+#: Validity of the geometric-optics (stationary-phase) Kirchhoff solution (Ulaby, Moore &
+#: Fung 1982 vol. II §12-4 / Table 12.2): ``kℓ ≥ 6``, ``ℓ² ≥ 2.76 σλ`` (tangent plane),
+#: stationary phase ``Q = (2kσ cosθi)² ≥ 10`` — ``Q = (q_z σ)²`` is the exponent of the
+#: Kirchhoff coherent attenuation ``e^{−Q}`` that GO, the whole-intensity limit, double counts
+#: (``e^{−10} = 4.5e-5``); checked at normal incidence for the roughness and per angle with
+#: ``theta_i`` — and rms slope ``m ≤ 1``. Per angle also Smith's illuminated fraction
+#: ``G1(θi) ≥ 0.5`` (with shadowing: GO has no multiple scattering, which becomes comparable
+#: to single scattering once half the surface is in shadow, Thorsos 1988 JASA 83, 78;
+#: Bourlier, Berginc & Saillard 2002) or ``≥ 0.9`` without shadowing (Kirchhoff without
+#: shadowing, as physical optics).
 VALIDITY = {
     "k_l_min": 6.0,
     "curvature_factor": 2.76,
-    "k_sigma_min": math.sqrt(10.0),
+    "phase_q_min": 10.0,
     "rms_slope_max": 1.0,
+    "illuminated_min": 0.5,
+    "illuminated_min_unshadowed": 0.9,
 }
+
+#: Options of :func:`bistatic` (what ``check_validity`` accepts).
+OPTIONS = ("shadowing", "k_max", "slope_variance", "threads", "coherent")
+
+_SRC_Q = "Ulaby, Moore & Fung 1982 vol. II §12-4, Table 12.2 (stationary phase)"
+_SRC_SH = "Smith 1967; Thorsos 1988 JASA 83 78; Bourlier, Berginc & Saillard 2002"
 
 _CHUNK = 1 << 15
 
 
-def check_validity(roughness, k: float, *, k_max=None, slope_variance=None) -> dict:
-    """Validity report ``{"valid", "reasons", "checks", ...}`` for ``k`` [rad/m]."""
+def check_validity(
+    roughness,
+    k: float,
+    *,
+    eps=None,
+    theta_i=None,
+    k_max=None,
+    slope_variance=None,
+    shadowing=True,
+    **solver_options,
+) -> dict:
+    """Validity report (BOARD interface 1, :mod:`.validity`) for ``k`` [rad/m]; criteria in
+    :data:`VALIDITY`. ``theta_i`` [rad] adds the per-angle stationary-phase and shadowing
+    checks; ``eps`` is accepted for the common signature (GO's limits do not depend on it)."""
+    check_solver_options("go", solver_options, OPTIONS)
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
-    ks = k * rough.sigma
+    mode = check_shadowing(shadowing)
     v = VALIDITY
+    q0 = (2 * k * rough.sigma) ** 2
+    sx, sy = slope_variances(rough, k_max, slope_variance, k=k)
+    m = math.sqrt(sx + sy)
     checks = [
         *tangent_plane_checks(rough, k, v),
-        (
-            "k_sigma",
-            ks > v["k_sigma_min"],
-            f"kσ = {ks:.3g} ≤ √10 (stationary phase)",
-            v["k_sigma_min"] / ks,
-        ),
+        lower("stationary_phase", q0, v["phase_q_min"], "(2kσ)² at normal incidence", _SRC_Q),
+        upper("rms_slope", m, v["rms_slope_max"], "total rms slope m", _SRC_Q),
     ]
-    try:
-        sx, sy = slope_variances(rough, k_max, slope_variance)
-        m = math.sqrt(sx + sy)
-        checks.append(
-            (
-                "rms_slope",
-                m < v["rms_slope_max"],
-                f"rms slope m = {m:.3g} ≥ 1",
-                m / v["rms_slope_max"],
-            )
-        )
-    except ValueError as exc:
-        checks.append(("rms_slope", False, str(exc)))
-    return validity_report(rough, k, checks)
+    angle_checks = []
+    ti = None
+    if theta_i is not None:
+        ti = check_angle("theta_i", theta_i)
+        ci = np.cos(ti)
+        angle_checks.append(
+            angle_lower("stationary_phase_angle", q0 * ci * ci, v["phase_q_min"],
+                        "Q = (2kσ cosθi)²", _SRC_Q)
+        )  # fmt: skip
+        limit = v["illuminated_min"] if mode else v["illuminated_min_unshadowed"]
+        angle_checks.append(
+            shadowing_angle_check("illuminated", ti, sx, sy, limit,
+                                  "Smith's illuminated fraction G1(θi)", _SRC_SH)
+        )  # fmt: skip
+    return build_report(
+        rough,
+        k,
+        checks,
+        theta_i=ti,
+        angle_checks=angle_checks,
+        rms_slope=m,
+        slope_cutoff=slope_cutoff(rough, k, k_max, slope_variance),
+    )
+
+
+def slope_cutoff(rough, k: float, k_max=None, slope_variance=None) -> float | None:
+    """The spectral cutoff [rad/m] GO's slope variance is computed with (None: none used)."""
+    if slope_variance is not None or (k_max is None and rough._mss_closed() is not None):
+        return None
+    return float(k_max) if k_max is not None else SLOPE_CUTOFF_FACTOR * k
 
 
 def slope_pdf_factor(g, sx: float, sy: float, dimension: int) -> np.ndarray:
@@ -138,6 +195,7 @@ def bistatic(
     k_max: float | None = None,
     slope_variance=None,
     threads: int | None = None,
+    coherent: bool = True,
 ) -> Scattering:
     """Geometric-optics bistatic scattering coefficients σ⁰ (all four polarizations).
 
@@ -147,10 +205,16 @@ def bistatic(
     eps : relative permittivity (complex, ``Im ε ≥ 0``, broadcasts with the angles) or "pec".
     k : free-space wavenumber [rad/m] (enters only the coherent part and validity).
     theta_i, theta_s, phi_s, phi_i : angles [rad], numpy-broadcast.
-    shadowing : True/"smith" (separable Smith, as Mitsuba 3), "correlated", or False.
-    k_max : spectral cutoff [rad/m] for correlations with infinite slope variance.
+    shadowing : True/"smith" (separable Smith as Mitsuba 3, monostatic ``1/(1+Λ)`` in the
+        exact backscatter direction), "separable" (the product everywhere), "correlated"
+        (height-correlated), or False (:func:`.kirchhoff_common.shadowing_factor`).
+    k_max : spectral cutoff [rad/m] of the slope variance for correlations whose slope
+        variance is infinite (exponential, power law); default ``2k``, the spectrum the wave
+        sees (:mod:`emscatter.solvers.validity`). Ignored for a Gaussian unless given.
     slope_variance : override the per-direction slope variance(s) ``⟨ζx²⟩[, ⟨ζy²⟩]`` [-].
     threads : worker threads for large inputs (default: the CPU count, at most 8).
+    coherent : False skips the coherent part (``coherent`` is then NaN and
+        ``info["coherent"]`` says so; BOARD interface 3).
 
     Returns
     -------
@@ -160,13 +224,14 @@ def bistatic(
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
     mode = check_shadowing(shadowing)
-    sx, sy = slope_variances(rough, k_max, slope_variance)
+    sx, sy = slope_variances(rough, k_max, slope_variance, k=k)
+    want_coh = check_flag("coherent", coherent)
     dim = rough.dimension
     g = geometry(theta_i, theta_s, phi_s, phi_i, eps, dim)
     shape = g.shape
     n = g.size
     flat = np.empty((2, 2, n))
-    coh = np.empty((2, n))
+    coh = np.empty((2, n)) if coherent else np.full((2, n), np.nan)
     signed = sx != sy and dim == 2
 
     def work(start: int) -> None:
@@ -175,17 +240,32 @@ def bistatic(
         if mode is not None:
             val = val * shadowing_factor(loc, sx, sy, mode)
         fresnel_factors(loc, dim, val, out=flat[:, :, start : start + loc.n])
-        coh[:, start : start + loc.n] = coherent_local(loc, rough.sigma, k)
+        if want_coh:
+            coh[:, start : start + loc.n] = coherent_local(loc, rough.sigma, k)
 
     starts = range(0, n, _CHUNK)
     workers = workers_for(threads, len(starts))
-    if workers > 1:
+    if dispatch.go_sigma0(
+        g.ti_flat, g.ts_flat, g.dphi, g.eps_flat, dimension=dim, sx=sx, sy=sy, shadowing=mode,
+        out=flat, coherent_out=coh if want_coh else None, k=k, sigma=rough.sigma, threads=workers,
+    ):  # fmt: skip
+        pass  # compiled kernel (emscatter.kernels); the numpy path below is the reference
+    elif workers > 1:
         with ThreadPoolExecutor(max_workers=workers) as pool:
             list(pool.map(work, starts))  # numpy releases the GIL in its kernels
     else:
         for st in starts:
             work(st)
     sigma0 = flat.reshape(2, 2, *shape)
+    info = {
+        "slope_variance": (sx, sy),
+        "total_mean_square_slope": sx + sy,
+        "slope_cutoff": slope_cutoff(rough, k, k_max, slope_variance),
+        "shadowing": mode,
+        "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx),
+    }
+    if not want_coh:
+        info["coherent"] = "not computed (coherent=False)"
     return Scattering(
         sigma0=sigma0,
         coherent=coh.reshape(2, *shape),
@@ -196,10 +276,5 @@ def bistatic(
         phi_i=g.phi_i,
         k=k,
         dimension=dim,
-        info={
-            "slope_variance": (sx, sy),
-            "total_mean_square_slope": sx + sy,
-            "shadowing": mode,
-            "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx),
-        },
+        info=info,
     )

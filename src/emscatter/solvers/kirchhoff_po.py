@@ -46,18 +46,21 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 from scipy import special
 
-from ..conventions import check_positive
+from ..conventions import check_angle, check_positive
+from ..kernels import dispatch
 from ..scattering import Scattering
 from ..spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 from .kirchhoff_common import (
+    check_flag,
     check_roughness,
     coherent_local,
     fresnel_factors,
     geometry,
+    shadowing_angle_check,
     tangent_plane_checks,
-    validity_report,
     workers_for,
 )
+from .validity import build_report, check_solver_options, upper, wave_slope_variances
 
 __all__ = ["bistatic", "check_validity", "VALIDITY", "series_sum", "log_nfold"]
 
@@ -69,31 +72,52 @@ __all__ = ["bistatic", "check_validity", "VALIDITY", "series_sum", "log_nfold"]
 #: 1.3–1.8 dB at m ≈ 0.65. Outside every method's range, ``method="auto"`` takes the method
 #: whose criteria are exceeded by the smallest factor (report ``"excess"``), which is PO in
 #: those cells rather than SPM at kσ > 0.3 (1.3–17 dB off).
-VALIDITY = {"k_l_min": 4.0, "curvature_factor": 2.76, "rms_slope_max": 0.4}
+#: Per angle (with ``theta_i``): Kirchhoff without shadowing needs the shadowed part of the
+#: surface small — Smith's illuminated fraction ``G1(θi) ≥ 0.9`` (Smith 1967; Thorsos 1988
+#: JASA 83, 78, on the Kirchhoff approximation near grazing). Slopes of non-differentiable
+#: spectra are those of the spectrum below ``2k`` (:mod:`.validity`).
+VALIDITY = {
+    "k_l_min": 4.0,
+    "curvature_factor": 2.76,
+    "rms_slope_max": 0.4,
+    "illuminated_min": 0.9,
+}
+
+#: Options of :func:`bistatic` (what ``check_validity`` accepts).
+OPTIONS = ("rtol", "max_terms", "threads", "coherent")
+
+_SRC_M = "validity maps (validation/validity_maps); Ulaby, Moore & Fung 1982 Table 12.2"
+_SRC_SH = "Smith 1967; Thorsos 1988 JASA 83 78 (Kirchhoff without shadowing near grazing)"
 
 _LOG_2PI = math.log(2 * math.pi)
 _BLOCK = 1 << 15  # geometries per series block (one thread each)
 
 
-def check_validity(roughness, k: float, *, k_max=None) -> dict:
-    """Validity report ``{"valid", "reasons", "checks", ...}`` for ``k`` [rad/m]."""
+def check_validity(roughness, k: float, *, eps=None, theta_i=None, **solver_options) -> dict:
+    """Validity report (BOARD interface 1, :mod:`.validity`) for ``k`` [rad/m]; criteria in
+    :data:`VALIDITY`. ``theta_i`` [rad] adds the per-angle shadowing check; ``eps`` is
+    accepted for the common signature (the limits do not depend on it)."""
+    check_solver_options("po", solver_options, OPTIONS)
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
     v = VALIDITY
-    checks = tangent_plane_checks(rough, k, v)
-    try:
-        m = math.sqrt(rough.total_mean_square_slope(k_max))
-        checks.append(
-            (
-                "rms_slope",
-                m < v["rms_slope_max"],
-                f"rms slope m = {m:.3g} ≥ {v['rms_slope_max']}",
-                m / v["rms_slope_max"],
-            )
-        )
-    except ValueError as exc:
-        checks.append(("rms_slope", False, str(exc)))
-    return validity_report(rough, k, checks)
+    sx, sy, k_cut = wave_slope_variances(rough, k)
+    m = math.sqrt(sx + sy)
+    checks = [
+        *tangent_plane_checks(rough, k, v),
+        upper("rms_slope", m, v["rms_slope_max"], "total rms slope m", _SRC_M),
+    ]
+    angle_checks = []
+    ti = None
+    if theta_i is not None:
+        ti = check_angle("theta_i", theta_i)
+        angle_checks.append(
+            shadowing_angle_check("illuminated", ti, sx, sy, v["illuminated_min"],
+                                  "Smith's illuminated fraction G1(θi)", _SRC_SH)
+        )  # fmt: skip
+    return build_report(
+        rough, k, checks, theta_i=ti, angle_checks=angle_checks, rms_slope=m, slope_cutoff=k_cut
+    )
 
 
 # ----------------------------------------------------------------------------- n-fold spectra
@@ -251,14 +275,21 @@ def series_sum(log_w, Q, K, *, rtol: float = 1e-8, max_terms: int = 10**6) -> np
             lo_x = np.where(left, lo_x, x1)
         x_best[refine] = 0.5 * (lo_x + hi_x)
     n0 = np.maximum(np.round(np.exp(x_best)), 1.0)
+    log_rtol = math.log(rtol)
+    big = n0 >= _N_CONTINUUM
+    log_int = None
+    if np.any(big):
+        b = np.nonzero(big)[0]
+        log_int, ok = _continuum_sum(lt, b, n0[b], log_rtol)
+        big[b[~ok]] = False
+        log_int = log_int[ok]
     L0 = lt(n0[:, None], allidx)[:, 0]
     acc = np.zeros(N)
     count = np.zeros(N)
-    log_rtol = math.log(rtol)
 
     for direction in (+1, -1):
         nxt = n0 + 1 if direction > 0 else n0 - 1
-        active = nxt >= 1 if direction < 0 else np.ones(N, dtype=bool)
+        active = (nxt >= 1 if direction < 0 else np.ones(N, dtype=bool)) & ~big
         if direction > 0:
             acc += 1.0  # the peak term itself
             count += 1
@@ -293,7 +324,55 @@ def series_sum(log_w, Q, K, *, rtol: float = 1e-8, max_terms: int = 10**6) -> np
             active[a[done]] = False
             nxt[a] += direction * c
             c = min(2 * c, 4096)
-    return L0 + np.log(acc)
+    with np.errstate(divide="ignore"):
+        out = L0 + np.log(acc)
+    if log_int is not None:
+        out[big] = log_int
+    return out
+
+
+#: Peak term index above which :func:`series_sum` replaces the sum over n by its integral.
+_N_CONTINUUM = 400.0
+
+
+def _continuum_sum(lt, idx: np.ndarray, n0: np.ndarray, log_rtol: float):
+    """``log Σ_n t_n`` as ``log ∫ t(n) dn`` for peaks at large ``n`` (``(log T, ok)``).
+
+    The terms ``t(n) = exp(lt(n))`` are analytic in ``n`` and log-concave, with a peak of
+    width ``s ≈ √n ≥ 20`` here; by Poisson summation ``Σ_n t(n) = ∫ t(n) dn`` up to
+    ``O(e^{−2π² s²})`` plus the end terms, both far below any tolerance. This is the series'
+    own continuum (large-``Q``) limit — the road to geometric optics, without GO's ``O(1/Q)``
+    error, and for every spectrum (the exponential's limit is not GO's Gaussian slopes). Cost:
+    a few Newton steps and 64 Gauss–Legendre nodes per geometry, whatever ``Q`` (issue 11:
+    PO at kσ = 1e3 used to walk ~10⁴ terms per geometry). ``ok`` is False where the window
+    does not reach the tolerance or would cross ``n = 1`` (those take the direct sum)."""
+    n = n0.astype(float).copy()
+    for _ in range(8):  # Newton on d lt/dn with central differences of step ≈ the width
+        h = np.sqrt(n)
+        f0 = lt(n[:, None], idx)[:, 0]
+        fp = lt((n + h)[:, None], idx)[:, 0]
+        fm = lt((n - h)[:, None], idx)[:, 0]
+        d1 = (fp - fm) / (2 * h)
+        d2 = np.minimum((fp - 2 * f0 + fm) / (h * h), -1e-300)
+        step = np.clip(-d1 / d2, -0.5 * n, 0.5 * n)
+        n = np.maximum(n + step, 2.0)
+        if np.all(np.abs(step) < 1e-3 * h):
+            break
+    width = 1.0 / np.sqrt(-d2)
+    L0 = lt(n[:, None], idx)[:, 0]
+    half = (math.sqrt(-2 * log_rtol) + 4.0) * width
+    x, w = np.polynomial.legendre.leggauss(16)
+    panels = np.linspace(-1.0, 1.0, 5)
+    lo, up = panels[:-1, None], panels[1:, None]
+    t = (0.5 * (lo + up) + 0.5 * (up - lo) * x[None, :]).ravel()
+    wt = (0.5 * (up - lo) * w[None, :]).ravel()
+    nodes = n[:, None] + half[:, None] * t[None, :]
+    vals = np.exp(lt(np.maximum(nodes, 1.0), idx) - L0[:, None])
+    total = (vals * wt[None, :]).sum(axis=1) * half
+    edges = np.maximum(vals[:, 0], vals[:, -1])
+    ok = (n - half > 1.0) & (edges * width < math.exp(log_rtol) * total) & np.isfinite(total)
+    with np.errstate(divide="ignore"):
+        return L0 + np.log(total), ok
 
 
 # ----------------------------------------------------------------------------- solver
@@ -309,6 +388,7 @@ def bistatic(
     rtol: float = 1e-8,
     max_terms: int = 10**6,
     threads: int | None = None,
+    coherent: bool = True,
 ) -> Scattering:
     """Physical-optics (scalar Kirchhoff) bistatic scattering coefficients σ⁰.
 
@@ -322,6 +402,8 @@ def bistatic(
     rtol : relative tolerance of the series (tail bound) [-].
     max_terms : safety cap on the number of series terms per geometry.
     threads : worker threads over blocks of geometries (default: CPU count, at most 8).
+    coherent : False skips the coherent part (``coherent`` is then NaN and
+        ``info["coherent"]`` says so; BOARD interface 3).
     """
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
@@ -330,6 +412,7 @@ def bistatic(
         raise ValueError(f"rtol must be in (0, 1), got {rtol!r}")
     if isinstance(max_terms, bool) or not isinstance(max_terms, int | np.integer) or max_terms < 1:
         raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
+    want_coh = check_flag("coherent", coherent)
     log_w = log_nfold(rough)
     dim = rough.dimension
     g = geometry(theta_i, theta_s, phi_s, phi_i, eps, dim)
@@ -348,7 +431,9 @@ def bistatic(
 
     def block(st: int) -> np.ndarray:
         sl = slice(st, st + _BLOCK)
-        return series_sum(log_w, Q[sl], K[sl], rtol=rtol, max_terms=int(max_terms))
+        opts = {"rtol": rtol, "max_terms": int(max_terms)}
+        compiled = dispatch.po_log_series(rough, log_w, Q[sl], K[sl], series_sum=series_sum, **opts)
+        return compiled if compiled is not None else series_sum(log_w, Q[sl], K[sl], **opts)
 
     if workers > 1:
         with ThreadPoolExecutor(max_workers=workers) as pool:
@@ -358,7 +443,13 @@ def bistatic(
     logT = np.concatenate(parts) if parts else np.empty(0)
     geo = pref * loc.q2 * loc.q2 * np.exp(logT)
     sigma0 = fresnel_factors(loc, dim, geo).reshape(2, 2, *g.shape)
-    coh = coherent_local(loc, rough.sigma, k).reshape(2, *g.shape)
+    if want_coh:
+        coh = coherent_local(loc, rough.sigma, k).reshape(2, *g.shape)
+    else:
+        coh = np.full((2, *g.shape), np.nan)
+    info = {"rtol": rtol, "polarization_factors": "local specular (stationary phase)"}
+    if not want_coh:
+        info["coherent"] = "not computed (coherent=False)"
     return Scattering(
         sigma0=sigma0,
         coherent=coh,
@@ -369,5 +460,5 @@ def bistatic(
         phi_i=g.phi_i,
         k=k,
         dimension=dim,
-        info={"rtol": rtol, "polarization_factors": "local specular (stationary phase)"},
+        info=info,
     )

@@ -1,19 +1,45 @@
-"""Validity checks across solvers and the ``method="auto"`` choice.
+"""Validity checks across solvers and the ``method="auto"`` choice (BOARD interface 2).
 
-Each solver module reports its own validity (``check_validity(roughness, k)``); this module
-asks them in :data:`emscatter.solvers.AUTO_ORDER` (cheapest first) and picks the first one
-that is valid. Outside every validity range the least-bad candidate is used and the caller's
+Each solver module reports its own validity (``check_validity(roughness, k, *, eps,
+theta_i)``, :mod:`.validity`); :func:`rank_methods` asks them in
+:data:`emscatter.solvers.AUTO_ORDER` (cheapest first) and orders them: methods valid for the
+roughness *and* at every requested angle first, cheapest first; then the others by how far
+their criteria are exceeded (report ``"excess"`` = max log(value/limit), angle criteria
+included; ties: fewer failed criteria, then cheaper). :func:`select_method` returns the first.
+Outside every validity range the least-bad candidate is used and the caller's
 ``out_of_range`` policy applies: ``"warn"`` (default, :class:`ValidityWarning`), ``"raise"``
-(:class:`ValidityError`) or ``"nan"`` (results replaced by NaN, flagged in ``info``).
+(:class:`ValidityError`), ``"nan"`` (results replaced by NaN, flagged in ``info``) or
+``"ignore"``. Per-angle choices (e.g. an energy fallback) read each report's
+``angle_valid`` / ``angle_excess``.
+
+:func:`check_options` maps the solver options a caller passed to the method actually used:
+an option of that method is kept; an accuracy or execution knob that a closed-form method
+satisfies anyway (``threads``, ``rtol``, ``max_terms``) is dropped; ``shadowing=False`` is
+dropped for methods without shadowing; anything else is a ValueError naming the option, the
+method that was picked (and that ``auto`` picked it) and the options that method takes.
 """
 
 from __future__ import annotations
 
+import inspect
 import math
 import warnings
+from functools import lru_cache
 from typing import Literal
 
 from . import AUTO_ORDER, get
+
+__all__ = [
+    "ValidityWarning",
+    "ValidityError",
+    "rank_methods",
+    "select_method",
+    "validity",
+    "check_options",
+    "solver_options",
+    "enforce",
+    "check_out_of_range",
+]
 
 OutOfRange = Literal["warn", "raise", "nan", "ignore"]
 OUT_OF_RANGE_CHOICES = ("warn", "raise", "nan", "ignore")
@@ -33,23 +59,34 @@ def check_out_of_range(value) -> str:
     return value
 
 
-def validity(roughness, k: float, methods=AUTO_ORDER) -> dict[str, dict]:
-    """Validity report of each method for this roughness and wavenumber ``k`` [rad/m]."""
-    return {name: get(name).check_validity(roughness, k) for name in methods}
+@lru_cache(maxsize=32)
+def _takes(name: str) -> frozenset:
+    """Keyword parameters of a solver's ``check_validity`` (eps/theta_i support)."""
+    params = inspect.signature(get(name).check_validity).parameters
+    return frozenset(params)
 
 
-def select_method(roughness, k: float, methods=AUTO_ORDER) -> tuple[str, dict]:
-    """The cheapest valid method, and all reports. If none is valid, the one whose criteria
-    are exceeded by the smallest factor (report ``"excess"`` = max log(value/limit); ties:
-    fewer violated criteria, then cheaper) is returned with ``valid=False``."""
-    reports = {}
-    for name in methods:
-        try:
-            reports[name] = get(name).check_validity(roughness, k)
-        except (ValueError, TypeError) as exc:  # e.g. a solver that cannot take this roughness
-            reports[name] = {"valid": False, "reasons": [str(exc)], "unsupported": True}
-        if reports[name]["valid"]:
-            return name, reports
+def _report(name: str, roughness, k: float, eps, theta_i) -> dict:
+    takes = _takes(name)
+    kw = {}
+    if eps is not None and "eps" in takes:
+        kw["eps"] = eps
+    if theta_i is not None and "theta_i" in takes:
+        kw["theta_i"] = theta_i
+    try:
+        return get(name).check_validity(roughness, k, **kw)
+    except (ValueError, TypeError) as exc:  # e.g. a solver that cannot take this roughness
+        return {"valid": False, "reasons": [str(exc)], "unsupported": True, "excess": math.inf}
+
+
+def rank_methods(
+    roughness, k: float, *, eps=None, theta_i=None, methods=AUTO_ORDER
+) -> list[tuple[str, dict]]:
+    """``[(name, validity report), ...]`` best first (module docstring) for wavenumber ``k``
+    [rad/m], permittivity ``eps`` and incidence angles ``theta_i`` [rad] (any shape, optional).
+
+    Raises ValueError when no method supports the roughness."""
+    reports = {n: _report(n, roughness, k, eps, theta_i) for n in methods}
     supported = [n for n in methods if not reports[n].get("unsupported")]
     if not supported:
         raise ValueError(
@@ -57,15 +94,70 @@ def select_method(roughness, k: float, methods=AUTO_ORDER) -> tuple[str, dict]:
             + "; ".join(f"{n}: {r['reasons'][0]}" for n, r in reports.items())
         )
     order = {n: i for i, n in enumerate(methods)}
-    best = min(
-        supported,
-        key=lambda n: (
-            reports[n].get("excess", math.inf),
-            len(reports[n].get("reasons", [])),
-            order[n],
-        ),
-    )
-    return best, reports
+
+    def key(n):
+        r = reports[n]
+        if r["valid"]:
+            return (0, 0.0, 0, order[n])
+        return (1, r.get("excess", math.inf), len(r.get("reasons", [])), order[n])
+
+    ranked = sorted(supported, key=key)
+    ranked += [n for n in methods if reports[n].get("unsupported")]
+    return [(n, reports[n]) for n in ranked]
+
+
+def select_method(
+    roughness, k: float, methods=AUTO_ORDER, *, eps=None, theta_i=None
+) -> tuple[str, dict]:
+    """The first of :func:`rank_methods` and every method's report ``{name: report}``."""
+    ranked = rank_methods(roughness, k, eps=eps, theta_i=theta_i, methods=methods)
+    return ranked[0][0], dict(ranked)
+
+
+def validity(roughness, k: float, methods=AUTO_ORDER, *, eps=None, theta_i=None) -> dict:
+    """Validity report of each method for this roughness and wavenumber ``k`` [rad/m]."""
+    return {n: _report(n, roughness, k, eps, theta_i) for n in methods}
+
+
+# ----------------------------------------------------------------------------- options
+#: Knobs that only tune accuracy or execution; a method without them meets them anyway.
+_DROPPABLE = ("threads", "rtol", "max_terms")
+
+
+def solver_options(name: str) -> tuple[str, ...]:
+    """Names of the options the solver ``name`` takes (its module's ``OPTIONS``, else the
+    keyword-only parameters of its ``bistatic``)."""
+    mod = get(name)
+    opts = getattr(mod, "OPTIONS", None)
+    if opts is None:
+        params = inspect.signature(mod.bistatic).parameters.values()
+        opts = tuple(p.name for p in params if p.kind is inspect.Parameter.KEYWORD_ONLY)
+    return tuple(opts)
+
+
+def check_options(name: str, options: dict, *, picked_by_auto: bool) -> dict:
+    """The options to pass to solver ``name`` (module docstring), or a ValueError."""
+    allowed = solver_options(name)
+    out = {}
+    for opt, value in options.items():
+        if opt in allowed:
+            out[opt] = value
+            continue
+        if picked_by_auto and opt in _DROPPABLE:
+            continue
+        if picked_by_auto and opt == "shadowing" and value in (False, None):
+            continue
+        how = f"method='auto' picked {name!r}" if picked_by_auto else f"method {name!r}"
+        hint = (
+            "; pass the method explicitly (method=...) to use it, or drop the option"
+            if picked_by_auto
+            else ""
+        )
+        raise ValueError(
+            f"option {opt}={value!r} does not apply: {how}, which takes "
+            f"{sorted(allowed) or 'no options'}{hint}"
+        )
+    return out
 
 
 def enforce(name: str, report: dict, out_of_range: str, *, stacklevel: int = 3) -> bool:
