@@ -7,22 +7,18 @@ correlations (the power-law table stays on the numpy path). The numpy code is th
 the same formulas and the same stopping rule (log-space summands; per-component geometric
 tail where a component decreases, its whole-series bound otherwise; stop below ``rtol`` of the
 sum or below the smallest double), checked against it in ``tests/test_iem_kernels.py``.
-Walks are order by order (the test after every order is cheap here), from the peak of the
-dominant component found on a log grid of n.
+Walks go order by order (the tail test every fourth order), from the peak of the dominant
+component (golden-section search on log n, skipped when the terms already fall from n = 2).
 
-Kernels compile on first use (a few seconds) and are cached on disk in
-``EMSCATTER_NUMBA_CACHE_DIR`` (default ``~/.cache/emscatter/numba``) unless ``NUMBA_CACHE_DIR``
-is set; nothing here is imported by ``import emscatter``.
+Kernels compile on first use (tens of seconds on a loaded 2-core machine) and are cached on
+disk by the package runtime (:mod:`emscatter.kernels._runtime`: ``EMSCATTER_NUMBA_CACHE_DIR``,
+default ``~/.cache/emscatter/numba``); nothing here is imported by ``import emscatter``.
 """
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import importlib.util
 import math
-import os
-from pathlib import Path
 
 import numpy as np
 
@@ -32,17 +28,11 @@ GAUSSIAN, EXPONENTIAL = 0, 1
 
 
 def enabled() -> bool:
-    """Whether the compiled kernels are to be used now (``EMSCATTER_KERNELS``)."""
-    choice = os.environ.get("EMSCATTER_KERNELS", "auto").strip().lower() or "auto"
-    if choice not in ("auto", "numba", "numpy"):
-        raise ValueError(f"EMSCATTER_KERNELS must be one of auto, numba, numpy, got {choice!r}")
-    if choice == "numpy":
-        return False
-    if importlib.util.find_spec("numba") is not None:
-        return True
-    if choice == "numba":
-        raise ImportError("EMSCATTER_KERNELS=numba but numba is not installed")
-    return False
+    """Whether the compiled kernels are to be used now (``EMSCATTER_KERNELS``, read at each
+    call: :func:`emscatter.kernels.backend`)."""
+    from ..kernels import backend
+
+    return backend() == "numba"
 
 
 def spectrum_code(rough) -> int | None:
@@ -54,31 +44,6 @@ def spectrum_code(rough) -> int | None:
     if isinstance(rough, ExponentialCorrelation):
         return EXPONENTIAL
     return None
-
-
-def _cache_dir() -> Path:
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        return Path(os.environ["NUMBA_CACHE_DIR"])
-    if os.environ.get("EMSCATTER_NUMBA_CACHE_DIR"):
-        return Path(os.environ["EMSCATTER_NUMBA_CACHE_DIR"])
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "emscatter" / "numba"
-
-
-@contextlib.contextmanager
-def _cache_location(numba):
-    old = numba.config.CACHE_DIR
-    path = _cache_dir()
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        ok = os.access(path, os.W_OK)
-    except OSError:
-        ok = False
-    if ok:
-        numba.config.CACHE_DIR = str(path)
-    try:
-        yield ok
-    finally:
-        numba.config.CACHE_DIR = old
 
 
 @functools.cache

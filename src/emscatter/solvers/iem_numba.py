@@ -1,27 +1,19 @@
 """The numba kernels behind :mod:`.iem_jit` (module-level, so numba's on-disk cache reuses
-them across processes). Importing this module imports numba and sets its cache directory
-while the kernels are decorated; only :mod:`.iem_jit` imports it, on first use."""
+them across processes), decorated with the package's runtime (:mod:`emscatter.kernels._runtime`:
+cache directory, numba options). Only :mod:`.iem_jit` imports this module, on first use."""
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ..kernels._runtime import inline, jit
 from . import iem_kernels as kern
-from .iem_jit import _cache_location
 
-# decorate with numba's cache directory pointed at ours (restored at the end of the module)
-_ctx = _cache_location(numba)
-cacheable = _ctx.__enter__()
-
-opts = {"nogil": True, "cache": cacheable, "error_model": "numpy"}
-inline = numba.njit(inline="always", error_model="numpy")
-_plain = numba.njit(error_model="numpy", cache=cacheable)
-reduced_i = _plain(kern._reduced_i)
-reduced_s = _plain(kern._reduced_s)
-combine = _plain(kern._combine)
+reduced_i = jit(kern._reduced_i)
+reduced_s = jit(kern._reduced_s)
+combine = jit(kern._combine)
 l4pi, l2pi, lpi = math.log(4 * math.pi), math.log(2 * math.pi), math.log(math.pi)
 LOG_FACT = np.array([math.lgamma(n + 1.0) for n in range(2048)])  # log n!, looked up
 
@@ -112,7 +104,7 @@ def peak_order(pref, log_ks2, K, spec, dim, la_j, lx_j, qs):
     return max(2.0, float(round(math.exp(0.5 * (a + b)))))
 
 
-@numba.njit(error_model="numpy", cache=cacheable)
+@jit
 def row_series(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_terms,
                ok, lmass, prev, cur):  # fmt: skip
     """(log σ⁰, log envelope sum, status) of one geometry (see iem_series); ``ok, lmass,
@@ -232,7 +224,7 @@ def row_series(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_ter
     return ref + math.log(acc) if acc > 0 else -np.inf, ref + math.log(acc_e), 0
 
 
-@numba.njit(**opts)
+@jit
 def series_kernel(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_terms,
                   out_s, out_e):  # fmt: skip
     status = 0
@@ -246,7 +238,7 @@ def series_kernel(la, lx, ph, sx, d, pref, K, log_ks2, spec, dim, log_rtol, max_
     return status
 
 
-@numba.njit(error_model="numpy", cache=cacheable)
+@jit
 def poisson_sum(logq, K, spec, dim, log_rtol):
     """log Σ_{n≥1} qⁿ/n! Ŵₙ(K) (log-concave past its peak)."""
     ref, acc, prev = -np.inf, 0.0, -np.inf
@@ -269,7 +261,7 @@ def poisson_sum(logq, K, spec, dim, log_rtol):
             return S
 
 
-@numba.njit(error_model="numpy", cache=cacheable)
+@jit
 def transition_sums(logq, K, spec, dim, log_rtol):
     """log S(βQ) for β = 1, 2, 4 in one pass (the β = 4 series is the longest)."""
     r1 = r2 = r4 = -np.inf
@@ -307,7 +299,7 @@ def transition_sums(logq, K, spec, dim, log_rtol):
     return r1 + math.log(a1), r2 + math.log(a2), r4 + math.log(a4)
 
 
-@numba.njit(**opts)
+@jit
 def poisson_kernel(logq, K, spec, dim, log_rtol, out):
     for r in range(logq.shape[0]):
         out[r] = poisson_sum(logq[r], K[r], spec, dim, log_rtol) if logq[r] > -np.inf \
@@ -325,7 +317,7 @@ def root(z):
     return -r if r.imag < 0 else r
 
 
-@numba.njit(**opts)
+@jit
 def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 max_terms, out_hh, out_vv, out_e):  # fmt: skip
     ks2 = ks * ks
@@ -430,6 +422,3 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 out_vv[r] = sres
             out_e[r] = max(out_e[r], eres - sres)
     return status
-
-
-_ctx.__exit__(None, None, None)
