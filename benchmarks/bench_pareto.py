@@ -125,9 +125,8 @@ def brdf_resolution(repeat):
         from emscatter.brdf import build_table  # noqa: F401 — branch brdf
     except ImportError:
         return None
-    from emscatter.brdf import build_table
-
     import emscatter as em
+    from emscatter.brdf import build_table
 
     rough = em.GaussianCorrelation(0.3, 1.0)  # GO-like lobe at λ = 1 m: rms slope 0.42
     rng = np.random.default_rng(0)
