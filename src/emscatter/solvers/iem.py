@@ -113,7 +113,7 @@ import math
 
 import numpy as np
 
-from ..conventions import check_positive
+from ..conventions import check_angle, check_positive
 from ..fresnel import PEC, fresnel_cos, is_pec
 from ..scattering import Scattering
 from ..spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
@@ -126,11 +126,20 @@ from .kirchhoff_common import (
     coherent_local,
     geometry,
     smith_lambda,
-    validity_report,
 )
 from .kirchhoff_po import log_nfold
+from .validity import angle_upper, build_report, check_solver_options, upper
 
-__all__ = ["bistatic", "check_validity", "VALIDITY", "nominal_rms_slope"]
+__all__ = ["bistatic", "check_validity", "VALIDITY", "OPTIONS", "nominal_rms_slope"]
+
+#: Options :func:`bistatic` takes (for :func:`check_validity` and ``select.check_options``).
+OPTIONS = (
+    "coherent", "rtol", "max_terms", "fresnel", "complementary", "first_order", "reciprocal",
+    "shadowing", "rms_slope", "crosspol", "crosspol_order",
+)  # fmt: skip
+_SRC_KS = "Fung, Li & Chen 1992; Wu & Chen 2004 (AIEM vs 3-D MoM up to kσ ≈ 3)"
+_SRC_SLOPE = "single scattering; Ulaby & Long 2014 I2EM codes (σ/ℓ ≤ 0.25)"
+_SRC_ANGLE = "validation/iem/energy_scan.csv (emissivity in [0, 1])"
 
 #: Validity limits (see :func:`check_validity`).
 VALIDITY = {
@@ -679,10 +688,12 @@ def _conductor(eps) -> bool:
     return bool(np.any((e.real < 0) | (np.abs(e) >= 100.0)))
 
 
-def check_validity(roughness, k: float, *, eps=None, theta_i=None) -> dict:
-    """Validity report (BOARD interface 1): ``valid``, ``reasons`` (check, value, limit),
-    ``checks``, ``excess`` (max log(value/limit)); with ``theta_i`` [rad] also ``angle_valid``
-    (theta_i's shape) and ``angle_reasons``.
+def check_validity(roughness, k: float, *, eps=None, theta_i=None, **solver_options) -> dict:
+    """Validity report (BOARD interface 1, built by :mod:`.validity`): ``valid``, ``reasons``
+    (check, value, limit, factor), ``checks``, ``details``, ``excess`` (max log(value/limit));
+    with ``theta_i`` [rad] also ``angle_valid``, ``angle_excess`` (theta_i's shape) and
+    ``angle_reasons``. ``solver_options``: the names :func:`bistatic` takes (:data:`OPTIONS`;
+    the limits do not depend on them), anything else is an error naming the method.
 
     Limits (:data:`VALIDITY`), from the literature and this module's own checks:
 
@@ -696,29 +707,21 @@ def check_validity(roughness, k: float, *, eps=None, theta_i=None) -> dict:
       two limits above, the emissivity of ε = 3 and 15 + 2i stays in [0, 1] up to 70°, while a
       perfect conductor reflects more than it receives (e < −0.02, v) from 50–60° on.
     """
+    check_solver_options("iem", solver_options, OPTIONS)
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
     v = VALIDITY
-    ks = k * rough.sigma
     slope = max(nominal_rms_slope(rough))
     checks = [
-        ("k_sigma", ks <= v["k_sigma_max"], f"kσ = {ks:.3g} > {v['k_sigma_max']}",
-         ks / v["k_sigma_max"]),
-        ("rms_slope", slope <= v["rms_slope_max"],
-         f"nominal rms slope = {slope:.3g} > {v['rms_slope_max']}", slope / v["rms_slope_max"]),
-    ]  # fmt: skip
-    rep = validity_report(rough, k, checks)
+        upper("k_sigma", k * rough.sigma, v["k_sigma_max"], "kσ", _SRC_KS),
+        upper("rms_slope", slope, v["rms_slope_max"], "nominal rms slope", _SRC_SLOPE),
+    ]
+    angle_checks, ti = [], None
     if theta_i is not None:
-        th = np.asarray(theta_i, dtype=float)
+        ti = check_angle("theta_i", theta_i)
         cond = _conductor(eps)
-        lim_deg = v["theta_i_max_conductor_deg"] if cond else v["theta_i_max_deg"]
-        ok = th <= math.radians(lim_deg)
-        rep["angle_valid"] = ok & rep["valid"]
-        what = "conductor: energy" if cond else "energy, shadowing"
-        rep["angle_reasons"] = (
-            [] if np.all(ok) else [f"θi = {math.degrees(float(np.max(th))):.3g}° > "
-                                   f"{lim_deg:g}° ({what})"]
-        )  # fmt: skip
-        if not np.all(ok):
-            rep["valid"] = False
-    return rep
+        lim = v["theta_i_max_conductor_deg"] if cond else v["theta_i_max_deg"]
+        what = "θi [deg] (conductor: energy)" if cond else "θi [deg] (energy, shadowing)"
+        angle_checks.append(angle_upper("theta_i", np.degrees(ti), lim, what, _SRC_ANGLE))
+    return build_report(rough, k, checks, theta_i=ti, angle_checks=angle_checks,
+                        rms_slope=slope)  # fmt: skip
