@@ -18,14 +18,21 @@ checks the energy balance at every angle (:func:`emscatter.emissivity.energy_bal
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 
 import numpy as np
 
 from . import cache, solvers
-from .conventions import broadcast_angles, check_angle, check_finite, wavenumber
-from .dispatch import angle_policy, angles_deg, rank_methods, validity_report
+from .conventions import (
+    broadcast_angles,
+    check_angle,
+    check_broadcast,
+    check_finite,
+    wavenumber,
+)
+from .dispatch import angle_policy, angle_report, angles_deg, rank_methods, validity_report
 from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
 from .frequency import Group, as_eps_or_material, eps_at, frequency_groups
 from .fresnel import is_pec
@@ -50,12 +57,21 @@ def _check_method(method) -> str:
 
 
 def _map_options(name: str, options: dict, auto: bool) -> dict:
+    if not options:  # nothing to map (check_options would return {} too)
+        return {}
     mapper = getattr(select, "check_options", None)
     return dict(mapper(name, options, picked_by_auto=auto)) if mapper else options
 
 
 def resolve_method(
-    roughness: Roughness, k: float, method: str, out_of_range: str, eps=None, *, theta_i=None
+    roughness: Roughness,
+    k: float,
+    method: str,
+    out_of_range: str,
+    eps=None,
+    *,
+    theta_i=None,
+    stacklevel: int = 5,
 ):
     """``(name, module, report, make_nan)`` for a method name or ``"auto"``.
 
@@ -67,17 +83,10 @@ def resolve_method(
     if name == "auto":
         name = rank_methods(roughness, k, eps=eps)[0][0]
     report = validity_report(name, roughness, k, eps=eps)
-    make_nan = select.enforce(name, report, out_of_range, stacklevel=5)
+    make_nan = select.enforce(name, report, out_of_range, stacklevel=stacklevel)
     report["roughness_valid"] = bool(report.get("valid", False))
     if theta_i is not None:  # checked at the distinct angles, mapped back to theta_i's shape
-        ti = np.asarray(theta_i, dtype=float)
-        uniq, inverse = np.unique(ti, return_inverse=True)
-        angular = validity_report(name, roughness, k, eps=eps, theta_i=uniq)
-        for key in ("angle_valid", "angle_excess"):
-            if key in angular:
-                report[key] = np.asarray(angular[key])[inverse.reshape(ti.shape)]
-        if "angle_reasons" in angular:
-            report["angle_reasons"] = angular["angle_reasons"]
+        report.update(angle_report(name, roughness, k, eps=eps, theta_i=theta_i))
         if "angle_valid" in report:
             report["valid"] = report["roughness_valid"] and bool(np.all(report["angle_valid"]))
     return name, solvers.get(name), report, make_nan
@@ -92,7 +101,23 @@ def _angle_mask(report: dict, shape) -> np.ndarray:
 
 
 def _takes(func, name: str) -> bool:
-    return name in inspect.signature(func).parameters
+    """Whether ``func`` has a parameter ``name`` (signatures read once per function)."""
+    try:
+        return _params(func).__contains__(name)
+    except TypeError:  # an unhashable callable: read its signature each time
+        return name in inspect.signature(func).parameters
+
+
+@functools.lru_cache(maxsize=256)
+def _params(func) -> frozenset:
+    return frozenset(inspect.signature(func).parameters)
+
+
+def _solver_entry(module):
+    """The solver's entry for inputs this module has checked: ``bistatic.checked`` when the
+    solver provides one (same arguments; it skips the re-checks and its own validity report,
+    which the API replaces), else ``bistatic`` itself (also when a caller replaced it)."""
+    return getattr(module.bistatic, "checked", module.bistatic)
 
 
 # ----------------------------------------------------------------------------- bistatic
@@ -101,10 +126,12 @@ def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scatt
     ti, ts, ps, pi_ = angles
     name = rank_methods(rough, k, eps=eps)[0][0] if method == "auto" else method
     opts = _map_options(name, options, method == "auto")  # before any warning
-    name, module, report, make_nan = resolve_method(rough, k, name, out_of_range, eps, theta_i=ti)
+    name, module, report, make_nan = resolve_method(
+        rough, k, name, out_of_range, eps, theta_i=ti, stacklevel=6
+    )  # warnings point at the caller of bistatic/backscatter
     lazy = _takes(module.bistatic, "coherent")  # BOARD interface 3
     extra = {"coherent": False} if lazy else {}
-    result = module.bistatic(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
+    result = _solver_entry(module)(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
     shape = result.sigma0.shape[2:]
     info = {**result.info, "validity": report}
     info.pop("coherent", None)
@@ -124,7 +151,8 @@ def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scatt
     else:
         coherent = result.coherent
     bad = ~_angle_mask(report, shape)
-    blank = angle_policy(name, bad, result.theta_i, out_of_range, report.get("angle_reasons", []))
+    reasons = report.get("angle_reasons", [])
+    blank = angle_policy(name, bad, result.theta_i, out_of_range, reasons, stacklevel=5)
     if make_nan or blank.any():
         mask = np.ones(shape, dtype=bool) if make_nan else blank
         sigma0 = np.where(mask, np.nan, sigma0)
@@ -256,10 +284,15 @@ def bistatic(
     ts = check_angle("theta_s", theta_s)
     ps = check_finite("phi_s", phi_s).astype(float)
     pi_ = check_finite("phi_i", phi_i).astype(float)
-    angles = (ti, ts, ps, pi_)
+    return _bistatic_checked(rough, eps, k, (ti, ts, ps, pi_), method, out_of_range, options)
+
+
+def _bistatic_checked(rough, eps, k, angles, method, out_of_range, options) -> Scattering:
+    """:func:`bistatic` after its checks (``angles`` = checked θi, θs, φs, φi arrays)."""
+    ti, ts, ps, pi_ = angles
     spec = frequency_groups(k, eps, theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
     if spec is None:  # one frequency: the solver sees the caller's shapes
-        broadcast_angles(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
+        check_broadcast(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
         return _bistatic_one(rough, eps_at(eps, k), k, angles, method, out_of_range, options)
     shape, k_b, groups = spec
     return _bistatic_groups(rough, groups, shape, k_b, angles, method, out_of_range, options)
@@ -281,19 +314,14 @@ def backscatter(
     :func:`bistatic`."""
     ti = check_angle("theta_i", theta_i)
     pi_ = check_finite("phi_i", phi_i).astype(float)
-    return bistatic(
-        surface,
-        eps,
-        frequency=frequency,
-        wavelength=wavelength,
-        theta_i=ti,
-        theta_s=ti,
-        phi_s=pi_ + math.pi,
-        phi_i=pi_,
-        method=method,
-        out_of_range=out_of_range,
-        **options,
-    )
+    # bistatic's checks, each once (θs = θi and φs = φi + π need none of their own)
+    rough = _check_roughness(surface)
+    eps = as_eps_or_material(eps)
+    k = wavenumber(frequency, wavelength)
+    select.check_out_of_range(out_of_range)
+    method = _check_method(method)
+    ps = np.asarray(pi_ + math.pi, dtype=float)
+    return _bistatic_checked(rough, eps, k, (ti, ti, ps, pi_), method, out_of_range, options)
 
 
 # ----------------------------------------------------------------------------- emissivity

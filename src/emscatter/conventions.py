@@ -80,17 +80,22 @@ def _deg(rad: float) -> str:
     return f"{math.degrees(rad):.4g}°"
 
 
+#: dtype kinds that :func:`check_finite` accepts: numbers (timedelta is a signed integer to
+#: numpy) and booleans — ``np.issubdtype(dtype, np.number) or np.issubdtype(dtype, np.bool_)``
+_NUMERIC_KINDS = frozenset("biufcm")
+
+
 def check_finite(name: str, value, *, allow_nan: bool = False) -> np.ndarray:
     """Return ``value`` as an array, raising if it holds NaN or inf."""
     try:
         arr = np.asarray(value)
     except Exception as exc:  # pragma: no cover - numpy raises for exotic objects only
         raise TypeError(f"{name} must be a number or array of numbers, got {value!r}") from exc
-    if arr.dtype == object or not (
-        np.issubdtype(arr.dtype, np.number) or np.issubdtype(arr.dtype, np.bool_)
-    ):
+    kind = arr.dtype.kind
+    if kind not in _NUMERIC_KINDS:
         raise TypeError(f"{name} must be a number or array of numbers, got {_describe(value)}")
-    if not allow_nan and not np.all(np.isfinite(arr)):
+    # integers and booleans are always finite (no element-wise test needed)
+    if not allow_nan and kind in "fcm" and not np.isfinite(arr).all():
         bad = arr[~np.isfinite(arr)].ravel()[0]
         where = "" if arr.ndim == 0 else f" in {_describe(value)}"
         raise ValueError(f"{name} must be finite, got {fmt(bad)}{where}")
@@ -131,10 +136,24 @@ def check_in_range(
     return v
 
 
+_FLOATS = (float, np.float64)
+
+
 def check_angle(name: str, value, *, low: float = 0.0, high: float = math.pi / 2) -> np.ndarray:
     """Angles in radians, finite, within ``[low, high]`` (default ``[0, π/2]``).
 
     Messages give the allowed range and the offending value in radians and in degrees."""
+    if type(value) in _FLOATS:  # the common scalar: one comparison (NaN and inf fail it)
+        if low <= value <= high:
+            return np.array(value, dtype=float)
+    elif type(value) is np.ndarray and value.dtype.char == "d" and value.size:
+        # real floats: min and max in range ⇒ finite and in range (NaN fails the comparison)
+        if low <= value.min() and value.max() <= high:
+            return value.astype(float)
+    return _check_angle_slow(name, value, low, high)
+
+
+def _check_angle_slow(name: str, value, low: float, high: float) -> np.ndarray:
     arr = check_finite(name, value)
     if np.iscomplexobj(arr):
         raise TypeError(f"{name} must be real (radians), got complex {_describe(value)}")
@@ -156,6 +175,10 @@ def check_permittivity(value, name: str = "eps") -> np.ndarray:
     ``value`` may be real or complex, scalar or array, or the string ``"pec"``
     (handled by the callers that accept a perfect conductor). Booleans are refused.
     """
+    if type(value) is complex:  # the common scalar: checked without arrays
+        re, im = value.real, value.imag
+        if math.isfinite(re) and math.isfinite(im) and im >= 0 and value != 0:
+            return np.array(value)
     if isinstance(value, bool | np.bool_) or np.asarray(value).dtype == bool:
         raise TypeError(
             f"{name} must be a complex permittivity (a number, e.g. 17+2j) or 'pec', got {value!r}"
@@ -258,6 +281,16 @@ def broadcast_angles(**angles) -> list[np.ndarray]:
     """Broadcast angle arrays together, naming them if their shapes do not fit."""
     try:
         return list(np.broadcast_arrays(*angles.values()))
+    except ValueError:
+        shapes = ", ".join(f"{k}{np.shape(v)}" for k, v in angles.items())
+        raise ValueError(f"angle arrays do not broadcast together: {shapes}") from None
+
+
+def check_broadcast(**angles) -> tuple[int, ...]:
+    """The broadcast shape of the named arrays (as :func:`broadcast_angles`, same message
+    when their shapes do not fit, without building the broadcast views)."""
+    try:
+        return np.broadcast_shapes(*(np.shape(v) for v in angles.values()))
     except ValueError:
         shapes = ", ".join(f"{k}{np.shape(v)}" for k, v in angles.items())
         raise ValueError(f"angle arrays do not broadcast together: {shapes}") from None

@@ -117,7 +117,18 @@ class Local:
 
 
 def _flat(a: np.ndarray, shape) -> np.ndarray:
-    return a if a.ndim == 0 else np.broadcast_to(a, shape).reshape(-1)
+    if a.ndim == 0:
+        return a
+    return a.reshape(-1) if a.shape == shape else np.broadcast_to(a, shape).reshape(-1)
+
+
+def _broadcast(a: np.ndarray, shape) -> np.ndarray:
+    """``np.broadcast_to(a, shape)`` (a read-only view); cheaper when ``a`` has the shape."""
+    if a.shape != shape:
+        return np.broadcast_to(a, shape)
+    view = a.view()
+    view.flags.writeable = False
+    return view
 
 
 def _trig(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -160,12 +171,12 @@ def geometry(theta_i, theta_s, phi_s, phi_i, eps, dimension: int) -> Geometry:
             )
     g = Geometry()
     g.shape = shape
-    g.size = int(np.prod(shape, dtype=np.int64))
-    g.theta_i, g.theta_s, g.phi_s, g.phi_i = (np.broadcast_to(a, shape) for a in (ti, ts, ps, pi_))
+    g.size = math.prod(shape)
+    g.theta_i, g.theta_s, g.phi_s, g.phi_i = (_broadcast(a, shape) for a in (ti, ts, ps, pi_))
     if is_pec(eps):
         g.eps = g.eps_flat = PEC
     else:
-        g.eps = np.broadcast_to(eps, shape)
+        g.eps = _broadcast(eps, shape)
         g.eps_flat = _flat(eps, shape)
     g.ti_flat, g.ts_flat = _flat(ti, shape), _flat(ts, shape)
     g.dphi = _flat(ps - pi_, shape)

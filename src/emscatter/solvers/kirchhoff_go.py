@@ -221,6 +221,18 @@ def bistatic(
     :class:`~emscatter.scattering.Scattering` with ``sigma0`` (2, 2, *shape) and the Kirchhoff
     coherent reflectivity ``|R_p(θi)|² exp(−(2kσ cosθi)²)``.
     """
+    return _bistatic(
+        roughness, eps, k, theta_i, theta_s, phi_s, phi_i, shadowing=shadowing, k_max=k_max,
+        slope_variance=slope_variance, threads=threads, coherent=coherent, validity=True,
+    )  # fmt: skip
+
+
+def _bistatic(
+    roughness, eps, k, theta_i, theta_s, phi_s, phi_i=0.0, *, shadowing=True, k_max=None,
+    slope_variance=None, threads=None, coherent=True, validity=False,
+) -> Scattering:  # fmt: skip
+    """:func:`bistatic`; ``info["validity"]`` is None unless ``validity`` (``bistatic.checked``,
+    the public API's entry, which supplies its own report)."""
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
     mode = check_shadowing(shadowing)
@@ -262,7 +274,9 @@ def bistatic(
         "total_mean_square_slope": sx + sy,
         "slope_cutoff": slope_cutoff(rough, k, k_max, slope_variance),
         "shadowing": mode,
-        "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx),
+        "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx)
+        if validity
+        else None,
     }
     if not want_coh:
         info["coherent"] = "not computed (coherent=False)"
@@ -278,3 +292,6 @@ def bistatic(
         dimension=dim,
         info=info,
     )
+
+
+bistatic.checked = _bistatic  # the API's entry for inputs it has checked
