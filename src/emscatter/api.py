@@ -27,12 +27,19 @@ import numpy as np
 from . import cache, solvers
 from .conventions import (
     broadcast_angles,
+    broadcast_view,
     check_angle,
     check_broadcast,
     check_finite,
     wavenumber,
 )
-from .dispatch import angle_policy, angle_report, angles_deg, rank_methods, validity_report
+from .dispatch import (
+    angle_policy,
+    angles_deg,
+    call_report,
+    rank_methods,
+    validity_report,
+)
 from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
 from .frequency import Group, as_eps_or_material, eps_at, frequency_groups
 from .fresnel import is_pec
@@ -82,13 +89,10 @@ def resolve_method(
     name = _check_method(method)
     if name == "auto":
         name = rank_methods(roughness, k, eps=eps)[0][0]
-    report = validity_report(name, roughness, k, eps=eps)
-    make_nan = select.enforce(name, report, out_of_range, stacklevel=stacklevel)
-    report["roughness_valid"] = bool(report.get("valid", False))
-    if theta_i is not None:  # checked at the distinct angles, mapped back to theta_i's shape
-        report.update(angle_report(name, roughness, k, eps=eps, theta_i=theta_i))
-        if "angle_valid" in report:
-            report["valid"] = report["roughness_valid"] and bool(np.all(report["angle_valid"]))
+    report = call_report(name, roughness, k, eps=eps, theta_i=theta_i)
+    # the roughness-level policy sees the roughness-level verdict (angles: angle_policy)
+    whole = {"valid": report["roughness_valid"], "reasons": report.get("reasons", [])}
+    make_nan = select.enforce(name, whole, out_of_range, stacklevel=stacklevel)
     return name, solvers.get(name), report, make_nan
 
 
@@ -97,7 +101,8 @@ def _angle_mask(report: dict, shape) -> np.ndarray:
     valid = report.get("angle_valid")
     if valid is None:
         return np.ones(shape, dtype=bool)
-    return np.broadcast_to(np.asarray(valid, dtype=bool), shape)
+    valid = np.asarray(valid, dtype=bool)
+    return valid if valid.shape == shape else broadcast_view(valid, shape)
 
 
 def _takes(func, name: str) -> bool:
@@ -121,8 +126,11 @@ def _solver_entry(module):
 
 
 # ----------------------------------------------------------------------------- bistatic
-def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scattering:
-    """One frequency: resolve the method, run the solver, apply the validity policies."""
+def _bistatic_one(
+    rough, eps, k, angles, method, out_of_range, options, monostatic=False
+) -> Scattering:
+    """One frequency: resolve the method, run the solver, apply the validity policies
+    (``monostatic``: the angles are the backscatter ones, told to a solver entry that asks)."""
     ti, ts, ps, pi_ = angles
     name = rank_methods(rough, k, eps=eps)[0][0] if method == "auto" else method
     opts = _map_options(name, options, method == "auto")  # before any warning
@@ -131,7 +139,10 @@ def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scatt
     )  # warnings point at the caller of bistatic/backscatter
     lazy = _takes(module.bistatic, "coherent")  # BOARD interface 3
     extra = {"coherent": False} if lazy else {}
-    result = _solver_entry(module)(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
+    entry = _solver_entry(module)
+    if monostatic and _takes(entry, "monostatic"):
+        extra["monostatic"] = True
+    result = entry(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
     shape = result.sigma0.shape[2:]
     info = {**result.info, "validity": report}
     info.pop("coherent", None)
@@ -150,10 +161,14 @@ def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scatt
 
     else:
         coherent = result.coherent
-    bad = ~_angle_mask(report, shape)
-    reasons = report.get("angle_reasons", [])
-    blank = angle_policy(name, bad, result.theta_i, out_of_range, reasons, stacklevel=5)
-    if make_nan or blank.any():
+    blank = None  # the angles to blank (the per-angle policy), when any
+    valid = report.get("angle_valid")
+    if valid is not None and out_of_range != "ignore" and not np.all(valid):
+        bad = ~_angle_mask(report, shape)
+        reasons = report.get("angle_reasons", [])
+        blank = angle_policy(name, bad, result.theta_i, out_of_range, reasons, stacklevel=5)
+        blank = blank if blank.any() else None
+    if make_nan or blank is not None:
         mask = np.ones(shape, dtype=bool) if make_nan else blank
         sigma0 = np.where(mask, np.nan, sigma0)
         coh_in = coherent
@@ -287,13 +302,18 @@ def bistatic(
     return _bistatic_checked(rough, eps, k, (ti, ts, ps, pi_), method, out_of_range, options)
 
 
-def _bistatic_checked(rough, eps, k, angles, method, out_of_range, options) -> Scattering:
-    """:func:`bistatic` after its checks (``angles`` = checked θi, θs, φs, φi arrays)."""
+def _bistatic_checked(
+    rough, eps, k, angles, method, out_of_range, options, monostatic=False
+) -> Scattering:
+    """:func:`bistatic` after its checks (``angles`` = checked θi, θs, φs, φi arrays;
+    ``monostatic``: they are :func:`backscatter`'s, θs is θi and φs = φi + π)."""
     ti, ts, ps, pi_ = angles
-    spec = frequency_groups(k, eps, theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
+    one_k = type(k) is float  # (frequency_groups' None, without building its arguments)
+    spec = None if one_k else frequency_groups(k, eps, theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
     if spec is None:  # one frequency: the solver sees the caller's shapes
         check_broadcast(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
-        return _bistatic_one(rough, eps_at(eps, k), k, angles, method, out_of_range, options)
+        e = eps_at(eps, k)
+        return _bistatic_one(rough, e, k, angles, method, out_of_range, options, monostatic)
     shape, k_b, groups = spec
     return _bistatic_groups(rough, groups, shape, k_b, angles, method, out_of_range, options)
 
@@ -321,7 +341,8 @@ def backscatter(
     select.check_out_of_range(out_of_range)
     method = _check_method(method)
     ps = np.asarray(pi_ + math.pi, dtype=float)
-    return _bistatic_checked(rough, eps, k, (ti, ti, ps, pi_), method, out_of_range, options)
+    angles = (ti, ti, ps, pi_)
+    return _bistatic_checked(rough, eps, k, angles, method, out_of_range, options, True)
 
 
 # ----------------------------------------------------------------------------- emissivity

@@ -28,7 +28,10 @@ from .conventions import fmt
 from .fresnel import is_pec
 from .solvers import select
 
-__all__ = ["validity_report", "angle_report", "rank_methods", "angle_policy", "angles_deg"]
+__all__ = [
+    "validity_report", "angle_report", "call_report", "rank_methods", "angle_policy",
+    "angles_deg",
+]  # fmt: skip
 
 _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 512
@@ -72,10 +75,12 @@ def _remember(key, value) -> None:
 
 
 def _recall(key):
-    if key is None or key not in _CACHE:
+    if key is None:
         return None
-    _CACHE.move_to_end(key)
-    return _CACHE[key]
+    value = _CACHE.get(key)
+    if value is not None:
+        _CACHE.move_to_end(key)
+    return value
 
 
 def validity_report(name: str, roughness, k: float, *, eps=None, theta_i=None, **options):
@@ -118,6 +123,29 @@ def angle_report(name: str, roughness, k: float, *, eps=None, theta_i) -> dict:
         out["angle_reasons"] = angular["angle_reasons"]
     _remember(key, out)
     return {n: v.copy() if isinstance(v, np.ndarray) else v for n, v in out.items()}
+
+
+def call_report(name: str, roughness, k: float, *, eps=None, theta_i=None) -> dict:
+    """:func:`validity_report` with ``"roughness_valid"`` (its own ``valid``) and, when
+    ``theta_i`` [rad] is given, :func:`angle_report`'s entries merged in (``valid`` then also
+    requires every angle); cached on the inputs as one entry. A fresh dict each call; its
+    arrays are read-only (shared between calls)."""
+    ti = None if theta_i is None else np.asarray(theta_i, dtype=float)
+    parts = ("call", name, roughness, float(k), _key_of(eps), _key_of(ti))
+    key = None if _UNCACHEABLE in parts else parts
+    hit = _recall(key)
+    if hit is None:
+        hit = validity_report(name, roughness, k, eps=eps)
+        hit["roughness_valid"] = bool(hit.get("valid", False))
+        if ti is not None:  # checked at the distinct angles, mapped back to theta_i's shape
+            hit.update(angle_report(name, roughness, k, eps=eps, theta_i=ti))
+            if "angle_valid" in hit:
+                hit["valid"] = hit["roughness_valid"] and bool(np.all(hit["angle_valid"]))
+        for v in hit.values():
+            if isinstance(v, np.ndarray):
+                v.flags.writeable = False  # shared by the calls that hit this entry
+        _remember(key, hit)
+    return dict(hit)
 
 
 def clear_cache() -> None:

@@ -41,7 +41,7 @@ import math
 
 import numpy as np
 
-from ._runtime import inline, jit, run_fused
+from ._runtime import _MIN_CHUNK, inline, jit, run_chunked, run_fused
 from ._vmath import INV_LN2, LN2_HI, LN2_LO, vcos, vexp, vsin_q1
 
 NO_SHADOWING, SEPARABLE, CORRELATED, SMITH = 0, 1, 2, 3
@@ -191,6 +191,58 @@ def _fast_fresnel(pec, er, ei, c):
 
 
 @inline
+def _go_point(si, ci, ss, cs, cd, sd2, ni, di, ns, ds, er, ei, pref, inv_s2, shadowing, pec,
+              shadowed):  # fmt: skip
+    """σ⁰ ``(hh, hv, vh, vv)`` [-] of one geometry from its trigonometry (``sd2 = sin²Δφ``)
+    and the Smith parts ``Λ = N/D`` of both directions (unused unless ``shadowed``)."""
+    qx = ss * cd - si
+    qz = cs + ci
+    q2 = max(2.0 * (1.0 + ci * cs - si * ss * cd), 0.0)
+    # slope_pdf_factor (2-D)
+    ok = qz > 0
+    inv = 1.0 / (qz if ok else 1.0)
+    zx = qx * inv
+    zy2 = ss * ss * sd2 * (inv * inv)
+    expo = -0.5 * (zx * zx * inv_s2 + zy2 * inv_s2)
+    r = q2 * inv * inv
+    val = pref * r * r * vexp(expo) if ok else 0.0
+    num = 1.0
+    den = 1.0
+    if shadowed:  # shadowing_factor num/den: folded into the one division below
+        num = di * ds
+        den = (di + ni) * (ds + ns)
+        if shadowing == CORRELATED:
+            den = num + ni * ds + ns * di
+        elif shadowing == SMITH and q2 > 4.0 * (1.0 - 1e-12):
+            num = di * (ds + ns)  # monostatic 1/(1 + Λi)
+    # fresnel_factors (2-D)
+    if pec:
+        rh2, rv2, cross = 1.0, 1.0, -1.0
+    else:
+        rh2, rv2, cross = _fast_fresnel(False, er, ei, min(0.5 * math.sqrt(q2), 1.0))
+    hi = ci * ss * cd + si * cs
+    hs = si * cs * cd + ci * ss
+    vi2 = ss * ss * sd2  # (v̂_i·τ)² = sin²θs sin²Δφ
+    d = hi * hi + vi2
+    if d < _TAU_EPS:  # exact backscatter: t̂ = ĥ_i
+        hi, hs, vi2, sd2, d = 1.0, -1.0, 0.0, 0.0, 1.0
+    inv4 = (val * num) / (den * (d * d))
+    ah = rh2 * inv4
+    av = rv2 * inv4
+    cr = 2.0 * cross * inv4
+    p = hs * hi
+    m = si * ss * sd2  # (v̂_s·τ)(v̂_i·τ)
+    x2 = hs * hs * vi2  # ((ĥ_s·τ)(v̂_i·τ))²
+    y2 = si * si * sd2 * (hi * hi)  # ((v̂_s·τ)(ĥ_i·τ))²
+    pm = cr * p * m  # x·y = p·m
+    hh = max(ah * p * p + av * m * m + pm, 0.0)
+    vv = max(ah * m * m + av * p * p + pm, 0.0)
+    hv = max(ah * x2 + av * y2 - pm, 0.0)
+    vh = max(ah * y2 + av * x2 - pm, 0.0)
+    return hh, hv, vh, vv
+
+
+@inline
 def _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, pec, shadowed):
     """σ⁰ [-] into the four 1-D outputs; ``pec`` and ``shadowed`` are constants of the
     compiled loop (see the ``_go_*`` kernels)."""
@@ -204,53 +256,15 @@ def _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, pec, shadowed)
         cs = math.sqrt((1.0 - ss) * (1.0 + ss))
         cd = vcos(dphi[j])
         sd2 = max((1.0 - cd) * (1.0 + cd), 0.0)  # sin²Δφ: sin Δφ enters squared only
-        qx = ss * cd - si
-        qz = cs + ci
-        q2 = max(2.0 * (1.0 + ci * cs - si * ss * cd), 0.0)
-        # slope_pdf_factor (2-D)
-        ok = qz > 0
-        inv = 1.0 / (qz if ok else 1.0)
-        zx = qx * inv
-        zy2 = ss * ss * sd2 * (inv * inv)
-        expo = -0.5 * (zx * zx * inv_s2 + zy2 * inv_s2)
-        r = q2 * inv * inv
-        val = pref * r * r * vexp(expo) if ok else 0.0
-        num = 1.0
-        den = 1.0
-        if shadowed:  # shadowing_factor num/den: folded into the one division below
+        ni = di = ns = ds = 1.0
+        if shadowed:
             ai, as_ = _shadow_pair(ci, si, cs, ss, kappa)
             ni, di = _lambda_parts(ai)
             ns, ds = _lambda_parts(as_)
-            num = di * ds
-            den = (di + ni) * (ds + ns)
-            if shadowing == CORRELATED:
-                den = num + ni * ds + ns * di
-            elif shadowing == SMITH and q2 > 4.0 * (1.0 - 1e-12):
-                num = di * (ds + ns)  # monostatic 1/(1 + Λi)
-        # fresnel_factors (2-D)
-        if pec:
-            rh2, rv2, cross = 1.0, 1.0, -1.0
-        else:
-            rh2, rv2, cross = _fast_fresnel(False, er, ei, min(0.5 * math.sqrt(q2), 1.0))
-        hi = ci * ss * cd + si * cs
-        hs = si * cs * cd + ci * ss
-        vi2 = ss * ss * sd2  # (v̂_i·τ)² = sin²θs sin²Δφ
-        d = hi * hi + vi2
-        if d < _TAU_EPS:  # exact backscatter: t̂ = ĥ_i
-            hi, hs, vi2, sd2, d = 1.0, -1.0, 0.0, 0.0, 1.0
-        inv4 = (val * num) / (den * (d * d))
-        ah = rh2 * inv4
-        av = rv2 * inv4
-        cr = 2.0 * cross * inv4
-        p = hs * hi
-        m = si * ss * sd2  # (v̂_s·τ)(v̂_i·τ)
-        x2 = hs * hs * vi2  # ((ĥ_s·τ)(v̂_i·τ))²
-        y2 = si * si * sd2 * (hi * hi)  # ((v̂_s·τ)(ĥ_i·τ))²
-        pm = cr * p * m  # x·y = p·m
-        hh[j] = max(ah * p * p + av * m * m + pm, 0.0)
-        vv[j] = max(ah * m * m + av * p * p + pm, 0.0)
-        hv[j] = max(ah * x2 + av * y2 - pm, 0.0)
-        vh[j] = max(ah * y2 + av * x2 - pm, 0.0)
+        hh[j], hv[j], vh[j], vv[j] = _go_point(
+            si, ci, ss, cs, cd, sd2, ni, di, ns, ds, er, ei, pref, inv_s2, shadowing, pec,
+            shadowed,
+        )  # fmt: skip
 
 
 @jit
@@ -278,6 +292,135 @@ _KERNELS = {
     (True, True): _go_pec_shadowed,
     (False, False): _go_dielectric,
     (False, True): _go_dielectric_shadowed,
+}
+
+
+# ----------------------------------------------------------------------------- grids
+@inline
+def _direction_table(theta, s2, tab):
+    """Per distinct direction: ``sinθ``, ``cosθ`` and Smith's ``Λ = N/D`` into the rows of
+    ``tab`` (as the fused loop, ``a = cosθ/(max(sinθ, 1e-100) √(2s²))``)."""
+    kappa = math.sqrt(2.0 * s2)
+    for j in range(theta.size):
+        si = vsin_q1(theta[j])
+        ci = math.sqrt((1.0 - si) * (1.0 + si))
+        tab[0, j] = si
+        tab[1, j] = ci
+        sic = max(si, 1e-100) * kappa
+        tab[2, j], tab[3, j] = _lambda_parts(ci * (1.0 / sic))
+
+
+@jit
+def _grid_tables(ti, ts, dphi, s2, ti_tab, ts_tab, d_tab):
+    """The per-direction tables of :func:`go_sigma0_grid` (``d_tab``: cos Δφ, sin²Δφ)."""
+    _direction_table(ti, s2, ti_tab)
+    _direction_table(ts, s2, ts_tab)
+    for j in range(dphi.size):
+        cd = vcos(dphi[j])
+        d_tab[0, j] = cd
+        d_tab[1, j] = max((1.0 - cd) * (1.0 + cd), 0.0)
+
+
+_BLOCK = 256  # geometries gathered per block (the scratch rows stay in L1)
+
+
+@inline
+def _go_grid_loop(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, hh, hv, vh, vv,
+                  pec, shadowed):  # fmt: skip
+    """The fused loop over a broadcast grid (up to 3-D, C order) in blocks: each block first
+    gathers its geometries' rows of the per-direction tables into contiguous scratch rows
+    (position ``(a, b, c)`` counted up, table index from the element strides ``st`` (3, 3)
+    of the unbroadcast θi, θs, Δφ, 0 along broadcast axes), then runs the point formula over them (a
+    loop that vectorizes); ``hh``… hold the flat geometries ``j0, j0 + 1, …``."""
+    pref = 0.5 / math.sqrt(s2 * s2)
+    inv_s2 = 1.0 / s2
+    n1 = shape[1]
+    n2 = shape[2]
+    a = j0 // (n1 * n2)
+    rest = j0 - a * (n1 * n2)
+    b = rest // n2
+    c = rest - b * n2
+    buf = np.empty((10, _BLOCK))
+    g_si, g_ci, g_ni, g_di = buf[0], buf[1], buf[2], buf[3]
+    g_ss, g_cs, g_ns, g_ds = buf[4], buf[5], buf[6], buf[7]
+    g_cd, g_sd = buf[8], buf[9]
+    si_t, ci_t, ni_t, di_t = ti_tab[0], ti_tab[1], ti_tab[2], ti_tab[3]
+    ss_t, cs_t, ns_t, ds_t = ts_tab[0], ts_tab[1], ts_tab[2], ts_tab[3]
+    cd_t, sd_t = d_tab[0], d_tab[1]
+    i0, i1, i2 = st[0, 0], st[0, 1], st[0, 2]
+    s0, s1, s2_ = st[1, 0], st[1, 1], st[1, 2]
+    d0, d1, d2 = st[2, 0], st[2, 1], st[2, 2]
+    ki = a * i0 + b * i1 + c * i2
+    ks = a * s0 + b * s1 + c * s2_
+    kd = a * d0 + b * d1 + c * d2
+    n = hh.size
+    for start in range(0, n, _BLOCK):
+        m = min(_BLOCK, n - start)
+        for t in range(m):  # gather (scalar: loads, and the position counted up)
+            g_si[t] = si_t[ki]
+            g_ci[t] = ci_t[ki]
+            g_ni[t] = ni_t[ki]
+            g_di[t] = di_t[ki]
+            g_ss[t] = ss_t[ks]
+            g_cs[t] = cs_t[ks]
+            g_ns[t] = ns_t[ks]
+            g_ds[t] = ds_t[ks]
+            g_cd[t] = cd_t[kd]
+            g_sd[t] = sd_t[kd]
+            c += 1
+            ki += i2
+            ks += s2_
+            kd += d2
+            if c == n2:
+                c = 0
+                b += 1
+                if b == n1:
+                    b = 0
+                    a += 1
+                ki = a * i0 + b * i1
+                ks = a * s0 + b * s1
+                kd = a * d0 + b * d1
+        o_hh = hh[start : start + m]
+        o_hv = hv[start : start + m]
+        o_vh = vh[start : start + m]
+        o_vv = vv[start : start + m]
+        for t in range(m):  # the point formula (vectorized)
+            o_hh[t], o_hv[t], o_vh[t], o_vv[t] = _go_point(
+                g_si[t], g_ci[t], g_ss[t], g_cs[t], g_cd[t], g_sd[t], g_ni[t], g_di[t],
+                g_ns[t], g_ds[t], er, ei, pref, inv_s2, shadowing, pec, shadowed,
+            )  # fmt: skip
+
+
+@jit
+def _grid_pec(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_grid_loop(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, hh, hv, vh, vv,
+                  True, False)  # fmt: skip
+
+
+@jit
+def _grid_pec_shadowed(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_grid_loop(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, hh, hv, vh, vv,
+                  True, True)  # fmt: skip
+
+
+@jit
+def _grid_dielectric(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_grid_loop(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, hh, hv, vh, vv,
+                  False, False)  # fmt: skip
+
+
+@jit
+def _grid_dielectric_shadowed(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing,
+                              hh, hv, vh, vv):  # fmt: skip
+    _go_grid_loop(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, hh, hv, vh, vv,
+                  False, True)  # fmt: skip
+
+
+_GRID_KERNELS = {
+    (True, False): _grid_pec,
+    (True, True): _grid_pec_shadowed,
+    (False, False): _grid_dielectric,
+    (False, True): _grid_dielectric_shadowed,
 }
 
 
@@ -322,4 +465,69 @@ def go_sigma0(
     if coherent_out is not None:
         consts = (pec, e.real, e.imag, 2.0 * k * sigma)
         run_fused(_coherent_kernel, (ti,), consts, (coherent_out[0], coherent_out[1]), threads)
+    return out
+
+
+def coherent_reflectivity(ti: np.ndarray, eps, *, k: float, sigma: float) -> np.ndarray:
+    """Kirchhoff coherent ``|R_p(θi)|² e^{−(2kσ cosθi)²}`` (2, n) [-] for flat ``ti`` [rad]."""
+    pec = isinstance(eps, str)
+    e = 0j if pec else complex(eps)
+    out = np.empty((2, ti.size))
+    _coherent_kernel(np.ascontiguousarray(ti), pec, e.real, e.imag, 2.0 * k * sigma, out[0], out[1])
+    return out
+
+
+def _element_strides(shape: tuple[int, ...], grid: tuple[int, ...]) -> list[int]:
+    """C-order element strides of a contiguous array of ``shape`` on the 3-D ``grid`` it
+    broadcasts to (padded in front; 0 along the axes it is broadcast over)."""
+    shape = (1,) * (3 - len(shape)) + shape
+    out, step = [0, 0, 0], 1
+    for d in (2, 1, 0):
+        if shape[d] != 1:
+            out[d] = step
+            step *= shape[d]
+    return out
+
+
+def go_sigma0_grid(
+    ti: np.ndarray,
+    ts: np.ndarray,
+    dphi: np.ndarray,
+    shape: tuple[int, ...],
+    eps,
+    *,
+    slope_variance: float,
+    shadowing: str | None,
+    out: np.ndarray,
+    threads: int | None = None,
+) -> np.ndarray:
+    """:func:`go_sigma0` for angles given unbroadcast — ``ti``, ``ts``, ``dphi`` [rad]
+    broadcast together to ``shape`` (at most 3-D; ``θ ∈ [0, π/2]``, ``|dphi| ≤ 1e6``) — into
+    ``out`` (2, 2, prod(shape)), C order. The trigonometry and Smith's ``Λ`` are computed once
+    per distinct direction (per element of ``ti``, ``ts``, ``dphi``) and each geometry reads
+    them: a grid of m θi × m θs × m φ pays for 2m + m of them, not 3m³."""
+    pec = isinstance(eps, str)
+    e = 0j if pec else complex(eps)
+    code = SHADOWING_CODES[shadowing]
+    s2 = float(slope_variance)
+    grid = (1,) * (3 - len(shape)) + tuple(shape)
+    shape3 = np.array(grid, np.int64)
+    flats = [np.ascontiguousarray(a, dtype=np.float64) for a in (ti, ts, dphi)]
+    st = np.array([_element_strides(a.shape, grid) for a in flats], np.int64)
+    flats = [a.reshape(-1) for a in flats]
+    ti_tab, ts_tab = np.empty((4, flats[0].size)), np.empty((4, flats[1].size))
+    d_tab = np.empty((2, flats[2].size))
+    _grid_tables(*flats, s2, ti_tab, ts_tab, d_tab)
+    kernel = _GRID_KERNELS[(pec, code != NO_SHADOWING)]
+    outs = (out[0, 0], out[0, 1], out[1, 0], out[1, 1])
+    consts = (ti_tab, ts_tab, d_tab, e.real, e.imag, s2, code)
+
+    def part(a: int, b: int) -> None:
+        kernel(a, shape3, st, *consts, *(y[a:b] for y in outs))
+
+    n = out.shape[-1]
+    if n < 2 * _MIN_CHUNK or threads == 1:
+        part(0, n)
+    else:
+        run_chunked(part, n, threads)
     return out
