@@ -192,7 +192,7 @@ def go_counts(pec: bool) -> dict:
     x = np.full(64, 0.5)
     outs = [np.empty(64) for _ in range(4)]
     kernel = kg._KERNELS[(pec, True)]
-    return op_counts(kernel, {}, (x, x, x, 17.0, 2.0, 0.02, kg.SMITH, *outs))
+    return op_counts(kernel, {}, (x, x, x, x, 17.0, 2.0, 0.02, kg.SMITH, *outs))
 
 
 # ----------------------------------------------------------------------------- throughput

@@ -38,14 +38,17 @@ def test_closed_form_is_used_only_where_it_holds():
     theta = np.radians([10.0, 30.0])
     eps = np.array(4.0 + 0j)
     iso = go.geometry(theta, theta, np.array(math.pi), np.array(0.0), eps, 2, checked=True)
-    assert go_monostatic.covers(iso, 2, 0.02, 0.02)
-    assert not go_monostatic.covers(iso, 2, 0.02, 0.03)  # anisotropic slopes
-    assert not go_monostatic.covers(iso, 1, 0.02, 0.0)  # a profile
+    assert go_monostatic.covers(iso, 2, 0.02, 0.02, "smith")
+    assert not go_monostatic.covers(iso, 2, 0.02, 0.02, "a new mode")  # no closed form here
+    with pytest.raises(ValueError, match="a new mode"):
+        go_monostatic.backscatter_sigma0(theta, 4.0, 0.02, "a new mode")
+    assert not go_monostatic.covers(iso, 2, 0.02, 0.03, "smith")  # anisotropic slopes
+    assert not go_monostatic.covers(iso, 1, 0.02, 0.0, "smith")  # a profile
     off = go.geometry(theta, theta, np.array(3.0), np.array(0.0), eps, 2, checked=True)
-    assert not go_monostatic.covers(off, 2, 0.02, 0.02)  # not the backscatter azimuth
+    assert not go_monostatic.covers(off, 2, 0.02, 0.02, "smith")  # not the backscatter azimuth
     many = go.geometry(theta, theta, np.array(math.pi), np.array(0.0), np.array([4.0, 5.0 + 0j]),
                        2, checked=True)  # fmt: skip
-    assert not go_monostatic.covers(many, 2, 0.02, 0.02)  # several permittivities
+    assert not go_monostatic.covers(many, 2, 0.02, 0.02, None)  # several permittivities
     # anisotropic slopes through the API still take the general formula and agree with it
     rough = em.GaussianCorrelation(0.1, 1.0, length_y=1.5)
     got = em.backscatter(rough, 4.0, wavelength=2 * math.pi / k, theta_i=theta, phi_i=0.4,

@@ -333,7 +333,7 @@ def backscatter(
     """Monostatic (backscatter) coefficients: ``θs = θi``, ``φs = φi + π``. Parameters as
     :func:`bistatic`."""
     ti = check_angle("theta_i", theta_i)
-    pi_ = check_finite("phi_i", phi_i).astype(float)
+    pi_ = np.asarray(check_finite("phi_i", phi_i), dtype=float)
     # bistatic's checks, each once (θs = θi and φs = φi + π need none of their own)
     rough = _check_roughness(surface)
     eps = as_eps_or_material(eps)

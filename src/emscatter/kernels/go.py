@@ -44,14 +44,18 @@ import numpy as np
 from ._runtime import _MIN_CHUNK, inline, jit, run_chunked, run_fused
 from ._vmath import INV_LN2, LN2_HI, LN2_LO, vcos, vexp, vsin_q1
 
-NO_SHADOWING, SEPARABLE, CORRELATED, SMITH = 0, 1, 2, 3
+NO_SHADOWING, SEPARABLE, CORRELATED, SMITH, DIRECTIONAL = 0, 1, 2, 3, 4
 #: kirchhoff_common.check_shadowing's modes: "smith" is the separable product except in the
-#: exact backscatter direction (|q|² > 4(1 − 1e-12)), where the monostatic 1/(1 + Λi) applies
+#: exact backscatter direction (|q|² > 4(1 − 1e-12)), where the monostatic 1/(1 + Λi) applies;
+#: "direction-correlated" (accuracy's default, Ginneken et al. 1998 / Heitz 2014 §6) is
+#: 1/(1 + max Λ + λ(ψ) min Λ), λ(ψ) = 4.41ψ/(4.41ψ + 1), ψ = arccos(−cos Δφ) — λ from numpy
+#: (:func:`directional_weight`, as the numpy reference computes it) and passed in per geometry
 SHADOWING_CODES = {
     None: NO_SHADOWING,
     "separable": SEPARABLE,
     "correlated": CORRELATED,
     "smith": SMITH,
+    "direction-correlated": DIRECTIONAL,
 }
 _SQRT_PI = math.sqrt(math.pi)
 _TAU_EPS = 1e-28  # as kirchhoff_common._TAU_EPS
@@ -191,10 +195,11 @@ def _fast_fresnel(pec, er, ei, c):
 
 
 @inline
-def _go_point(si, ci, ss, cs, cd, sd2, ni, di, ns, ds, er, ei, pref, inv_s2, shadowing, pec,
-              shadowed):  # fmt: skip
-    """σ⁰ ``(hh, hv, vh, vv)`` [-] of one geometry from its trigonometry (``sd2 = sin²Δφ``)
-    and the Smith parts ``Λ = N/D`` of both directions (unused unless ``shadowed``)."""
+def _go_point(si, ci, ss, cs, cd, sd2, ni, di, ns, ds, corr, er, ei, pref, inv_s2, shadowing,
+              pec, shadowed):  # fmt: skip
+    """σ⁰ ``(hh, hv, vh, vv)`` [-] of one geometry from its trigonometry (``sd2 = sin²Δφ``),
+    the Smith parts ``Λ = N/D`` of both directions (unused unless ``shadowed``) and the
+    direction-correlation weight ``corr = λ(ψ)`` (used by ``DIRECTIONAL`` only)."""
     qx = ss * cd - si
     qz = cs + ci
     q2 = max(2.0 * (1.0 + ci * cs - si * ss * cd), 0.0)
@@ -213,6 +218,10 @@ def _go_point(si, ci, ss, cs, cd, sd2, ni, di, ns, ds, er, ei, pref, inv_s2, sha
         den = (di + ni) * (ds + ns)
         if shadowing == CORRELATED:
             den = num + ni * ds + ns * di
+        elif shadowing == DIRECTIONAL:  # Λi·D = ni·ds, Λs·D = ns·di with D = di·ds
+            li = ni * ds
+            ls = ns * di
+            den = num + max(li, ls) + corr * min(li, ls)
         elif shadowing == SMITH and q2 > 4.0 * (1.0 - 1e-12):
             num = di * (ds + ns)  # monostatic 1/(1 + Λi)
     # fresnel_factors (2-D)
@@ -243,9 +252,10 @@ def _go_point(si, ci, ss, cs, cd, sd2, ni, di, ns, ds, er, ei, pref, inv_s2, sha
 
 
 @inline
-def _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, pec, shadowed):
+def _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, pec, shadowed):
     """σ⁰ [-] into the four 1-D outputs; ``pec`` and ``shadowed`` are constants of the
-    compiled loop (see the ``_go_*`` kernels)."""
+    compiled loop (see the ``_go_*`` kernels); ``corr``: λ(ψ) per geometry for
+    ``DIRECTIONAL`` (any array of the same length otherwise, e.g. ``dphi``: never used)."""
     pref = 0.5 / math.sqrt(s2 * s2)  # π · 1/(2π√(sx sy))
     inv_s2 = 1.0 / s2
     kappa = math.sqrt(2.0 * s2)
@@ -262,29 +272,29 @@ def _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, pec, shadowed)
             ni, di = _lambda_parts(ai)
             ns, ds = _lambda_parts(as_)
         hh[j], hv[j], vh[j], vv[j] = _go_point(
-            si, ci, ss, cs, cd, sd2, ni, di, ns, ds, er, ei, pref, inv_s2, shadowing, pec,
-            shadowed,
+            si, ci, ss, cs, cd, sd2, ni, di, ns, ds, corr[j], er, ei, pref, inv_s2, shadowing,
+            pec, shadowed,
         )  # fmt: skip
 
 
 @jit
-def _go_pec(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv):
-    _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, True, False)
+def _go_pec(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, True, False)
 
 
 @jit
-def _go_pec_shadowed(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv):
-    _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, True, True)
+def _go_pec_shadowed(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, True, True)
 
 
 @jit
-def _go_dielectric(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv):
-    _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, False, False)
+def _go_dielectric(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, False, False)
 
 
 @jit
-def _go_dielectric_shadowed(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv):
-    _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, False, True)
+def _go_dielectric_shadowed(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, False, True)
 
 
 _KERNELS = {
@@ -312,7 +322,8 @@ def _direction_table(theta, s2, tab):
 
 @jit
 def _grid_tables(ti, ts, dphi, s2, ti_tab, ts_tab, d_tab):
-    """The per-direction tables of :func:`go_sigma0_grid` (``d_tab``: cos Δφ, sin²Δφ)."""
+    """The per-direction tables of :func:`go_sigma0_grid` (``d_tab``: cos Δφ, sin²Δφ; its
+    third row, λ(ψ), is filled by the caller)."""
     _direction_table(ti, s2, ti_tab)
     _direction_table(ts, s2, ts_tab)
     for j in range(dphi.size):
@@ -340,13 +351,13 @@ def _go_grid_loop(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, h
     rest = j0 - a * (n1 * n2)
     b = rest // n2
     c = rest - b * n2
-    buf = np.empty((10, _BLOCK))
+    buf = np.empty((11, _BLOCK))
     g_si, g_ci, g_ni, g_di = buf[0], buf[1], buf[2], buf[3]
     g_ss, g_cs, g_ns, g_ds = buf[4], buf[5], buf[6], buf[7]
-    g_cd, g_sd = buf[8], buf[9]
+    g_cd, g_sd, g_w = buf[8], buf[9], buf[10]
     si_t, ci_t, ni_t, di_t = ti_tab[0], ti_tab[1], ti_tab[2], ti_tab[3]
     ss_t, cs_t, ns_t, ds_t = ts_tab[0], ts_tab[1], ts_tab[2], ts_tab[3]
-    cd_t, sd_t = d_tab[0], d_tab[1]
+    cd_t, sd_t, w_t = d_tab[0], d_tab[1], d_tab[2]
     i0, i1, i2 = st[0, 0], st[0, 1], st[0, 2]
     s0, s1, s2_ = st[1, 0], st[1, 1], st[1, 2]
     d0, d1, d2 = st[2, 0], st[2, 1], st[2, 2]
@@ -367,6 +378,7 @@ def _go_grid_loop(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, h
             g_ds[t] = ds_t[ks]
             g_cd[t] = cd_t[kd]
             g_sd[t] = sd_t[kd]
+            g_w[t] = w_t[kd]
             c += 1
             ki += i2
             ks += s2_
@@ -387,7 +399,7 @@ def _go_grid_loop(j0, shape, st, ti_tab, ts_tab, d_tab, er, ei, s2, shadowing, h
         for t in range(m):  # the point formula (vectorized)
             o_hh[t], o_hv[t], o_vh[t], o_vv[t] = _go_point(
                 g_si[t], g_ci[t], g_ss[t], g_cs[t], g_cd[t], g_sd[t], g_ni[t], g_di[t],
-                g_ns[t], g_ds[t], er, ei, pref, inv_s2, shadowing, pec, shadowed,
+                g_ns[t], g_ds[t], g_w[t], er, ei, pref, inv_s2, shadowing, pec, shadowed,
             )  # fmt: skip
 
 
@@ -461,11 +473,20 @@ def go_sigma0(
     kernel = _KERNELS[(pec, code != NO_SHADOWING)]
     consts = (e.real, e.imag, float(slope_variance), code)
     outs = (out[0, 0], out[0, 1], out[1, 0], out[1, 1])
-    run_fused(kernel, (ti, ts, dphi), consts, outs, threads)
+    corr = directional_weight(dphi) if code == DIRECTIONAL else dphi
+    run_fused(kernel, (ti, ts, dphi, corr), consts, outs, threads)
     if coherent_out is not None:
         consts = (pec, e.real, e.imag, 2.0 * k * sigma)
         run_fused(_coherent_kernel, (ti,), consts, (coherent_out[0], coherent_out[1]), threads)
     return out
+
+
+def directional_weight(dphi: np.ndarray) -> np.ndarray:
+    """``λ(ψ) = 4.41ψ/(4.41ψ + 1)``, ``ψ = arccos(−cos Δφ)`` [-] for ``dphi`` = φs − φi [rad]
+    (Ginneken, Stavridi & Koenderink 1998, Appl. Opt. 37, 130; in numpy, as the numpy
+    reference's "direction-correlated" shadowing computes it)."""
+    psi = np.arccos(np.clip(-np.cos(dphi), -1.0, 1.0))
+    return 4.41 * psi / (4.41 * psi + 1.0)
 
 
 def coherent_reflectivity(ti: np.ndarray, eps, *, k: float, sigma: float) -> np.ndarray:
@@ -516,8 +537,9 @@ def go_sigma0_grid(
     st = np.array([_element_strides(a.shape, grid) for a in flats], np.int64)
     flats = [a.reshape(-1) for a in flats]
     ti_tab, ts_tab = np.empty((4, flats[0].size)), np.empty((4, flats[1].size))
-    d_tab = np.empty((2, flats[2].size))
+    d_tab = np.empty((3, flats[2].size))
     _grid_tables(*flats, s2, ti_tab, ts_tab, d_tab)
+    d_tab[2] = directional_weight(flats[2]) if code == DIRECTIONAL else 0.0
     kernel = _GRID_KERNELS[(pec, code != NO_SHADOWING)]
     outs = (out[0, 0], out[0, 1], out[1, 0], out[1, 1])
     consts = (ti_tab, ts_tab, d_tab, e.real, e.imag, s2, code)

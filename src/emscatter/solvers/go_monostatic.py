@@ -7,7 +7,8 @@ eq. 2.2.33)::
 
     σ⁰_pp = |R(0)|² exp(−tan²θ / (2 s²)) / (2 s² cos⁴θ) · S(θ),    σ⁰_hv = σ⁰_vh = 0
 
-with ``S`` the shadowing factor at backscatter (``"smith"``: monostatic ``1/(1+Λ)``;
+with ``S`` the shadowing factor at backscatter (``"smith"`` and ``"direction-correlated"``:
+monostatic ``1/(1+Λ)``;
 ``"separable"``: ``1/(1+Λ)²``; ``"correlated"``: ``1/(1+2Λ)``; None: 1). The same numbers as
 the general formula (to rounding) for a fraction of its operations: a backscatter curve does
 not pay for the bistatic Fresnel and polarization geometry.
@@ -22,7 +23,8 @@ import numpy as np
 from scipy import special
 
 __all__ = [
-    "backscatter_sigma0", "covers", "normal_reflectivity", "smith_lambda_backscatter"
+    "backscatter_sigma0", "covers", "normal_reflectivity", "smith_lambda_backscatter",
+    "SHADOWING_MODES",
 ]  # fmt: skip
 
 _SQRT_PI = math.sqrt(math.pi)
@@ -46,17 +48,19 @@ def backscatter_sigma0(theta: np.ndarray, eps, slope_variance: float, shadowing)
     val *= r
     if shadowing is not None:
         lam = smith_lambda_backscatter(np.sqrt(c2), si, s2)
-        if shadowing == "smith":
+        if shadowing in ("smith", "direction-correlated"):  # both 1/(1 + Λ) at backscatter
             lam += 1.0
             val /= lam
         elif shadowing == "separable":
             lam += 1.0
             val /= lam
             val /= lam  # (Λ is huge at θ = π/2: no square)
-        else:  # "correlated"
+        elif shadowing == "correlated":
             lam *= 2.0
             lam += 1.0
             val /= lam
+        else:
+            raise ValueError(f"no backscatter closed form for shadowing={shadowing!r}")
     out = np.zeros((2, 2, theta.size))
     np.multiply(val, normal_reflectivity(eps), out=out[0, 0])
     out[1, 1] = out[0, 0]  # |R_h(0)|² = |R_v(0)|²
@@ -93,14 +97,20 @@ def normal_reflectivity(eps) -> float:
     return abs((1.0 - w) / (1.0 + w)) ** 2
 
 
-def covers(g, dimension: int, sx: float, sy: float) -> bool:
+#: those with a closed form here ("direction-correlated": accuracy's continuous default, which is
+#: 1/(1 + Λ) at backscatter, where ψ = 0)
+SHADOWING_MODES = (None, "smith", "separable", "correlated", "direction-correlated")
+
+
+def covers(g, dimension: int, sx: float, sy: float, shadowing) -> bool:
     """Whether :func:`backscatter_sigma0` applies to the geometry ``g``
     (:func:`.kirchhoff_common.geometry`) of a backscatter call: a 2-D isotropic surface, one
     permittivity, one φi with ``φs − φi`` exactly π (so the general formula's exact
-    backscatter branch is the one taken)."""
+    backscatter branch is the one taken), a shadowing mode of :data:`SHADOWING_MODES`."""
     ti, ts, dphi, phi_i, _, eps = g.compact
     return (
-        dimension == 2
+        shadowing in SHADOWING_MODES
+        and dimension == 2
         and sx == sy
         and (isinstance(eps, str) or eps.ndim == 0)
         and phi_i.ndim == 0

@@ -261,7 +261,7 @@ def _bistatic(
     starts = range(0, n, _CHUNK)
     workers = workers_for(threads, len(starts))
     ti_c, ts_c, dphi_c, _, _, eps_c = g.compact  # unbroadcast: the kernel reads grids as such
-    if monostatic and not want_coh and go_monostatic.covers(g, dim, sx, sy):
+    if monostatic and not want_coh and go_monostatic.covers(g, dim, sx, sy, mode):
         flat = go_monostatic.backscatter_sigma0(g.ti_flat, eps_c, sx, mode)
     elif dispatch.go_sigma0(
         ti_c, ts_c, dphi_c, eps_c, dimension=dim, sx=sx, sy=sy, shadowing=mode, out=flat,
