@@ -175,32 +175,24 @@ def op_counts(func, replacements: dict, args: tuple) -> dict:
 
 
 def spm_counts(pec: bool) -> dict:
+    """Ops of the compiled SPM1 loop for this case (Gaussian spectrum)."""
     from emscatter.kernels import spm as ks
 
     x = np.full(64, 0.5)
     outs = [np.empty(64) for _ in range(4)]
-    rep = {
-        "        if pec:\n": f"        if {pec}:\n",
-        "        if spectrum == GAUSSIAN:\n": "        if True:\n",
-    }
-    return op_counts(ks._spm1_kernel, rep, (x, x, x, pec, 17.0, 2.0, 2.0, 1.0, 1.0, 0, *outs))
+    kernel = ks._KERNELS[(pec, ks.GAUSSIAN)]
+    return op_counts(kernel, {}, (x, x, x, 17.0, 2.0, 2.0, 1.0, 1.0, *outs))
 
 
 def go_counts(pec: bool) -> dict:
+    """Ops of the compiled GO loop with Smith shadowing (the mode is a runtime select: the
+    few ops of the other modes are counted too)."""
     from emscatter.kernels import go as kg
 
     x = np.full(64, 0.5)
-    outs = [np.empty(64) for _ in range(6)]
-    rep = {
-        "        if two_k_sigma >= 0:\n": "        if False:\n",
-        "            if shadowing == CORRELATED:\n": "            if False:\n",
-        "        if shadowing != 0:\n": "        if True:\n",
-    }
-    args = (x, x, x, pec, 17.0, 2.0, 0.02, 1, -1.0, *outs)
-    c = op_counts(kg._go_kernel, rep, args)
-    if pec:  # the Fresnel part of a PEC is constant (its ops are still in the IR copy)
-        c["note"] = "counted with the dielectric Fresnel code present (pec selects constants)"
-    return c
+    outs = [np.empty(64) for _ in range(4)]
+    kernel = kg._KERNELS[(pec, True)]
+    return op_counts(kernel, {}, (x, x, x, x, 17.0, 2.0, 0.02, kg.SMITH, *outs))
 
 
 # ----------------------------------------------------------------------------- throughput

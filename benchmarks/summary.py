@@ -90,6 +90,22 @@ def rows() -> list[tuple]:
                     "peers",
                 )
             )
+    iem = _load("iem")
+    if iem and "ratio_smrt_fung92_over_iem_copol" in iem:
+        cmd = iem.get("command", "PYTHONPATH=src python benchmarks/bench_iem.py")
+        for n, ratio in iem["ratio_smrt_fung92_over_iem_copol"].items():
+            ours = iem["seconds_median"][f"iem_copol/{n}"]
+            theirs = iem["smrt_seconds_median"][f"smrt_iem_fung92/{n}"]
+            out.append(
+                (
+                    f"IEM co-pol backscatter vs SMRT iem_fung92, {n} angle(s)",
+                    "SMRT/emscatter ≥ 1",
+                    f"×{ratio:.2f} ({ours * 1e3:.3g} ms vs {theirs * 1e3:.3g} ms)",
+                    _met(ratio >= 1),
+                    cmd,
+                    "iem",
+                )
+            )
     g = _load("generate")
     if g:
         r = g["ratios"]

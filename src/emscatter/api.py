@@ -18,14 +18,28 @@ checks the energy balance at every angle (:func:`emscatter.emissivity.energy_bal
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 
 import numpy as np
 
 from . import cache, solvers
-from .conventions import broadcast_angles, check_angle, check_finite, wavenumber
-from .dispatch import angle_policy, angles_deg, rank_methods, validity_report
+from .conventions import (
+    broadcast_angles,
+    broadcast_view,
+    check_angle,
+    check_broadcast,
+    check_finite,
+    wavenumber,
+)
+from .dispatch import (
+    angle_policy,
+    angles_deg,
+    call_report,
+    rank_methods,
+    validity_report,
+)
 from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
 from .frequency import Group, as_eps_or_material, eps_at, frequency_groups
 from .fresnel import is_pec
@@ -50,12 +64,21 @@ def _check_method(method) -> str:
 
 
 def _map_options(name: str, options: dict, auto: bool) -> dict:
+    if not options:  # nothing to map (check_options would return {} too)
+        return {}
     mapper = getattr(select, "check_options", None)
     return dict(mapper(name, options, picked_by_auto=auto)) if mapper else options
 
 
 def resolve_method(
-    roughness: Roughness, k: float, method: str, out_of_range: str, eps=None, *, theta_i=None
+    roughness: Roughness,
+    k: float,
+    method: str,
+    out_of_range: str,
+    eps=None,
+    *,
+    theta_i=None,
+    stacklevel: int = 5,
 ):
     """``(name, module, report, make_nan)`` for a method name or ``"auto"``.
 
@@ -66,20 +89,10 @@ def resolve_method(
     name = _check_method(method)
     if name == "auto":
         name = rank_methods(roughness, k, eps=eps)[0][0]
-    report = validity_report(name, roughness, k, eps=eps)
-    make_nan = select.enforce(name, report, out_of_range, stacklevel=5)
-    report["roughness_valid"] = bool(report.get("valid", False))
-    if theta_i is not None:  # checked at the distinct angles, mapped back to theta_i's shape
-        ti = np.asarray(theta_i, dtype=float)
-        uniq, inverse = np.unique(ti, return_inverse=True)
-        angular = validity_report(name, roughness, k, eps=eps, theta_i=uniq)
-        for key in ("angle_valid", "angle_excess"):
-            if key in angular:
-                report[key] = np.asarray(angular[key])[inverse.reshape(ti.shape)]
-        if "angle_reasons" in angular:
-            report["angle_reasons"] = angular["angle_reasons"]
-        if "angle_valid" in report:
-            report["valid"] = report["roughness_valid"] and bool(np.all(report["angle_valid"]))
+    report = call_report(name, roughness, k, eps=eps, theta_i=theta_i)
+    # the roughness-level policy sees the roughness-level verdict (angles: angle_policy)
+    whole = {"valid": report["roughness_valid"], "reasons": report.get("reasons", [])}
+    make_nan = select.enforce(name, whole, out_of_range, stacklevel=stacklevel)
     return name, solvers.get(name), report, make_nan
 
 
@@ -88,24 +101,49 @@ def _angle_mask(report: dict, shape) -> np.ndarray:
     valid = report.get("angle_valid")
     if valid is None:
         return np.ones(shape, dtype=bool)
-    return np.broadcast_to(np.asarray(valid, dtype=bool), shape)
+    valid = np.asarray(valid, dtype=bool)
+    return valid if valid.shape == shape else broadcast_view(valid, shape)
 
 
 def _takes(func, name: str) -> bool:
-    return name in inspect.signature(func).parameters
+    """Whether ``func`` has a parameter ``name`` (signatures read once per function)."""
+    try:
+        return _params(func).__contains__(name)
+    except TypeError:  # an unhashable callable: read its signature each time
+        return name in inspect.signature(func).parameters
+
+
+@functools.lru_cache(maxsize=256)
+def _params(func) -> frozenset:
+    return frozenset(inspect.signature(func).parameters)
+
+
+def _solver_entry(module):
+    """The solver's entry for inputs this module has checked: ``bistatic.checked`` when the
+    solver provides one (same arguments; it skips the re-checks and its own validity report,
+    which the API replaces), else ``bistatic`` itself (also when a caller replaced it)."""
+    return getattr(module.bistatic, "checked", module.bistatic)
 
 
 # ----------------------------------------------------------------------------- bistatic
-def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scattering:
-    """One frequency: resolve the method, run the solver, apply the validity policies."""
+def _bistatic_one(
+    rough, eps, k, angles, method, out_of_range, options, monostatic=False
+) -> Scattering:
+    """One frequency: resolve the method, run the solver, apply the validity policies
+    (``monostatic``: the angles are the backscatter ones, told to a solver entry that asks)."""
     ti, ts, ps, pi_ = angles
     name = rank_methods(rough, k, eps=eps)[0][0] if method == "auto" else method
     opts = _map_options(name, options, method == "auto")  # before any warning
-    name, module, report, make_nan = resolve_method(rough, k, name, out_of_range, eps, theta_i=ti)
+    name, module, report, make_nan = resolve_method(
+        rough, k, name, out_of_range, eps, theta_i=ti, stacklevel=6
+    )  # warnings point at the caller of bistatic/backscatter
     # BOARD interface 3: the coherent part is computed on first read, unless asked for eagerly
     lazy = _takes(module.bistatic, "coherent") and not opts.pop("coherent", False)
     extra = {"coherent": False} if lazy else {}
-    result = module.bistatic(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
+    entry = _solver_entry(module)
+    if monostatic and _takes(entry, "monostatic"):
+        extra["monostatic"] = True
+    result = entry(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
     shape = result.sigma0.shape[2:]
     info = {**result.info, "validity": report}
     info.pop("coherent", None)
@@ -124,9 +162,14 @@ def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scatt
 
     else:
         coherent = result.coherent
-    bad = ~_angle_mask(report, shape)
-    blank = angle_policy(name, bad, result.theta_i, out_of_range, report.get("angle_reasons", []))
-    if make_nan or blank.any():
+    blank = None  # the angles to blank (the per-angle policy), when any
+    valid = report.get("angle_valid")
+    if valid is not None and out_of_range != "ignore" and not np.all(valid):
+        bad = ~_angle_mask(report, shape)
+        reasons = report.get("angle_reasons", [])
+        blank = angle_policy(name, bad, result.theta_i, out_of_range, reasons, stacklevel=5)
+        blank = blank if blank.any() else None
+    if make_nan or blank is not None:
         mask = np.ones(shape, dtype=bool) if make_nan else blank
         sigma0 = np.where(mask, np.nan, sigma0)
         coh_in = coherent
@@ -257,11 +300,21 @@ def bistatic(
     ts = check_angle("theta_s", theta_s)
     ps = check_finite("phi_s", phi_s).astype(float)
     pi_ = check_finite("phi_i", phi_i).astype(float)
-    angles = (ti, ts, ps, pi_)
-    spec = frequency_groups(k, eps, theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
+    return _bistatic_checked(rough, eps, k, (ti, ts, ps, pi_), method, out_of_range, options)
+
+
+def _bistatic_checked(
+    rough, eps, k, angles, method, out_of_range, options, monostatic=False
+) -> Scattering:
+    """:func:`bistatic` after its checks (``angles`` = checked θi, θs, φs, φi arrays;
+    ``monostatic``: they are :func:`backscatter`'s, θs is θi and φs = φi + π)."""
+    ti, ts, ps, pi_ = angles
+    one_k = type(k) is float  # (frequency_groups' None, without building its arguments)
+    spec = None if one_k else frequency_groups(k, eps, theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
     if spec is None:  # one frequency: the solver sees the caller's shapes
-        broadcast_angles(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
-        return _bistatic_one(rough, eps_at(eps, k), k, angles, method, out_of_range, options)
+        check_broadcast(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
+        e = eps_at(eps, k)
+        return _bistatic_one(rough, e, k, angles, method, out_of_range, options, monostatic)
     shape, k_b, groups = spec
     return _bistatic_groups(rough, groups, shape, k_b, angles, method, out_of_range, options)
 
@@ -281,20 +334,16 @@ def backscatter(
     """Monostatic (backscatter) coefficients: ``θs = θi``, ``φs = φi + π``. Parameters as
     :func:`bistatic`."""
     ti = check_angle("theta_i", theta_i)
-    pi_ = check_finite("phi_i", phi_i).astype(float)
-    return bistatic(
-        surface,
-        eps,
-        frequency=frequency,
-        wavelength=wavelength,
-        theta_i=ti,
-        theta_s=ti,
-        phi_s=pi_ + math.pi,
-        phi_i=pi_,
-        method=method,
-        out_of_range=out_of_range,
-        **options,
-    )
+    pi_ = np.asarray(check_finite("phi_i", phi_i), dtype=float)
+    # bistatic's checks, each once (θs = θi and φs = φi + π need none of their own)
+    rough = _check_roughness(surface)
+    eps = as_eps_or_material(eps)
+    k = wavenumber(frequency, wavelength)
+    select.check_out_of_range(out_of_range)
+    method = _check_method(method)
+    ps = np.asarray(pi_ + math.pi, dtype=float)
+    angles = (ti, ti, ps, pi_)
+    return _bistatic_checked(rough, eps, k, angles, method, out_of_range, options, True)
 
 
 # ----------------------------------------------------------------------------- emissivity

@@ -80,17 +80,24 @@ def _deg(rad: float) -> str:
     return f"{math.degrees(rad):.4g}°"
 
 
+#: dtype kinds that :func:`check_finite` accepts: numbers (timedelta is a signed integer to
+#: numpy) and booleans — ``np.issubdtype(dtype, np.number) or np.issubdtype(dtype, np.bool_)``
+_NUMERIC_KINDS = frozenset("biufcm")
+
+
 def check_finite(name: str, value, *, allow_nan: bool = False) -> np.ndarray:
     """Return ``value`` as an array, raising if it holds NaN or inf."""
+    if type(value) is float and math.isfinite(value):  # the common scalar
+        return np.array(value)
     try:
         arr = np.asarray(value)
     except Exception as exc:  # pragma: no cover - numpy raises for exotic objects only
         raise TypeError(f"{name} must be a number or array of numbers, got {value!r}") from exc
-    if arr.dtype == object or not (
-        np.issubdtype(arr.dtype, np.number) or np.issubdtype(arr.dtype, np.bool_)
-    ):
+    kind = arr.dtype.kind
+    if kind not in _NUMERIC_KINDS:
         raise TypeError(f"{name} must be a number or array of numbers, got {_describe(value)}")
-    if not allow_nan and not np.all(np.isfinite(arr)):
+    # integers and booleans are always finite (no element-wise test needed)
+    if not allow_nan and kind in "fcm" and not np.isfinite(arr).all():
         bad = arr[~np.isfinite(arr)].ravel()[0]
         where = "" if arr.ndim == 0 else f" in {_describe(value)}"
         raise ValueError(f"{name} must be finite, got {fmt(bad)}{where}")
@@ -131,10 +138,24 @@ def check_in_range(
     return v
 
 
+_FLOATS = (float, np.float64)
+
+
 def check_angle(name: str, value, *, low: float = 0.0, high: float = math.pi / 2) -> np.ndarray:
     """Angles in radians, finite, within ``[low, high]`` (default ``[0, π/2]``).
 
     Messages give the allowed range and the offending value in radians and in degrees."""
+    if type(value) in _FLOATS:  # the common scalar: one comparison (NaN and inf fail it)
+        if low <= value <= high:
+            return np.array(value, dtype=float)
+    elif type(value) is np.ndarray and value.dtype.char == "d" and value.size:
+        # real floats: min and max in range ⇒ finite and in range (NaN fails the comparison)
+        if low <= value.min() and value.max() <= high:
+            return value.astype(float)
+    return _check_angle_slow(name, value, low, high)
+
+
+def _check_angle_slow(name: str, value, low: float, high: float) -> np.ndarray:
     arr = check_finite(name, value)
     if np.iscomplexobj(arr):
         raise TypeError(f"{name} must be real (radians), got complex {_describe(value)}")
@@ -156,6 +177,18 @@ def check_permittivity(value, name: str = "eps") -> np.ndarray:
     ``value`` may be real or complex, scalar or array, or the string ``"pec"``
     (handled by the callers that accept a perfect conductor). Booleans are refused.
     """
+    if type(value) is complex:  # the common scalar: checked without arrays
+        re, im = value.real, value.imag
+        if math.isfinite(re) and math.isfinite(im) and im >= 0 and value != 0:
+            return np.array(value)
+    elif type(value) is np.ndarray and value.dtype.kind == "c" and value.size:
+        # a checked permittivity passed on: finite, Im ≥ 0, nonzero (else the messages below)
+        if value.ndim == 0:
+            z = complex(value)
+            if math.isfinite(z.real) and math.isfinite(z.imag) and z.imag >= 0 and z != 0:
+                return value.astype(complex)
+        elif value.imag.min() >= 0 and np.isfinite(value).all() and value.all():
+            return value.astype(complex)
     if isinstance(value, bool | np.bool_) or np.asarray(value).dtype == bool:
         raise TypeError(
             f"{name} must be a complex permittivity (a number, e.g. 17+2j) or 'pec', got {value!r}"
@@ -187,12 +220,21 @@ def _positive_array(name: str, value, unit: str) -> np.ndarray:
     return arr
 
 
+_REALS = (float, np.float64)  # (ints, bools and arrays take the checks below)
+
+
 def wavenumber(frequency=None, wavelength=None, *, warn: bool = True):
     """Free-space wavenumber ``k = 2π/λ`` [rad/m] from exactly one of frequency [Hz] or
     wavelength [m]: a ``float`` for a scalar, an ndarray of the same shape for an array.
 
     A frequency below 1 MHz or a wavelength above 1 km is allowed but warns
     (:class:`PlausibilityWarning`, "did you mean GHz?") unless ``warn=False``."""
+    if wavelength is None and type(frequency) in _REALS:  # a plain number: no arrays
+        if FREQUENCY_WARN <= frequency < math.inf:
+            return 2.0 * math.pi * float(frequency) / SPEED_OF_LIGHT
+    elif frequency is None and type(wavelength) in _REALS:
+        if 0 < wavelength <= WAVELENGTH_WARN:
+            return 2.0 * math.pi / float(wavelength)
     if (frequency is None) == (wavelength is None):
         raise ValueError(
             "give exactly one of frequency [Hz] or wavelength [m], got "
@@ -258,6 +300,48 @@ def broadcast_angles(**angles) -> list[np.ndarray]:
     """Broadcast angle arrays together, naming them if their shapes do not fit."""
     try:
         return list(np.broadcast_arrays(*angles.values()))
+    except ValueError:
+        shapes = ", ".join(f"{k}{np.shape(v)}" for k, v in angles.items())
+        raise ValueError(f"angle arrays do not broadcast together: {shapes}") from None
+
+
+def broadcast_shape(*shapes: tuple[int, ...]) -> tuple[int, ...]:
+    """``np.broadcast_shapes(*shapes)``, without its cost in the common case of one shape
+    (the others ``()`` or equal to it); ValueError as numpy's when they do not fit."""
+    shape = ()
+    for s in shapes:
+        if s and s != shape:
+            if shape:
+                return np.broadcast_shapes(*shapes)
+            shape = s
+    return shape
+
+
+def broadcast_view(a: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """``np.broadcast_to(a, shape)`` (a read-only view) for an array known to broadcast to
+    ``shape``, built directly from strides (a few µs less per call: these are per-call costs
+    of every solver call)."""
+    if not isinstance(a, np.ndarray) or a.ndim > len(shape):
+        return np.broadcast_to(a, shape)
+    lead = len(shape) - a.ndim
+    strides = (0,) * lead
+    for n_a, n, st in zip(a.shape, shape[lead:], a.strides, strict=True):
+        if n_a != n and n_a != 1:
+            return np.broadcast_to(a, shape)  # numpy's error message
+        strides += (0 if n_a == 1 else st,)
+    try:
+        view = np.ndarray(shape, a.dtype, a, 0, strides)
+    except (TypeError, ValueError):  # not a buffer (e.g. a non-contiguous view): numpy's way
+        return np.broadcast_to(a, shape)
+    view.flags.writeable = False
+    return view
+
+
+def check_broadcast(**angles) -> tuple[int, ...]:
+    """The broadcast shape of the named arrays (as :func:`broadcast_angles`, same message
+    when their shapes do not fit, without building the broadcast views)."""
+    try:
+        return broadcast_shape(*(np.shape(v) for v in angles.values()))
     except ValueError:
         shapes = ", ".join(f"{k}{np.shape(v)}" for k, v in angles.items())
         raise ValueError(f"angle arrays do not broadcast together: {shapes}") from None

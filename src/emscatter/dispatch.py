@@ -15,6 +15,7 @@ Roughness-level validity (the whole call) keeps :func:`emscatter.solvers.select.
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 import warnings
@@ -27,7 +28,10 @@ from .conventions import fmt
 from .fresnel import is_pec
 from .solvers import select
 
-__all__ = ["validity_report", "rank_methods", "angle_policy", "angles_deg"]
+__all__ = [
+    "validity_report", "angle_report", "call_report", "rank_methods", "angle_policy",
+    "angles_deg",
+]  # fmt: skip
 
 _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 512
@@ -44,6 +48,7 @@ def _key_of(value):
     return (arr.dtype.str, arr.shape, arr.tobytes())
 
 
+@functools.lru_cache(maxsize=256)
 def _accepts(func, name: str) -> bool:
     params = inspect.signature(func).parameters
     return name in params or any(p.kind is p.VAR_KEYWORD for p in params.values())
@@ -62,6 +67,22 @@ def _call_check(module, roughness, k, eps, theta_i, options) -> dict:
     return dict(check(roughness, k, **kw))
 
 
+def _remember(key, value) -> None:
+    if key is not None:
+        _CACHE[key] = value
+        if len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+
+
+def _recall(key):
+    if key is None:
+        return None
+    value = _CACHE.get(key)
+    if value is not None:
+        _CACHE.move_to_end(key)
+    return value
+
+
 def validity_report(name: str, roughness, k: float, *, eps=None, theta_i=None, **options):
     """``solvers.get(name).check_validity(roughness, k, ...)`` — a fresh dict each call, cached
     on ``(name, roughness, k, eps, theta_i, options)``. A solver that cannot take this
@@ -69,23 +90,66 @@ def validity_report(name: str, roughness, k: float, *, eps=None, theta_i=None, *
     parts = (name, roughness, float(k), _key_of(eps), _key_of(theta_i))
     parts += tuple(sorted((n, _key_of(v)) for n, v in options.items()))
     key = None if _UNCACHEABLE in parts else parts
-    if key is not None and key in _CACHE:
-        _CACHE.move_to_end(key)
-        return dict(_CACHE[key])
+    hit = _recall(key)
+    if hit is not None:
+        return dict(hit)
     module = solvers.get(name)
     try:
         report = _call_check(module, roughness, k, eps, theta_i, options)
     except (ValueError, TypeError) as exc:
         report = {"valid": False, "reasons": [str(exc)], "unsupported": True}
-    if key is not None:
-        _CACHE[key] = report
-        if len(_CACHE) > _CACHE_SIZE:
-            _CACHE.popitem(last=False)
+    _remember(key, report)
     return dict(report)
 
 
+def angle_report(name: str, roughness, k: float, *, eps=None, theta_i) -> dict:
+    """The per-angle entries (``angle_valid``, ``angle_excess`` in ``theta_i``'s shape,
+    ``angle_reasons``) of :func:`validity_report` for incidence angles ``theta_i`` [rad],
+    evaluated at the distinct angles and mapped back; cached on the angles themselves, so a
+    repeated call does not sort them again. Fresh arrays each call."""
+    ti = np.asarray(theta_i, dtype=float)
+    parts = ("angles", name, roughness, float(k), _key_of(eps), _key_of(ti))
+    key = None if _UNCACHEABLE in parts else parts
+    hit = _recall(key)
+    if hit is not None:
+        return {n: v.copy() if isinstance(v, np.ndarray) else v for n, v in hit.items()}
+    uniq, inverse = np.unique(ti, return_inverse=True)
+    angular = validity_report(name, roughness, k, eps=eps, theta_i=uniq)
+    out = {}
+    for entry in ("angle_valid", "angle_excess"):
+        if entry in angular:
+            out[entry] = np.asarray(angular[entry])[inverse.reshape(ti.shape)]
+    if "angle_reasons" in angular:
+        out["angle_reasons"] = angular["angle_reasons"]
+    _remember(key, out)
+    return {n: v.copy() if isinstance(v, np.ndarray) else v for n, v in out.items()}
+
+
+def call_report(name: str, roughness, k: float, *, eps=None, theta_i=None) -> dict:
+    """:func:`validity_report` with ``"roughness_valid"`` (its own ``valid``) and, when
+    ``theta_i`` [rad] is given, :func:`angle_report`'s entries merged in (``valid`` then also
+    requires every angle); cached on the inputs as one entry. A fresh dict each call; its
+    arrays are read-only (shared between calls)."""
+    ti = None if theta_i is None else np.asarray(theta_i, dtype=float)
+    parts = ("call", name, roughness, float(k), _key_of(eps), _key_of(ti))
+    key = None if _UNCACHEABLE in parts else parts
+    hit = _recall(key)
+    if hit is None:
+        hit = validity_report(name, roughness, k, eps=eps)
+        hit["roughness_valid"] = bool(hit.get("valid", False))
+        if ti is not None:  # checked at the distinct angles, mapped back to theta_i's shape
+            hit.update(angle_report(name, roughness, k, eps=eps, theta_i=ti))
+            if "angle_valid" in hit:
+                hit["valid"] = hit["roughness_valid"] and bool(np.all(hit["angle_valid"]))
+        for v in hit.values():
+            if isinstance(v, np.ndarray):
+                v.flags.writeable = False  # shared by the calls that hit this entry
+        _remember(key, hit)
+    return dict(hit)
+
+
 def clear_cache() -> None:
-    """Forget every cached validity report."""
+    """Forget every cached validity report and ranking."""
     _CACHE.clear()
 
 
@@ -104,8 +168,14 @@ def rank_methods(roughness, k: float, *, eps=None, theta_i=None, methods=None):
     """
     methods = tuple(methods or solvers.AUTO_ORDER)
     native = getattr(select, "rank_methods", None)
-    if native is not None:
-        return list(native(roughness, k, eps=eps, theta_i=theta_i, methods=methods))
+    if native is not None:  # cached like the reports (fresh report dicts each call)
+        parts = ("rank", methods, roughness, float(k), _key_of(eps), _key_of(theta_i))
+        key = None if _UNCACHEABLE in parts else parts
+        ranked = _recall(key)
+        if ranked is None:
+            ranked = list(native(roughness, k, eps=eps, theta_i=theta_i, methods=methods))
+            _remember(key, ranked)
+        return [(n, dict(r)) for n, r in ranked]
     first, _ = select.select_method(roughness, k, methods)
     reports = {n: validity_report(n, roughness, k, eps=eps, theta_i=theta_i) for n in methods}
     order = {n: i for i, n in enumerate(methods)}

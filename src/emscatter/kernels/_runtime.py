@@ -43,6 +43,7 @@ def _prefer_512_bit_vectors() -> None:
 
 _prefer_512_bit_vectors()
 _MIN_CHUNK = 1 << 14
+_CPUS = os.cpu_count() or 1
 
 
 def cache_dir() -> Path:
@@ -100,7 +101,7 @@ def run_chunked(part, n: int, threads: int | None = None) -> None:
     """Call ``part(start, stop)`` over ``[0, n)`` in contiguous chunks, one per thread
     (``threads``: default the CPU count, at most 8); ``part`` calls a ``nogil`` kernel."""
     if threads is None:
-        threads = min(os.cpu_count() or 1, 8)
+        threads = min(_CPUS, 8)
     parts = int(max(1, min(threads, n // _MIN_CHUNK)))
     if parts == 1:
         part(0, n)

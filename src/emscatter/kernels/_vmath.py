@@ -79,20 +79,12 @@ def vexp(x):
     xc = min(max(x, EXP_LO), EXP_HI)
     n = math.floor(xc * INV_LN2 + 0.5)
     r = (xc - n * LN2_HI) - n * LN2_LO
-    p = E13
-    p = p * r + E12
-    p = p * r + E11
-    p = p * r + E10
-    p = p * r + E9
-    p = p * r + E8
-    p = p * r + E7
-    p = p * r + E6
-    p = p * r + E5
-    p = p * r + E4
-    p = p * r + E3
-    p = p * r + E2
-    p = p * r + E1
-    p = p * r + E0
+    # Estrin's scheme (short dependency chains; the loops using it are latency-bound)
+    r2 = r * r
+    r4 = r2 * r2
+    lo = ((E0 + E1 * r) + (E2 + E3 * r) * r2) + ((E4 + E5 * r) + (E6 + E7 * r) * r2) * r4
+    hi = ((E8 + E9 * r) + (E10 + E11 * r) * r2) + (E12 + E13 * r) * r4
+    p = lo + hi * (r4 * r4)
     ni = int(n)
     # multiplying by 2^m is exact in the normal range: scale in two steps so n = 1024 does
     # not overflow and the subnormal range (n < −1021) rounds once
@@ -155,6 +147,15 @@ def vsin(x):
     c = _cos_poly(r)
     v = s if (q & 1) == 0 else c
     return -v if q >= 2 else v
+
+
+@inline
+def vsin_q1(x):
+    """``sin x`` for ``0 ≤ x ≤ π/2`` (incidence and scattering angles): :func:`vsin`'s
+    arithmetic without the quadrant bookkeeping of the other three quadrants."""
+    n = math.floor(x * INV_PIO2 + 0.5)  # 0 or 1
+    r = ((x - n * PIO2_1) - n * PIO2_2) - n * PIO2_3
+    return _sin_poly(r) if n < 0.5 else _cos_poly(r)
 
 
 @inline

@@ -40,11 +40,14 @@ def _scalar_eps(eps):
     return None
 
 
-def _flat(a, n: int) -> np.ndarray:
+def _flat(a, n: int, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """``a`` broadcast to ``shape`` (default ``(n,)``) as a flat C-contiguous float64 array."""
     a = np.asarray(a, dtype=np.float64)
-    if a.size == n and a.ndim == 1 and a.flags.c_contiguous:
-        return a
-    return np.ascontiguousarray(np.broadcast_to(a, (n,)).reshape(n))
+    if a.size == n and a.flags.c_contiguous:
+        return a.reshape(n)
+    out = np.empty((n,) if shape is None else shape)
+    out[...] = a  # a broadcast copy (cheaper than reshaping a broadcast view)
+    return out.reshape(n)
 
 
 def _azimuth_ok(dphi: np.ndarray) -> bool:
@@ -92,7 +95,7 @@ def covered_go(dimension: int, sx: float, sy: float, eps, shadowing) -> bool:
     return (
         dimension == 2
         and sx == sy
-        and shadowing in (None, "smith", "separable", "correlated")
+        and shadowing in (None, "smith", "separable", "correlated", "direction-correlated")
         and _scalar_eps(eps) is not None
     )
 
@@ -100,10 +103,15 @@ def covered_go(dimension: int, sx: float, sy: float, eps, shadowing) -> bool:
 def go_sigma0(
     ti, ts, dphi, eps, *, dimension: int, sx: float, sy: float, shadowing,
     out: np.ndarray, coherent_out: np.ndarray | None = None, k: float = 1.0, sigma: float = 0.0,
-    threads: int | None = None,
+    threads: int | None = None, shape: tuple[int, ...] | None = None,
 ) -> bool:  # fmt: skip
     """GO σ⁰ into ``out`` (2, 2, n) and, when given, the Kirchhoff coherent reflectivity into
-    ``coherent_out`` (2, n) (as ``emscatter.solvers.kirchhoff_go.bistatic``)."""
+    ``coherent_out`` (2, n) (as ``emscatter.solvers.kirchhoff_go.bistatic``).
+
+    The angles [rad] are flat arrays of length n, or (``shape`` given) unbroadcast arrays that
+    broadcast to ``shape`` (C order, n = prod(shape)): a grid of directions then takes the
+    kernel that computes each direction's trigonometry and shadowing once
+    (:func:`emscatter.kernels.go.go_sigma0_grid`)."""
     n = out.shape[-1]
     if (
         backend() != "numba"
@@ -111,16 +119,31 @@ def go_sigma0(
         or not covered_go(dimension, sx, sy, eps, shadowing)
     ):
         return False
-    dphi = _flat(dphi, n)
-    if not _azimuth_ok(dphi) or not out.flags.c_contiguous:
+    if not out.flags.c_contiguous or (
+        coherent_out is not None and not coherent_out.flags.c_contiguous
+    ):
         return False
-    if coherent_out is not None and not coherent_out.flags.c_contiguous:
+    arrays = [np.asarray(a, dtype=np.float64) for a in (ti, ts, dphi)]
+    if not _azimuth_ok(arrays[2]):
         return False
+    e = _scalar_eps(eps)
+    if shape is not None and len(shape) <= 3 and sum(a.size for a in arrays) < n:
+        from .go import coherent_reflectivity, go_sigma0_grid
+
+        go_sigma0_grid(
+            *arrays, shape, e, slope_variance=sx, shadowing=shadowing, out=out, threads=threads
+        )
+        if coherent_out is not None:  # a function of θi alone: once per θi, then spread
+            small = coherent_reflectivity(arrays[0].reshape(-1), e, k=k, sigma=sigma)
+            lead = (1,) * (len(shape) - arrays[0].ndim)
+            coherent_out.reshape(2, *shape)[...] = small.reshape(2, *lead, *arrays[0].shape)
+        return True
     from .go import go_sigma0 as kernel
 
+    ti, ts, dphi = (_flat(a, n, shape) for a in arrays)
     kernel(
-        _flat(ti, n), _flat(ts, n), dphi, _scalar_eps(eps), slope_variance=sx,
-        shadowing=shadowing, out=out, coherent_out=coherent_out, k=k, sigma=sigma, threads=threads,
+        ti, ts, dphi, e, slope_variance=sx, shadowing=shadowing, out=out,
+        coherent_out=coherent_out, k=k, sigma=sigma, threads=threads,
     )  # fmt: skip
     return True
 

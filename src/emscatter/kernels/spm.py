@@ -16,15 +16,17 @@ import math
 
 import numpy as np
 
-from . import SPM_EXPONENTIAL as EXPONENTIAL  # noqa: F401 (the code callers pass)
+from . import SPM_EXPONENTIAL as EXPONENTIAL
 from . import SPM_GAUSSIAN as GAUSSIAN
-from ._runtime import jit, run_fused
+from ._runtime import inline, jit, run_fused
 from ._vmath import vcos, vexp, vsin
 
 
-@jit
-def _spm1_kernel(ti, ts, dphi, pec, er, ei, kl, area, pref, spectrum, hh, hv, vh, vv):
-    """σ⁰ [-] into the four 1-D outputs (contiguous, so the loop vectorizes)."""
+@inline
+def _spm1_loop(ti, ts, dphi, pec, er, ei, kl, area, pref, spectrum, hh, hv, vh, vv):
+    """σ⁰ [-] into the four 1-D outputs (contiguous, so the loop vectorizes); ``pec`` and
+    ``spectrum`` are constants of each compiled copy (:data:`_KERNELS`: a loop-invariant
+    ``if`` is not unswitched by LLVM here, so one loop would compute both sides)."""
     em1_2 = (er - 1.0) * (er - 1.0) + ei * ei
     for j in range(ti.size):
         si = vsin(ti[j])
@@ -79,6 +81,34 @@ def _spm1_kernel(ti, ts, dphi, pec, er, ei, kl, area, pref, spectrum, hh, hv, vh
         vv[j] = pw * fvv
 
 
+@jit
+def _spm1_pec_gaussian(ti, ts, dphi, er, ei, kl, area, pref, hh, hv, vh, vv):
+    _spm1_loop(ti, ts, dphi, True, er, ei, kl, area, pref, GAUSSIAN, hh, hv, vh, vv)
+
+
+@jit
+def _spm1_pec_exponential(ti, ts, dphi, er, ei, kl, area, pref, hh, hv, vh, vv):
+    _spm1_loop(ti, ts, dphi, True, er, ei, kl, area, pref, EXPONENTIAL, hh, hv, vh, vv)
+
+
+@jit
+def _spm1_dielectric_gaussian(ti, ts, dphi, er, ei, kl, area, pref, hh, hv, vh, vv):
+    _spm1_loop(ti, ts, dphi, False, er, ei, kl, area, pref, GAUSSIAN, hh, hv, vh, vv)
+
+
+@jit
+def _spm1_dielectric_exponential(ti, ts, dphi, er, ei, kl, area, pref, hh, hv, vh, vv):
+    _spm1_loop(ti, ts, dphi, False, er, ei, kl, area, pref, EXPONENTIAL, hh, hv, vh, vv)
+
+
+_KERNELS = {
+    (True, GAUSSIAN): _spm1_pec_gaussian,
+    (True, EXPONENTIAL): _spm1_pec_exponential,
+    (False, GAUSSIAN): _spm1_dielectric_gaussian,
+    (False, EXPONENTIAL): _spm1_dielectric_exponential,
+}
+
+
 def spm1_sigma0(
     ti: np.ndarray,
     ts: np.ndarray,
@@ -100,8 +130,8 @@ def spm1_sigma0(
     pec = isinstance(eps, str)
     e = 0j if pec else complex(eps)
     pref = 16.0 * math.pi * k**4 * sigma**2  # same expression as the numpy path
-    consts = (pec, e.real, e.imag, k * length, length * length, pref, spectrum)
+    consts = (e.real, e.imag, k * length, length * length, pref)
 
     outs = (out[0, 0], out[0, 1], out[1, 0], out[1, 1])
-    run_fused(_spm1_kernel, (ti, ts, dphi), consts, outs, threads)
+    run_fused(_KERNELS[(pec, spectrum)], (ti, ts, dphi), consts, outs, threads)
     return out

@@ -24,6 +24,7 @@ name      formulation                                      module
 from __future__ import annotations
 
 import importlib
+import sys
 from types import ModuleType
 
 _REGISTRY: dict[str, str] = {
@@ -54,4 +55,5 @@ def get(name: str) -> ModuleType:
     """The solver module registered as ``name``."""
     if not isinstance(name, str) or name.lower() not in _REGISTRY:
         raise ValueError(f"method must be one of {['auto', *available()]}, got {name!r}")
-    return importlib.import_module(_REGISTRY[name.lower()])
+    target = _REGISTRY[name.lower()]
+    return sys.modules.get(target) or importlib.import_module(target)  # (the import, once)

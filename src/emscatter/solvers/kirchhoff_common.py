@@ -39,7 +39,13 @@ import os
 import numpy as np
 from scipy import special
 
-from ..conventions import check_angle, check_finite, check_positive
+from ..conventions import (
+    broadcast_shape,
+    broadcast_view,
+    check_angle,
+    check_finite,
+    check_positive,
+)
 from ..fresnel import PEC, check_eps, is_pec
 from ..spectra import Roughness, check_roughness
 from .validity import Check, angle_lower, build_report, lower, wave_slope_variances
@@ -60,15 +66,42 @@ __all__ = [
 ]
 
 _TAU_EPS = 1e-28  # |k̂_i × k̂_s|² below this is treated as exact backscatter
+_CPUS = os.cpu_count() or 1
 
 
 class Geometry:
-    """Checked, broadcast angles; trigonometry flattened to 1-D (kept 0-d when scalar)."""
+    """Checked, broadcast angles; trigonometry flattened to 1-D (kept 0-d when scalar).
+
+    The flat arrays (``ti_flat``, ``ts_flat``, ``dphi``, ``phi_i_flat``, ``phi_s_flat``,
+    ``eps_flat``) are made on first use from the checked, unbroadcast inputs in
+    ``compact`` (θi, θs, φs − φi, φi, φs, ε): a compiled kernel working on a grid of angles
+    reads those directly and never pays for the copies."""
 
     __slots__ = (
-        "theta_i", "theta_s", "phi_s", "phi_i", "eps", "eps_flat", "shape", "size",
-        "ti_flat", "ts_flat", "dphi", "phi_i_flat", "phi_s_flat", "phi_i_zero", "dimension",
+        "theta_i", "theta_s", "phi_s", "phi_i", "_eps", "shape", "size", "phi_i_zero",
+        "dimension", "compact", "_flats",
     )  # fmt: skip
+
+    @property
+    def eps(self):
+        """``"pec"`` or the permittivity broadcast to ``shape`` (read-only; made on first use)."""
+        if self._eps is None:
+            self._eps = _broadcast(self.compact[5], self.shape)
+        return self._eps
+
+    def _flat_input(self, i: int):
+        flats = self._flats
+        if flats[i] is None:
+            a = self.compact[i]
+            flats[i] = a if isinstance(a, str) else _flat(a, self.shape)
+        return flats[i]
+
+    ti_flat = property(lambda self: self._flat_input(0))
+    ts_flat = property(lambda self: self._flat_input(1))
+    dphi = property(lambda self: self._flat_input(2))
+    phi_i_flat = property(lambda self: self._flat_input(3))
+    phi_s_flat = property(lambda self: self._flat_input(4))
+    eps_flat = property(lambda self: self._flat_input(5))
 
     def chunk(self, sl: slice | None = None, *, signed_azimuth: bool = False) -> Local:
         """Derived vectors (``q`` in units of k) for the flat index range ``sl`` (all if None).
@@ -117,7 +150,27 @@ class Local:
 
 
 def _flat(a: np.ndarray, shape) -> np.ndarray:
-    return a if a.ndim == 0 else np.broadcast_to(a, shape).reshape(-1)
+    if a.ndim == 0:
+        return a
+    if a.shape == shape:
+        return a.reshape(-1)
+    out = np.empty(shape, dtype=a.dtype)  # a broadcast copy (faster than reshaping a view)
+    out[...] = a
+    return out.reshape(-1)
+
+
+def _broadcast(a: np.ndarray, shape) -> np.ndarray:
+    """``np.broadcast_to(a, shape)`` (read-only); cheaper when ``a`` has the shape, or is a
+    number spread over a small shape (a read-only copy then)."""
+    if a.shape != shape:
+        if a.ndim == 0 and len(shape) == 1 and shape[0] <= 4096:
+            view = np.full(shape, a)
+            view.flags.writeable = False
+            return view
+        return broadcast_view(a, shape)
+    view = a.view()
+    view.flags.writeable = False
+    return view
 
 
 def _trig(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -126,27 +179,35 @@ def _trig(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return s, np.sqrt((1.0 - s) * (1.0 + s))
 
 
-def geometry(theta_i, theta_s, phi_s, phi_i, eps, dimension: int) -> Geometry:
+def geometry(
+    theta_i, theta_s, phi_s, phi_i, eps, dimension: int, *, checked: bool = False
+) -> Geometry:
     """Check and broadcast the angles [rad] and ``eps`` (complex or "pec").
 
     For ``dimension=1`` the profile lies in the plane of incidence (whatever φi) and
     ``φs ∈ {φi, φi + π}`` (mod 2π); ``q_x`` is then measured along that plane.
+    ``checked=True``: the inputs were checked as here already (float arrays, angles in
+    range, ``eps`` "pec" or complex) — the public API's entry; only broadcasting is done.
     """
-    ti = check_angle("theta_i", theta_i)
-    ts = check_angle("theta_s", theta_s)
-    ps = check_finite("phi_s", phi_s)
-    pi_ = check_finite("phi_i", phi_i)
-    for name, arr in (("phi_s", ps), ("phi_i", pi_)):
-        if np.iscomplexobj(arr):
-            raise TypeError(f"{name} must be real (radians), got a complex array")
-    ps = ps.astype(float)
-    pi_ = pi_.astype(float)
-    eps = check_eps(eps)
+    if checked:
+        ti, ts, ps, pi_ = theta_i, theta_s, phi_s, phi_i
+        eps = PEC if is_pec(eps) else np.asarray(eps, dtype=complex)
+    else:
+        ti = check_angle("theta_i", theta_i)
+        ts = check_angle("theta_s", theta_s)
+        ps = check_finite("phi_s", phi_s)
+        pi_ = check_finite("phi_i", phi_i)
+        for name, arr in (("phi_s", ps), ("phi_i", pi_)):
+            if np.iscomplexobj(arr):
+                raise TypeError(f"{name} must be real (radians), got a complex array")
+        ps = ps.astype(float)
+        pi_ = pi_.astype(float)
+        eps = check_eps(eps)
     arrays = {"theta_i": ti, "theta_s": ts, "phi_s": ps, "phi_i": pi_}
     if not is_pec(eps):
         arrays["eps"] = eps
     try:
-        shape = np.broadcast_shapes(*(np.shape(a) for a in arrays.values()))
+        shape = broadcast_shape(*(np.shape(a) for a in arrays.values()))
     except ValueError:
         desc = ", ".join(f"{k}{np.shape(v)}" for k, v in arrays.items())
         raise ValueError(f"angle arrays (and eps) do not broadcast together: {desc}") from None
@@ -160,16 +221,13 @@ def geometry(theta_i, theta_s, phi_s, phi_i, eps, dimension: int) -> Geometry:
             )
     g = Geometry()
     g.shape = shape
-    g.size = int(np.prod(shape, dtype=np.int64))
-    g.theta_i, g.theta_s, g.phi_s, g.phi_i = (np.broadcast_to(a, shape) for a in (ti, ts, ps, pi_))
-    if is_pec(eps):
-        g.eps = g.eps_flat = PEC
-    else:
-        g.eps = np.broadcast_to(eps, shape)
-        g.eps_flat = _flat(eps, shape)
-    g.ti_flat, g.ts_flat = _flat(ti, shape), _flat(ts, shape)
-    g.dphi = _flat(ps - pi_, shape)
-    g.phi_i_flat, g.phi_s_flat = _flat(pi_, shape), _flat(ps, shape)
+    g.size = math.prod(shape)
+    g.theta_i = _broadcast(ti, shape)
+    g.theta_s = g.theta_i if ts is ti else _broadcast(ts, shape)  # backscatter: one view
+    g.phi_s, g.phi_i = _broadcast(ps, shape), _broadcast(pi_, shape)
+    g._eps = PEC if is_pec(eps) else None  # (broadcast on first use)
+    g.compact = (ti, ts, ps - pi_, pi_, ps, PEC if is_pec(eps) else eps)
+    g._flats = [None] * 6
     g.phi_i_zero = bool(pi_.ndim == 0 and float(pi_) == 0.0)
     g.dimension = dimension
     return g
@@ -392,7 +450,7 @@ def check_shadowing(shadowing_opt) -> str | None:
 def workers_for(threads, n_chunks: int) -> int:
     """Number of worker threads: ``threads`` (None → CPU count, at most 8), ≤ ``n_chunks``."""
     if threads is None:
-        threads = min(os.cpu_count() or 1, 8)
+        threads = min(_CPUS, 8)
     if isinstance(threads, bool) or not isinstance(threads, int | np.integer) or threads < 1:
         raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
     return int(min(threads, n_chunks))

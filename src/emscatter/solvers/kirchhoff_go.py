@@ -50,6 +50,7 @@ import numpy as np
 from ..conventions import check_angle, check_positive
 from ..kernels import dispatch
 from ..scattering import Scattering
+from . import go_monostatic
 from .kirchhoff_common import (
     check_flag,
     check_roughness,
@@ -221,13 +222,27 @@ def bistatic(
     :class:`~emscatter.scattering.Scattering` with ``sigma0`` (2, 2, *shape) and the Kirchhoff
     coherent reflectivity ``|R_p(θi)|² exp(−(2kσ cosθi)²)``.
     """
-    rough = check_roughness(roughness)
-    k = check_positive("k", k, unit="rad/m")
+    return _bistatic(
+        roughness, eps, k, theta_i, theta_s, phi_s, phi_i, shadowing=shadowing, k_max=k_max,
+        slope_variance=slope_variance, threads=threads, coherent=coherent, validity=True,
+    )  # fmt: skip
+
+
+def _bistatic(
+    roughness, eps, k, theta_i, theta_s, phi_s, phi_i=0.0, *, shadowing=True, k_max=None,
+    slope_variance=None, threads=None, coherent=True, validity=False, checked=False,
+    monostatic=False,
+) -> Scattering:  # fmt: skip
+    """:func:`bistatic`; ``info["validity"]`` is None unless ``validity``; ``checked``: the
+    roughness, ``k``, angles and ``eps`` are checked already (:func:`.kirchhoff_common.geometry`);
+    ``monostatic``: the caller guarantees ``θs = θi``, ``φs = φi + π`` (closed form then)."""
+    rough = roughness if checked else check_roughness(roughness)
+    k = float(k) if checked else check_positive("k", k, unit="rad/m")
     mode = check_shadowing(shadowing)
     sx, sy = slope_variances(rough, k_max, slope_variance, k=k)
     want_coh = check_flag("coherent", coherent)
     dim = rough.dimension
-    g = geometry(theta_i, theta_s, phi_s, phi_i, eps, dim)
+    g = geometry(theta_i, theta_s, phi_s, phi_i, eps, dim, checked=checked)
     shape = g.shape
     n = g.size
     flat = np.empty((2, 2, n))
@@ -245,9 +260,13 @@ def bistatic(
 
     starts = range(0, n, _CHUNK)
     workers = workers_for(threads, len(starts))
-    if dispatch.go_sigma0(
-        g.ti_flat, g.ts_flat, g.dphi, g.eps_flat, dimension=dim, sx=sx, sy=sy, shadowing=mode,
-        out=flat, coherent_out=coh if want_coh else None, k=k, sigma=rough.sigma, threads=workers,
+    ti_c, ts_c, dphi_c, _, _, eps_c = g.compact  # unbroadcast: the kernel reads grids as such
+    if monostatic and not want_coh and go_monostatic.covers(g, dim, sx, sy, mode):
+        flat = go_monostatic.backscatter_sigma0(g.ti_flat, eps_c, sx, mode)
+    elif dispatch.go_sigma0(
+        ti_c, ts_c, dphi_c, eps_c, dimension=dim, sx=sx, sy=sy, shadowing=mode, out=flat,
+        coherent_out=coh if want_coh else None, k=k, sigma=rough.sigma, threads=workers,
+        shape=shape,
     ):  # fmt: skip
         pass  # compiled kernel (emscatter.kernels); the numpy path below is the reference
     elif workers > 1:
@@ -262,7 +281,9 @@ def bistatic(
         "total_mean_square_slope": sx + sy,
         "slope_cutoff": slope_cutoff(rough, k, k_max, slope_variance),
         "shadowing": mode,
-        "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx),
+        "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx)
+        if validity
+        else None,
     }
     if not want_coh:
         info["coherent"] = "not computed (coherent=False)"
@@ -278,3 +299,13 @@ def bistatic(
         dimension=dim,
         info=info,
     )
+
+
+def _bistatic_checked(*args, monostatic: bool = False, **options) -> Scattering:
+    """The public API's entry (``bistatic.checked``): inputs checked as :func:`bistatic`
+    checks them; no validity report of its own (the API supplies one); ``monostatic``: the
+    exact backscatter geometry (``θs = θi``, ``φs = φi + π``)."""
+    return _bistatic(*args, **options, validity=False, checked=True, monostatic=monostatic)
+
+
+bistatic.checked = _bistatic_checked

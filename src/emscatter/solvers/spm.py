@@ -375,10 +375,26 @@ def bistatic(
     rough = _check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
     order = _check_order(order)
-    cut = coherent_cutoff(rough, k, k_max)
+    coherent_cutoff(rough, k, k_max)  # checks k_max here, in the order of the messages
     eps_c = _eps_array(eps)
     ti = check_angle("theta_i", theta_i)
     ts = check_angle("theta_s", theta_s)
+    return _bistatic_checked(
+        rough, eps_c, k, ti, ts, phi_s, phi_i, order=order, coherent=coherent, k_max=k_max,
+        validity=True,
+    )  # fmt: skip
+
+
+def _bistatic_checked(
+    rough, eps, k, ti, ts, phi_s, phi_i=0.0, *, order=2, coherent=True, k_max=None, validity=False
+) -> Scattering:
+    """:func:`bistatic` for inputs checked as it checks them (``bistatic.checked``, the public
+    API's entry): ``rough`` a Roughness, ``k`` a float > 0, ``eps`` "pec" or complex, ``ti``
+    and ``ts`` float arrays in [0, π/2]. ``info["validity"]`` is None unless ``validity``
+    (the API supplies its own report)."""
+    order = _check_order(order)
+    cut = coherent_cutoff(rough, k, k_max)
+    eps_c = PEC if is_pec(eps) else np.asarray(eps, dtype=complex)
     big = 1e6
     ps = check_angle("phi_s", phi_s, low=-big, high=big)
     pi_ = check_angle("phi_i", phi_i, low=-big, high=big)
@@ -417,7 +433,7 @@ def bistatic(
         coh, clipped = _coherent(rough, eps_b, k, ti_b, shape, 16, 16, pi_b, cut)
     coh = np.broadcast_to(coh, (2, *shape))
     info = {
-        "validity": check_validity(rough, k, k_max=k_max),
+        "validity": check_validity(rough, k, k_max=k_max) if validity else None,
         "order": order,
         "coherent_clipped": clipped,
         "coherent_cutoff": cut if order == 2 and coherent else None,
@@ -436,3 +452,6 @@ def bistatic(
         dimension=rough.dimension,
         info=info,
     )
+
+
+bistatic.checked = _bistatic_checked  # the API's entry for inputs it has checked
