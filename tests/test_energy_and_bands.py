@@ -189,6 +189,16 @@ def test_coherent_part_is_computed_only_when_read(monkeypatch):
     np.testing.assert_allclose(s.coherent_pol("v"), eager.coherent[1], rtol=1e-14)
 
 
+def test_a_caller_may_ask_for_the_coherent_part_eagerly():
+    """``coherent=True`` through the API is the solver's option, not a clash with the lazy one."""
+    rough = em.GaussianCorrelation(0.01, 0.1)
+    th = np.radians([10.0, 40.0, 70.0])
+    eager = em.backscatter(rough, 17 + 2j, frequency=1e9, theta_i=th, method="spm", coherent=True)
+    lazy = em.backscatter(rough, 17 + 2j, frequency=1e9, theta_i=th, method="spm")
+    assert eager.coherent_computed and not lazy.coherent_computed
+    np.testing.assert_allclose(eager.coherent, lazy.coherent, rtol=1e-14)
+
+
 def test_validity_reports_are_cached_per_roughness(monkeypatch):
     dispatch.clear_cache()
     count = []

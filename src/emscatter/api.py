@@ -102,7 +102,8 @@ def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scatt
     name = rank_methods(rough, k, eps=eps)[0][0] if method == "auto" else method
     opts = _map_options(name, options, method == "auto")  # before any warning
     name, module, report, make_nan = resolve_method(rough, k, name, out_of_range, eps, theta_i=ti)
-    lazy = _takes(module.bistatic, "coherent")  # BOARD interface 3
+    # BOARD interface 3: the coherent part is computed on first read, unless asked for eagerly
+    lazy = _takes(module.bistatic, "coherent") and not opts.pop("coherent", False)
     extra = {"coherent": False} if lazy else {}
     result = module.bistatic(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
     shape = result.sigma0.shape[2:]
