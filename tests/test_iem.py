@@ -265,12 +265,17 @@ def test_crosspol_quadrature_converged_and_pec_limit():
 def test_bistatic_crosspol_single_scattering_out_of_plane():
     """Out of the plane the single-scattering hv is nonzero (Kirchhoff polarization mixing plus
     the AIEM cross-pol complementary coefficients) and → SPM1's hv as kσ → 0 (the first
-    test); in the plane it vanishes except for the backscatter multiple-scattering term."""
+    test); in the plane it vanishes, leaving the multiple-scattering term (tests in
+    tests/test_iem_crosspol.py) as the only in-plane hv."""
     rough = GaussianCorrelation(0.05, 0.4)
-    out = iem.bistatic(rough, 15 + 2j, K, 0.5, 0.7, 2.0)
+    out = iem.bistatic(rough, 15 + 2j, K, 0.5, 0.7, 2.0, crosspol=False)
     assert out.hv > 1e-6 * out.hh and out.vh > 1e-6 * out.vv
-    inplane = iem.bistatic(rough, 15 + 2j, K, 0.5, np.array([0.7, 0.2]), np.array([0.0, math.pi]))
-    assert np.all(inplane.hv == 0) and np.all(inplane.vh == 0)
+    ts, ps = np.array([0.7, 0.2]), np.array([0.0, math.pi])
+    single = iem.bistatic(rough, 15 + 2j, K, 0.5, ts, ps, crosspol=False)
+    assert np.all(single.hv == 0) and np.all(single.vh == 0)
+    both = iem.bistatic(rough, 15 + 2j, K, 0.5, ts, ps)
+    assert np.all(both.hv > 0) and np.all(both.vh > 0)
+    np.testing.assert_array_equal(both.hh, single.hh)
 
 
 # ----------------------------------------------------------------------------- energy, validity

@@ -153,7 +153,7 @@ def bistatic_hemisphere():
     ts = np.radians(np.linspace(0.0, 85.0, 60))
     ps = np.linspace(0.0, 2 * math.pi, 121)
     T, P = np.meshgrid(ts, ps, indexing="ij")
-    a = iem.bistatic(rough, EPS, k, math.radians(30.0), T, P, coherent=False)
+    a = iem.bistatic(rough, EPS, k, math.radians(30.0), T, P, coherent=False, crosspol=False)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.8), subplot_kw={"projection": "polar"})
     for ax, pol in zip(axes, ("hh", "vv", "hv"), strict=True):
         m = ax.pcolormesh(P, np.degrees(T), _db(a.pol(pol)), shading="auto", cmap="viridis",
