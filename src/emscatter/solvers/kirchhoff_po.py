@@ -346,16 +346,18 @@ def _continuum_sum(lt, idx: np.ndarray, n0: np.ndarray, log_rtol: float):
     PO at kσ = 1e3 used to walk ~10⁴ terms per geometry). ``ok`` is False where the window
     does not reach the tolerance or would cross ``n = 1`` (those take the direct sum)."""
     n = n0.astype(float).copy()
+    d2 = np.full(n.shape, -1.0)
+    todo = np.arange(n.size)
     for _ in range(8):  # Newton on d lt/dn with central differences of step ≈ the width
-        h = np.sqrt(n)
-        f0 = lt(n[:, None], idx)[:, 0]
-        fp = lt((n + h)[:, None], idx)[:, 0]
-        fm = lt((n - h)[:, None], idx)[:, 0]
-        d1 = (fp - fm) / (2 * h)
-        d2 = np.minimum((fp - 2 * f0 + fm) / (h * h), -1e-300)
-        step = np.clip(-d1 / d2, -0.5 * n, 0.5 * n)
-        n = np.maximum(n + step, 2.0)
-        if np.all(np.abs(step) < 1e-3 * h):
+        nt = n[todo]
+        h = np.sqrt(nt)
+        f = lt(np.stack([nt, nt + h, nt - h], axis=1), idx[todo])
+        d1 = (f[:, 1] - f[:, 2]) / (2 * h)
+        d2[todo] = np.minimum((f[:, 1] - 2 * f[:, 0] + f[:, 2]) / (h * h), -1e-300)
+        step = np.clip(-d1 / d2[todo], -0.5 * nt, 0.5 * nt)
+        n[todo] = np.maximum(nt + step, 2.0)
+        todo = todo[np.abs(step) >= 1e-3 * h]
+        if not todo.size:
             break
     width = 1.0 / np.sqrt(-d2)
     L0 = lt(n[:, None], idx)[:, 0]
