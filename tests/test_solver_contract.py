@@ -15,7 +15,7 @@ from emscatter import solvers
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 from laws import assert_flat_limit, assert_physical, assert_reciprocal
 
-METHODS = ["spm", "go", "po"]
+METHODS = ["spm", "go", "po", "iem"]
 K = 2 * math.pi  # λ = 1 m
 
 DEG = np.radians([0.0, 10.0, 45.0, 70.0, 89.9])

@@ -17,6 +17,7 @@ name      formulation                                      module
 ``go``    Kirchhoff, geometric optics (stationary phase)   :mod:`.kirchhoff_go`
 ``po``    Kirchhoff, physical optics (scalar, series)      :mod:`.kirchhoff_po`
 ``mom``   method of moments, 1-D profiles (reference)      :mod:`.mom`
+``iem``   integral-equation model (AIEM), all pols, hv     :mod:`.iem`
 ========  ===============================================  =====================
 """
 
@@ -30,6 +31,7 @@ _REGISTRY: dict[str, str] = {
     "go": "emscatter.solvers.kirchhoff_go",
     "po": "emscatter.solvers.kirchhoff_po",
     "mom": "emscatter.solvers.mom",
+    "iem": "emscatter.solvers.iem",
 }
 
 #: Methods that ``method="auto"`` may choose, cheapest first.
