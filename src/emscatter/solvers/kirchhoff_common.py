@@ -56,6 +56,7 @@ __all__ = [
     "tangent_plane_checks",
     "illuminated_fraction",
     "shadowing_angle_check",
+    "grazing_parameter",
     "validity_report",
 ]
 
@@ -424,6 +425,13 @@ def illuminated_fraction(theta_i, s2: float) -> np.ndarray:
     ti = np.asarray(theta_i, dtype=float)
     s, c = np.sin(ti), np.cos(ti)
     return 1.0 / (1.0 + smith_lambda(_a(c, s, s2)))
+
+
+def grazing_parameter(theta_i, s2: float) -> np.ndarray:
+    """Smith's ``a = cotθi/(√2 s)`` [-] (∞ at normal incidence) for the per-direction slope
+    variance ``s2 = s²``."""
+    ti = np.asarray(theta_i, dtype=float)
+    return _a(np.cos(ti), np.sin(ti), s2)
 
 
 def shadowing_angle_check(name, theta_i, sx, sy, limit, what, source):

@@ -1,0 +1,68 @@
+"""Validation against the method of moments: validity maps and the emissivity table.
+
+* :mod:`.maps` — the maps' configurations, MoM references (stored, resumable), evaluation of
+  every approximation, ``auto``'s selector failures;
+* :mod:`.tapered` — the exponential maps' surface: the exponential spectrum with a smooth
+  inner cutoff, with the n-fold spectra PO and the IEM need;
+* :mod:`.map_files` — CSV / JSON / PNG / Markdown;
+* :mod:`.emissivity_table` — MoM vs SPM2 emissivity of a lossy dielectric.
+
+:func:`run_validation` is ``emscatter validate``.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+from .maps import FULL, PUBLISHED, SMALL, MapConfig, compute_map, tag_of
+
+__all__ = ["run_validation", "reselect"]
+
+
+def run_validation(
+    out: Path, *, full: bool = False, config: MapConfig | None = None, progress: bool = True
+) -> list[Path]:
+    """Compute and write the validity maps (``emscatter validate``): the small PEC grid
+    (:data:`.maps.SMALL`) by default, the four published maps (:data:`.maps.PUBLISHED`:
+    Gaussian and exponential, PEC and ε = 3) and the emissivity table with ``full=True``,
+    or ``config``. MoM references go to ``out/mom_<tag>.json`` as each cell finishes and
+    are reused by a later run (resume, or re-evaluation after a model change). Writes
+    ``validity_<tag>.csv/.json/.md`` and ``validity_<tag>_{h,v}.png``; returns the paths."""
+    from .emissivity_table import emissivity_table
+    from .map_files import write_map
+
+    configs = [config] if config is not None else (list(PUBLISHED) if full else [SMALL])
+    out = Path(out)
+    paths: list[Path] = []
+    for cfg in configs:
+        store = out / f"mom_{tag_of(cfg)}.json"
+        t0 = time.perf_counter()
+        rows = compute_map(cfg, store=store, progress=progress)
+        seconds = _mom_seconds(store) or time.perf_counter() - t0
+        paths.extend(write_map(rows, cfg, out, seconds=seconds))
+        paths.append(store)
+    if full and config is None:
+        paths.append(emissivity_table(out))
+    return paths
+
+
+def _mom_seconds(store: Path) -> float:
+    """Sum of the per-cell MoM times recorded in a reference store (CPU-seconds of cells)."""
+    if not store.exists():
+        return 0.0
+    cells = json.loads(store.read_text())["cells"]
+    return float(sum(c.get("seconds", 0.0) for c in cells))
+
+
+def reselect(out: Path, cfg: MapConfig = FULL) -> list[Path]:
+    """Re-evaluate every approximation and the ``auto`` choice of a map from its stored MoM
+    references (no MoM run) and rewrite its files — after a model or criterion change."""
+    store = Path(out) / f"mom_{tag_of(cfg)}.json"
+    if not store.exists():
+        raise FileNotFoundError(f"{store} missing: run `emscatter validate --full --out {out}`")
+    from .map_files import write_map
+
+    rows = compute_map(cfg, store=store, progress=False)
+    return write_map(rows, cfg, out, seconds=_mom_seconds(store))
