@@ -1,15 +1,21 @@
 # emscatter — two commands on a fresh machine:
 #   make demo   set up .venv (and a system libLLVM >= 17 for Mitsuba/Sionna's CPU backend), run the demo into out/
 #   make test   the same setup, then the whole test suite
+#   make lint   ruff check + format check;  make demo-quick  the demo on small grids (CI)
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test setup llvm lint bench validate clean
+.PHONY: demo demo-quick test setup llvm lint bench validate clean
 
 demo: setup
 	$(VENV)/bin/emscatter demo --out out
+
+# the demo on small grids (CI runs it after the tests): a scratch folder, removed first
+demo-quick: setup
+	rm -rf out/ci-demo
+	$(VENV)/bin/emscatter demo --quick --out out/ci-demo
 
 test: setup
 	$(PY) -m pytest -q -n 2
@@ -26,9 +32,12 @@ $(STAMP): pyproject.toml
 llvm:
 	@bash tools/ensure_llvm.sh
 
+# the folders that exist (examples/ arrives with the renderer bridge; a missing path is an error)
+LINT_PATHS := $(wildcard src tests benchmarks validation examples)
+
 lint: setup
-	$(VENV)/bin/ruff check src tests benchmarks validation examples
-	$(VENV)/bin/ruff format --check src tests benchmarks validation examples
+	$(VENV)/bin/ruff check $(LINT_PATHS)
+	$(VENV)/bin/ruff format --check $(LINT_PATHS)
 
 bench: setup
 	$(PY) benchmarks/run_all.py

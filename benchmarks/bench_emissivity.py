@@ -88,6 +88,12 @@ def main() -> dict:
     ax.set_title("Emissivity quadrature: error against time", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
+    sys.path.insert(0, str(HERE))
+    from common import command, machine, stamp
+
+    out["machine_info"] = machine()
+    out["command"] = command()
+    stamp(fig, out["machine_info"], out["command"], 7)
     save_figure(fig, HERE / "results" / "emissivity.png")
     write_json(HERE / "results" / "emissivity.json", out)
     return out

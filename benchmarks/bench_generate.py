@@ -44,8 +44,11 @@ import numpy as np
 import scipy
 import scipy.fft as sfft
 
-from emscatter.spectra import FractionalBrownian, GaussianCorrelation
-from emscatter.surfaces.generate import generate_surface
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import cpu_model  # noqa: E402
+
+from emscatter.spectra import FractionalBrownian, GaussianCorrelation  # noqa: E402
+from emscatter.surfaces.generate import generate_surface  # noqa: E402
 
 N_BIG = 4096
 N_EXACT = 1024
@@ -54,13 +57,7 @@ HURSTS = (0.1, 0.3, 0.5, 0.7, 0.9)
 
 
 def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+    return cpu_model()
 
 
 def _machine() -> dict:

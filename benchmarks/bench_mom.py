@@ -18,6 +18,7 @@ import json
 import math
 import os
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -97,11 +98,14 @@ def mc_throughput(n_real: int) -> dict:
     t0 = time.perf_counter()
     with (
         LocalCluster(
-            n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
+            n_workers=2,
+            threads_per_worker=1,
+            host="127.0.0.1",
+            dashboard_address=None,
             silence_logs=40,
         ) as cluster,
         Client(cluster) as client,
-    ):  # fmt: skip
+    ):
         t_start = time.perf_counter() - t0
         ex = client.get_executor()
         t1 = time.perf_counter()
@@ -189,6 +193,10 @@ def main(argv=None) -> None:
     ax.set_title("1-D MoM, PEC, 10 pts/λ (2-core machine)")
     ax.legend(fontsize=8)
     fig.tight_layout()
+    sys.path.insert(0, str(HERE))
+    from common import command, machine, stamp
+
+    stamp(fig, machine(), command(), None)
     fig.savefig(HERE / "mom_solve_time.png", dpi=120)
     print(f"wrote {out_dir / 'mom.json'} and {HERE / 'mom_solve_time.png'}")
 

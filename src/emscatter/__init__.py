@@ -38,6 +38,7 @@ __all__ = [
     "backscatter",
     "emissivity",
     "generate_surface",
+    "materials",
     "Scattering",
     "GaussianCorrelation",
     "ExponentialCorrelation",
@@ -53,6 +54,10 @@ __all__ = [
 
 
 def __getattr__(name):  # lazy: keep `import emscatter` light
+    if name == "materials":
+        import importlib
+
+        return importlib.import_module(".materials", __name__)
     if name == "generate_surface":
         from .surfaces.generate import generate_surface
 

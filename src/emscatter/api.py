@@ -1,10 +1,19 @@
 """The public entry points: bistatic and backscatter coefficients, emissivity.
 
 All take a roughness description (:mod:`emscatter.spectra`), a relative permittivity
-(``exp(-iωt)``: ``Im ε ≥ 0``; or ``"pec"``), exactly one of ``frequency`` [Hz] or
-``wavelength`` [m], and angles in radians that broadcast together (numpy rules).
-``method="auto"`` picks the cheapest method valid for the regime (see
-:mod:`emscatter.solvers.select`) and records it in the result.
+(``exp(-iωt)``: ``Im ε ≥ 0``; ``"pec"``; or a material — any object with
+``.eps(frequency=...)``, e.g. :mod:`emscatter.materials`), exactly one of ``frequency`` [Hz] or
+``wavelength`` [m] — a number or an array (a band) that broadcasts with the angles — and
+angles in radians that broadcast together (numpy rules). The solver runs once per distinct
+frequency.
+
+``method="auto"`` picks the best method valid for the regime (see
+:mod:`emscatter.solvers.select`) and records it in the result. Validity is checked per call
+(roughness) and per incidence angle (where the solver reports angular limits); emissivity also
+checks the energy balance at every angle (:func:`emscatter.emissivity.energy_balance`), and
+``auto`` then replaces the method at the angles where it breaks energy (see :func:`emissivity`).
+``out_of_range`` applies to all of these: ``"warn"`` names the angles (degrees) and values,
+``"nan"`` blanks those angles only, ``"raise"`` raises, ``"ignore"`` only records.
 """
 
 from __future__ import annotations
@@ -14,10 +23,12 @@ import math
 
 import numpy as np
 
-from . import solvers
+from . import cache, solvers
 from .conventions import broadcast_angles, check_angle, check_finite, wavenumber
-from .emissivity import Emissivity, hemispherical_reflectivity, lobe_width
-from .fresnel import check_eps
+from .dispatch import angle_policy, angles_deg, rank_methods, validity_report
+from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
+from .frequency import Group, as_eps_or_material, eps_at, frequency_groups
+from .fresnel import is_pec
 from .scattering import Scattering
 from .solvers import select
 from .spectra import Roughness, check_roughness
@@ -29,73 +40,101 @@ def _check_roughness(surface) -> Roughness:
     return check_roughness(surface, "surface")
 
 
-def resolve_method(roughness: Roughness, k: float, method: str, out_of_range: str, eps=None):
-    """``(name, module, report, make_nan)`` for a method name or ``"auto"``."""
-    select.check_out_of_range(out_of_range)
+def _check_method(method) -> str:
     if not isinstance(method, str):
         raise ValueError(f"method must be 'auto' or one of {solvers.available()}, got {method!r}")
-    if method.lower() == "auto":
-        name, reports = select.select_method(roughness, k)
-        report = reports[name]
-    else:
-        name = method.lower()
-        module = solvers.get(name)  # raises for unknown names
-        params = inspect.signature(module.check_validity).parameters
-        extra = {"eps": eps} if eps is not None and "eps" in params else {}
-        report = module.check_validity(roughness, k, **extra)
-    make_nan = select.enforce(name, report, out_of_range, stacklevel=4)
+    name = method.strip().lower()
+    if name != "auto":
+        solvers.get(name)  # raises naming the allowed methods
+    return name
+
+
+def _map_options(name: str, options: dict, auto: bool) -> dict:
+    mapper = getattr(select, "check_options", None)
+    return dict(mapper(name, options, picked_by_auto=auto)) if mapper else options
+
+
+def resolve_method(
+    roughness: Roughness, k: float, method: str, out_of_range: str, eps=None, *, theta_i=None
+):
+    """``(name, module, report, make_nan)`` for a method name or ``"auto"``.
+
+    ``report`` is the roughness-level validity report (angle entries added when ``theta_i``
+    [rad] is given); ``make_nan`` is True when ``out_of_range="nan"`` and the method is outside
+    its roughness-level validity (the policy has been applied: warned or raised)."""
+    select.check_out_of_range(out_of_range)
+    name = _check_method(method)
+    if name == "auto":
+        name = rank_methods(roughness, k, eps=eps)[0][0]
+    report = validity_report(name, roughness, k, eps=eps)
+    make_nan = select.enforce(name, report, out_of_range, stacklevel=5)
+    report["roughness_valid"] = bool(report.get("valid", False))
+    if theta_i is not None:  # checked at the distinct angles, mapped back to theta_i's shape
+        ti = np.asarray(theta_i, dtype=float)
+        uniq, inverse = np.unique(ti, return_inverse=True)
+        angular = validity_report(name, roughness, k, eps=eps, theta_i=uniq)
+        for key in ("angle_valid", "angle_excess"):
+            if key in angular:
+                report[key] = np.asarray(angular[key])[inverse.reshape(ti.shape)]
+        if "angle_reasons" in angular:
+            report["angle_reasons"] = angular["angle_reasons"]
+        if "angle_valid" in report:
+            report["valid"] = report["roughness_valid"] and bool(np.all(report["angle_valid"]))
     return name, solvers.get(name), report, make_nan
 
 
-def bistatic(
-    surface: Roughness,
-    eps,
-    *,
-    frequency: float | None = None,
-    wavelength: float | None = None,
-    theta_i,
-    theta_s,
-    phi_s,
-    phi_i=0.0,
-    method: str = "auto",
-    out_of_range: str = "warn",
-    **options,
-) -> Scattering:
-    """Bistatic scattering coefficients σ⁰ (all four polarizations) and coherent reflectivity.
+def _angle_mask(report: dict, shape) -> np.ndarray:
+    """Per-element validity from a report's ``angle_valid`` (all True when absent)."""
+    valid = report.get("angle_valid")
+    if valid is None:
+        return np.ones(shape, dtype=bool)
+    return np.broadcast_to(np.asarray(valid, dtype=bool), shape)
 
-    Parameters
-    ----------
-    surface : roughness statistics (``dimension=2`` surface, or ``dimension=1`` profile).
-    eps : relative permittivity of the lower medium (complex, ``Im ε ≥ 0``) or ``"pec"``.
-    frequency : [Hz], or ``wavelength`` [m] — exactly one.
-    theta_i, theta_s : incidence and scattering angles from the normal [rad], in [0, π/2].
-    phi_s, phi_i : azimuths [rad]; ``phi_s = phi_i`` is the forward (specular) half-plane.
-    method : ``"auto"``, ``"spm"``, ``"go"``, ``"po"`` or ``"mom"`` (1-D only).
-    out_of_range : ``"warn"`` | ``"raise"`` | ``"nan"`` | ``"ignore"`` when the method is
-        outside its validity range.
-    options : passed to the solver (e.g. ``shadowing=False`` for ``"go"``).
 
-    Returns
-    -------
-    :class:`emscatter.scattering.Scattering` — ``sigma0[pol_s, pol_i]`` linear,
-    ``coherent[pol_i]``, ``method``.
-    """
-    rough = _check_roughness(surface)
-    eps = check_eps(eps)
-    k = wavenumber(frequency, wavelength)
-    ti = check_angle("theta_i", theta_i)
-    ts = check_angle("theta_s", theta_s)
-    ps = check_finite("phi_s", phi_s).astype(float)
-    pi_ = check_finite("phi_i", phi_i).astype(float)
-    ti, ts, ps, pi_ = broadcast_angles(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
-    name, module, report, make_nan = resolve_method(rough, k, method, out_of_range, eps)
-    result = module.bistatic(rough, eps, k, ti, ts, ps, pi_, **options)
+def _takes(func, name: str) -> bool:
+    return name in inspect.signature(func).parameters
+
+
+# ----------------------------------------------------------------------------- bistatic
+def _bistatic_one(rough, eps, k, angles, method, out_of_range, options) -> Scattering:
+    """One frequency: resolve the method, run the solver, apply the validity policies."""
+    ti, ts, ps, pi_ = angles
+    name = rank_methods(rough, k, eps=eps)[0][0] if method == "auto" else method
+    opts = _map_options(name, options, method == "auto")  # before any warning
+    name, module, report, make_nan = resolve_method(rough, k, name, out_of_range, eps, theta_i=ti)
+    lazy = _takes(module.bistatic, "coherent")  # BOARD interface 3
+    extra = {"coherent": False} if lazy else {}
+    result = module.bistatic(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
+    shape = result.sigma0.shape[2:]
     info = {**result.info, "validity": report}
-    sigma0, coherent = result.sigma0, result.coherent
-    if make_nan:
-        sigma0 = np.full_like(sigma0, np.nan)
-        coherent = np.full_like(coherent, np.nan)
-        info["out_of_range"] = True
+    info.pop("coherent", None)
+    sigma0 = result.sigma0
+    if lazy:
+
+        def coherent():  # the specular geometry: depends on θi, φi, ε only
+            if is_pec(eps) or np.ndim(eps) == 0:
+                t, p = np.broadcast_arrays(ti, pi_)
+                e = eps
+            else:
+                t, p, e = np.broadcast_arrays(ti, pi_, eps)
+            coh = module.bistatic(rough, e, k, t, t, p, p, **opts).coherent
+            coh = coh.reshape(2, *(1,) * (len(shape) - t.ndim), *t.shape)
+            return np.array(np.broadcast_to(coh, (2, *shape)))
+
+    else:
+        coherent = result.coherent
+    bad = ~_angle_mask(report, shape)
+    blank = angle_policy(name, bad, result.theta_i, out_of_range, report.get("angle_reasons", []))
+    if make_nan or blank.any():
+        mask = np.ones(shape, dtype=bool) if make_nan else blank
+        sigma0 = np.where(mask, np.nan, sigma0)
+        coh_in = coherent
+        coherent = (
+            (lambda: np.where(mask, np.nan, coh_in()))
+            if callable(coh_in)
+            else np.where(mask, np.nan, coh_in)
+        )
+        info["out_of_range"] = True if make_nan else blank
     return Scattering(
         sigma0=sigma0,
         coherent=coherent,
@@ -110,19 +149,136 @@ def bistatic(
     )
 
 
+def _merge_methods(names) -> str:
+    return "+".join(dict.fromkeys(names))
+
+
+def _merged_validity(parts) -> dict:
+    """One report for several frequencies: valid if all are; reasons name the frequency."""
+    reports = [(g, res.info["validity"]) for g, res in parts]
+    return {
+        "valid": all(rep.get("valid", False) for _, rep in reports),
+        "reasons": [
+            f"at {g.frequency:.6g} Hz: {why}"
+            for g, rep in reports
+            for why in rep.get("reasons", [])
+        ],
+        "by_frequency": [
+            {"frequency": g.frequency, "method": res.method, "validity": res.info["validity"]}
+            for g, res in parts
+        ],
+    }
+
+
+def _bistatic_groups(rough, groups: list[Group], shape, k_b, angles, method, out_of_range, opts):
+    """Several frequencies: one solver run per group, results placed back element-wise."""
+    parts = [
+        (g, _bistatic_one(rough, g.eps, g.k, g.take(angles), method, out_of_range, opts))
+        for g in groups
+    ]
+    sigma0 = np.empty((2, 2, *shape))
+    methods = np.empty(shape, dtype=object)
+    for g, res in parts:
+        sigma0[:, :, g.mask] = res.sigma0
+        methods[g.mask] = res.method
+
+    def coherent():
+        out = np.empty((2, *shape))
+        for g, res in parts:
+            out[:, g.mask] = res.coherent
+        return out
+
+    ti, ts, ps, pi_ = (np.broadcast_to(a, shape) for a in angles)
+    info = {**parts[0][1].info, "validity": _merged_validity(parts), "methods": methods}
+    info.pop("out_of_range", None)
+    if any("out_of_range" in res.info for _, res in parts):
+        blank = np.zeros(shape, dtype=bool)
+        for g, res in parts:
+            blank[g.mask] = np.broadcast_to(res.info.get("out_of_range", False), g.mask.sum())
+        info["out_of_range"] = blank
+    return Scattering(
+        sigma0=sigma0,
+        coherent=coherent,
+        method=_merge_methods(res.method for _, res in parts),
+        theta_i=ti,
+        theta_s=ts,
+        phi_s=ps,
+        phi_i=pi_,
+        k=k_b,
+        dimension=rough.dimension,
+        info=info,
+    )
+
+
+def bistatic(
+    surface: Roughness,
+    eps,
+    *,
+    frequency=None,
+    wavelength=None,
+    theta_i,
+    theta_s,
+    phi_s,
+    phi_i=0.0,
+    method: str = "auto",
+    out_of_range: str = "warn",
+    **options,
+) -> Scattering:
+    """Bistatic scattering coefficients σ⁰ (all four polarizations) and coherent reflectivity.
+
+    Parameters
+    ----------
+    surface : roughness statistics (``dimension=2`` surface, or ``dimension=1`` profile).
+    eps : relative permittivity of the lower medium (complex, ``Im ε ≥ 0``; may be an array
+        broadcasting with the angles), ``"pec"``, or a material with ``.eps(frequency=...)``.
+    frequency : [Hz], or ``wavelength`` [m] — exactly one; a number or an array broadcasting
+        with the angles (the solver runs once per distinct value).
+    theta_i, theta_s : incidence and scattering angles from the normal [rad], in [0, π/2].
+    phi_s, phi_i : azimuths [rad]; ``phi_s = phi_i`` is the forward (specular) half-plane.
+    method : ``"auto"`` or a registered solver (``"spm"``, ``"go"``, ``"po"``, ``"mom"`` ...).
+    out_of_range : ``"warn"`` | ``"raise"`` | ``"nan"`` | ``"ignore"`` when the method is
+        outside its validity range — for the whole call (roughness) or at some incidence
+        angles (``"nan"`` then blanks those angles only).
+    options : passed to the solver (e.g. ``shadowing=False`` for ``"go"``).
+
+    Returns
+    -------
+    :class:`emscatter.scattering.Scattering` — ``sigma0[pol_s, pol_i]`` linear,
+    ``coherent[pol_i]`` (computed on first access: a σ⁰ curve never pays for it), ``method``,
+    ``k`` [rad/m] (an array when the frequencies vary).
+    """
+    rough = _check_roughness(surface)
+    eps = as_eps_or_material(eps)
+    k = wavenumber(frequency, wavelength)
+    select.check_out_of_range(out_of_range)
+    method = _check_method(method)
+    ti = check_angle("theta_i", theta_i)
+    ts = check_angle("theta_s", theta_s)
+    ps = check_finite("phi_s", phi_s).astype(float)
+    pi_ = check_finite("phi_i", phi_i).astype(float)
+    angles = (ti, ts, ps, pi_)
+    spec = frequency_groups(k, eps, theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
+    if spec is None:  # one frequency: the solver sees the caller's shapes
+        broadcast_angles(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
+        return _bistatic_one(rough, eps_at(eps, k), k, angles, method, out_of_range, options)
+    shape, k_b, groups = spec
+    return _bistatic_groups(rough, groups, shape, k_b, angles, method, out_of_range, options)
+
+
 def backscatter(
     surface: Roughness,
     eps,
     *,
-    frequency: float | None = None,
-    wavelength: float | None = None,
+    frequency=None,
+    wavelength=None,
     theta_i,
     phi_i=0.0,
     method: str = "auto",
     out_of_range: str = "warn",
     **options,
 ) -> Scattering:
-    """Monostatic (backscatter) coefficients: ``θs = θi``, ``φs = φi + π``."""
+    """Monostatic (backscatter) coefficients: ``θs = θi``, ``φs = φi + π``. Parameters as
+    :func:`bistatic`."""
     ti = check_angle("theta_i", theta_i)
     pi_ = check_finite("phi_i", phi_i).astype(float)
     return bistatic(
@@ -140,16 +296,33 @@ def backscatter(
     )
 
 
+# ----------------------------------------------------------------------------- emissivity
 def _integrate(module, rough, eps, k, ti, pi_, tol, options):
+    """:func:`_integrate_uncached` through the on-disk result cache (:mod:`emscatter.cache`;
+    a Monte Carlo solver only with a fixed seed)."""
+    if hasattr(module, "reflectivity") and options.get("seed") is None:
+        return _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options)
+    key = {"method": module.__name__, "surface": rough, "eps": eps, "k": k, "theta_i": ti,
+           "phi_i": pi_, "tol": tol, "options": options}  # fmt: skip
+    return cache.cached(
+        "emissivity", key, lambda: _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options)
+    )
+
+
+def _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options):
     """(r_coh, r_incoh, error, evaluations) by the shared hemispherical quadrature."""
+    if hasattr(module, "reflectivity"):  # e.g. the method of moments: its own far-field sums
+        r_coh, r_inc, err = module.reflectivity(rough, eps, k, ti, pi_, **options)
+        return np.asarray(r_coh), np.asarray(r_inc), np.asarray(err), 0
     dims = (Ellipsis,) + (None,) * (1 if rough.dimension == 1 else 2)
+    eps_q = eps if is_pec(eps) or np.ndim(eps) == 0 else np.asarray(eps)[dims]
     # σ⁰ only inside the integral: skip a solver's coherent part when it offers to.
-    takes_flag = "coherent" in inspect.signature(module.bistatic).parameters
-    skip = {"coherent": False} if takes_flag else {}
+    skip = {"coherent": False} if _takes(module.bistatic, "coherent") else {}
 
     def sigma0_fn(theta_s, phi_s):
-        res = module.bistatic(rough, eps, k, ti[dims], theta_s, phi_s, pi_[dims], **skip, **options)
-        return res.sigma0
+        return module.bistatic(
+            rough, eps_q, k, ti[dims], theta_s, phi_s, pi_[dims], **skip, **options
+        ).sigma0
 
     r_inc, err, evals = hemispherical_reflectivity(
         sigma0_fn,
@@ -160,15 +333,134 @@ def _integrate(module, rough, eps, k, ti, pi_, tol, options):
         tol=tol,
     )
     r_coh = module.bistatic(rough, eps, k, ti, ti, pi_, pi_, **options).coherent
-    return r_coh, r_inc, err, evals
+    return np.asarray(r_coh), r_inc, err, evals
+
+
+def _excess(report: dict) -> float:
+    return 0.0 if report.get("valid", False) else float(report.get("excess", math.inf))
+
+
+def _sub_eps(eps, mask):
+    return eps if is_pec(eps) or np.ndim(eps) == 0 else np.broadcast_to(eps, mask.shape)[mask]
+
+
+def _energy_fallback(rough, eps, k, ti, pi_, tol, options, ranking, primary, state):
+    """``method="auto"``: at the angles where the primary method is invalid or breaks energy,
+    try the next methods of the ranking; keep the first that is valid there and conserves
+    energy. Candidates further outside their roughness-level validity than the primary are
+    skipped (auto never trades a method for a worse-founded one). Updates ``state``."""
+    limit = _excess(primary)
+    for cand, _ in ranking[1:]:
+        ok = state["ok"]
+        if ok.all():
+            return
+        cand_report = validity_report(cand, rough, k, eps=eps)
+        if cand_report.get("unsupported") or _excess(cand_report) > limit:
+            continue
+        bad = ~ok
+        sub_ti, sub_pi = ti[bad], pi_[bad]
+        module = solvers.get(cand)
+        try:
+            opts = _map_options(cand, options, True)
+            rc, ri, er, ev = _integrate(
+                module, rough, _sub_eps(eps, bad), k, sub_ti, sub_pi, tol, opts
+            )
+        except (ValueError, TypeError):  # this method cannot take these inputs
+            continue
+        angular = validity_report(cand, rough, k, eps=eps, theta_i=sub_ti)
+        accept = energy_balance(rc, ri, er, sub_ti, tol=tol)["ok"] & _angle_mask(
+            angular, sub_ti.shape
+        )
+        if not accept.any():
+            continue
+        where = np.flatnonzero(bad)[accept]
+        for key, val in (("r_coh", rc), ("r_inc", ri), ("err", er)):
+            state[key].reshape(2, -1)[:, where] = np.asarray(val).reshape(2, -1)[:, accept]
+        state["methods"].reshape(-1)[where] = cand
+        state["ok"].reshape(-1)[where] = True
+        state["evals"] += ev
+
+
+def _emissivity_one(rough, eps, k, ti, pi_, method, tol, out_of_range, options) -> Emissivity:
+    """One frequency; ``ti`` and ``pi_`` broadcast to the same shape."""
+    if method == "auto":  # the regime's ranking; angles are handled one by one below
+        ranking = rank_methods(rough, k, eps=eps)
+    else:
+        ranking = [(method, None)]
+    opts = _map_options(ranking[0][0], options, method == "auto")  # before any warning
+    name, module, report, make_nan = resolve_method(
+        rough, k, ranking[0][0], out_of_range, eps, theta_i=ti
+    )
+    r_coh, r_inc, err, evals = _integrate(module, rough, eps, k, ti, pi_, tol, opts)
+    state = {
+        "r_coh": np.array(r_coh, dtype=float),
+        "r_inc": np.array(r_inc, dtype=float),
+        "err": np.array(err, dtype=float),
+        "methods": np.full(ti.shape, name, dtype=object),
+        "ok": _angle_mask(report, ti.shape) & energy_balance(r_coh, r_inc, err, ti, tol=tol)["ok"],
+        "evals": evals,
+    }
+    if method == "auto" and not make_nan:
+        _energy_fallback(rough, eps, k, ti, pi_, tol, options, ranking, report, state)
+    r_coh, r_inc, err = state["r_coh"], state["r_inc"], state["err"]
+    balance = energy_balance(r_coh, r_inc, err, ti, tol=tol)
+    ok = state["ok"]
+    reasons = [*(report.get("angle_reasons", []) if not ok.all() else []), *balance["reasons"]]
+    report = {
+        **report,
+        "angle_valid": ok,
+        "angle_reasons": reasons,
+        "energy_ok": balance["ok"],
+        "valid": bool(report.get("roughness_valid", False) and ok.all()),
+    }
+    methods = state["methods"]
+    label = _merge_methods(methods.ravel()) if methods.size else name
+    blank = angle_policy(label, ~ok, ti, out_of_range, reasons)
+    e = 1.0 - r_coh - r_inc
+    converged = np.all(err <= tol, axis=0)
+    quadrature = {"tol": tol, "converged": converged}
+    if not converged.all():
+        quadrature["reason"] = (
+            f"quadrature stopped at error {float(np.max(err)):.2g} > tol {tol:g} at "
+            f"{angles_deg(ti, ~converged)} (evaluation budget)"
+        )
+    info = {"validity": report, "energy": balance, "methods": methods, "quadrature": quadrature}
+    if make_nan:
+        e = np.full_like(e, np.nan)
+        info["out_of_range"] = True
+    elif blank.any():
+        e = np.where(blank, np.nan, e)
+        info["out_of_range"] = blank
+    return Emissivity(
+        emissivity=e,
+        coherent=r_coh,
+        incoherent=r_inc,
+        error=err,
+        method=label,
+        theta_i=ti,
+        evaluations=int(state["evals"]),
+        info=info,
+        k=k,
+        energy_ok=balance["ok"],
+    )
+
+
+def _check_tol(tol) -> float:
+    if isinstance(tol, bool) or not (
+        isinstance(tol, int | float | np.floating) and math.isfinite(tol) and 0 < tol < 1
+    ):
+        raise ValueError(
+            f"tol must be a number in (0, 1) (absolute quadrature tolerance), got {tol!r}"
+        )
+    return float(tol)
 
 
 def emissivity(
     surface: Roughness,
     eps,
     *,
-    frequency: float | None = None,
-    wavelength: float | None = None,
+    frequency=None,
+    wavelength=None,
     theta_i,
     phi_i=0.0,
     method: str = "auto",
@@ -177,36 +469,64 @@ def emissivity(
     **options,
 ) -> Emissivity:
     """h and v emissivity ``e_p = 1 − r_coh,p − r_incoh,p`` (Kirchhoff's law) by hemispherical
-    integration of the incoherent σ⁰ plus the coherent reflectivity, with an error estimate.
+    integration of the incoherent σ⁰ plus the coherent reflectivity, with an error estimate and
+    the energy balance checked at every angle.
 
     ``tol`` [-]: absolute tolerance of the quadrature (the reported ``error`` is the difference
     of the last two refinements). Other parameters as :func:`bistatic`.
+
+    Energy is a checked law: wherever ``e ∉ [0, 1]`` or ``r_coh + r_incoh > 1`` beyond the
+    quadrature error (:func:`emscatter.emissivity.energy_balance`), the angle is flagged in
+    ``result.energy_ok`` and ``info["validity"]["angle_valid"]``, and ``out_of_range``
+    applies to those angles. With ``method="auto"`` the method is replaced **at those angles
+    only** by the next ranked method that is valid there and conserves energy
+    (``info["methods"]`` has the method of each angle, ``result.method`` lists them, e.g.
+    ``"spm+go"``): the rest of the curve keeps the best method for the regime, and the angles
+    that an approximation gets wrong (typically near grazing) get one that holds there.
     """
     rough = _check_roughness(surface)
-    eps = check_eps(eps)
+    eps = as_eps_or_material(eps)
     k = wavenumber(frequency, wavelength)
+    select.check_out_of_range(out_of_range)
+    method = _check_method(method)
     ti = check_angle("theta_i", theta_i)
-    pi_ = np.broadcast_to(check_finite("phi_i", phi_i).astype(float), ti.shape)
-    if not (isinstance(tol, int | float) and math.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be a positive finite number, got {tol!r}")
-    name, module, report, make_nan = resolve_method(rough, k, method, out_of_range, eps)
-    if hasattr(module, "reflectivity"):  # e.g. the method of moments: its own far-field sums
-        r_coh, r_inc, err = module.reflectivity(rough, eps, k, ti, pi_, **options)
-        evals = 0
-    else:
-        r_coh, r_inc, err, evals = _integrate(module, rough, eps, k, ti, pi_, tol, options)
-    e = 1.0 - r_coh - r_inc
-    info = {"validity": report}
-    if make_nan:
-        e = np.full_like(e, np.nan)
-        info["out_of_range"] = True
+    pi_ = check_finite("phi_i", phi_i).astype(float)
+    tol = _check_tol(tol)
+    spec = frequency_groups(k, eps, theta_i=ti, phi_i=pi_)
+    if spec is None:
+        ti_b, pi_b = broadcast_angles(theta_i=ti, phi_i=pi_)
+        return _emissivity_one(
+            rough, eps_at(eps, k), k, ti_b, pi_b, method, tol, out_of_range, options
+        )
+    shape, k_b, groups = spec
+    parts = []
+    for g in groups:
+        sub_ti, sub_pi = g.take((ti, pi_))
+        parts.append(
+            (
+                g,
+                _emissivity_one(
+                    rough, g.eps, g.k, sub_ti, sub_pi, method, tol, out_of_range, options
+                ),
+            )
+        )
+    fields = {
+        name: np.empty((2, *shape)) for name in ("emissivity", "coherent", "incoherent", "error")
+    }
+    energy_ok = np.empty(shape, dtype=bool)
+    methods = np.empty(shape, dtype=object)
+    for g, res in parts:
+        for name, arr in fields.items():
+            arr[:, g.mask] = getattr(res, name)
+        energy_ok[g.mask] = res.energy_ok
+        methods[g.mask] = res.info["methods"]
+    info = {"validity": _merged_validity(parts), "methods": methods}
     return Emissivity(
-        emissivity=e,
-        coherent=r_coh,
-        incoherent=r_inc,
-        error=err,
-        method=name,
-        theta_i=ti,
-        evaluations=evals,
+        **fields,
+        method=_merge_methods(res.method for _, res in parts),
+        theta_i=np.broadcast_to(ti, shape),
+        evaluations=sum(res.evaluations for _, res in parts),
         info=info,
+        k=k_b,
+        energy_ok=energy_ok,
     )

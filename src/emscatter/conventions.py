@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import warnings
 from typing import Literal
 
 import numpy as np
@@ -42,11 +43,41 @@ class ConventionError(ValueError):
     """An input violates one of the library's conventions (e.g. the sign of Im ε)."""
 
 
+class PlausibilityWarning(UserWarning):
+    """An input is allowed but probably not meant (e.g. ``frequency=5.4`` with GHz in mind)."""
+
+
+#: Frequencies [Hz] below this, or wavelengths [m] above :data:`WAVELENGTH_WARN`, warn with
+#: "did you mean GHz?" (:class:`PlausibilityWarning`).
+FREQUENCY_WARN = 1e6
+WAVELENGTH_WARN = 1e3
+
+
+def fmt(x, digits: int = 6) -> str:
+    """A number as a person writes it: ``0.5``, ``1e+09``, ``(17+2j)`` — never a numpy repr."""
+    if isinstance(x, complex | np.complexfloating):
+        z = complex(x)
+        if z.imag == 0:
+            return f"{z.real:.{digits}g}"
+        sign = "+" if z.imag >= 0 or math.isnan(z.imag) else "-"
+        return f"({z.real:.{digits}g}{sign}{abs(z.imag):.{digits}g}j)"
+    if isinstance(x, bool | np.bool_):
+        return str(bool(x))
+    try:
+        return f"{float(x):.{digits}g}"
+    except (TypeError, ValueError):
+        return repr(x)
+
+
 def _describe(value) -> str:
     arr = np.asarray(value)
     if arr.ndim == 0:
-        return repr(arr.item())
+        return fmt(arr.item()) if arr.dtype != object else repr(arr.item())
     return f"array of shape {arr.shape}"
+
+
+def _deg(rad: float) -> str:
+    return f"{math.degrees(rad):.4g}°"
 
 
 def check_finite(name: str, value, *, allow_nan: bool = False) -> np.ndarray:
@@ -61,28 +92,28 @@ def check_finite(name: str, value, *, allow_nan: bool = False) -> np.ndarray:
         raise TypeError(f"{name} must be a number or array of numbers, got {_describe(value)}")
     if not allow_nan and not np.all(np.isfinite(arr)):
         bad = arr[~np.isfinite(arr)].ravel()[0]
-        raise ValueError(f"{name} must be finite, got {bad!r} in {_describe(value)}")
+        where = "" if arr.ndim == 0 else f" in {_describe(value)}"
+        raise ValueError(f"{name} must be finite, got {fmt(bad)}{where}")
     return arr
 
 
 def check_positive(name: str, value, *, unit: str = "") -> float:
     """A finite real scalar > 0; returns it as ``float``."""
-    check_real_scalar(name, value)
-    v = float(value)
+    v = check_real_scalar(name, value)
     if not v > 0:
-        raise ValueError(f"{name} must be > 0{(' [' + unit + ']') if unit else ''}, got {value!r}")
+        raise ValueError(f"{name} must be > 0{(' [' + unit + ']') if unit else ''}, got {fmt(v)}")
     return v
 
 
 def check_real_scalar(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real | np.ndarray):
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real | np.ndarray):
         raise TypeError(f"{name} must be a real number, got {value!r}")
     arr = np.asarray(value)
-    if arr.ndim != 0 or not np.isrealobj(arr):
+    if arr.ndim != 0 or not np.isrealobj(arr) or arr.dtype == bool:
         raise TypeError(f"{name} must be a real scalar, got {_describe(value)}")
     v = float(arr)
     if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {v!r}")
+        raise ValueError(f"{name} must be finite, got {fmt(v)}")
     return v
 
 
@@ -96,21 +127,25 @@ def check_in_range(
     if not (ok_low and ok_high):
         lb = "(" if low_open else "["
         hb = ")" if high_open else "]"
-        raise ValueError(f"{name} must be in {lb}{low}, {high}{hb}, got {value!r}")
+        raise ValueError(f"{name} must be in {lb}{low}, {high}{hb}, got {fmt(v)}")
     return v
 
 
 def check_angle(name: str, value, *, low: float = 0.0, high: float = math.pi / 2) -> np.ndarray:
-    """Angles in radians, finite, within ``[low, high]`` (default ``[0, π/2]``)."""
+    """Angles in radians, finite, within ``[low, high]`` (default ``[0, π/2]``).
+
+    Messages give the allowed range and the offending value in radians and in degrees."""
     arr = check_finite(name, value)
     if np.iscomplexobj(arr):
         raise TypeError(f"{name} must be real (radians), got complex {_describe(value)}")
+    if arr.dtype == bool:
+        raise TypeError(f"{name} must be angles in radians, got booleans {_describe(value)}")
     arr = arr.astype(float)
     if np.any(arr < low) or np.any(arr > high):
-        bad = arr[(arr < low) | (arr > high)].ravel()[0]
+        bad = float(arr[(arr < low) | (arr > high)].ravel()[0])
         raise ValueError(
-            f"{name} must be in [{low:g}, {high:g}] rad "
-            f"([{math.degrees(low):g}°, {math.degrees(high):g}°]), got {bad!r} rad"
+            f"{name} must be in [{fmt(low, 5)}, {fmt(high, 5)}] rad "
+            f"([{_deg(low)}, {_deg(high)}]), got {fmt(bad, 5)} rad ({_deg(bad)})"
         )
     return arr
 
@@ -119,51 +154,104 @@ def check_permittivity(value, name: str = "eps") -> np.ndarray:
     """Relative permittivity under the ``exp(-iωt)`` convention: finite, ``Im ε ≥ 0``.
 
     ``value`` may be real or complex, scalar or array, or the string ``"pec"``
-    (handled by the callers that accept a perfect conductor).
+    (handled by the callers that accept a perfect conductor). Booleans are refused.
     """
+    if isinstance(value, bool | np.bool_) or np.asarray(value).dtype == bool:
+        raise TypeError(
+            f"{name} must be a complex permittivity (a number, e.g. 17+2j) or 'pec', got {value!r}"
+        )
     arr = check_finite(name, value)
     arr = arr.astype(complex)
     if np.any(arr.imag < 0):
         bad = arr[arr.imag < 0].ravel()[0]
         raise ConventionError(
-            f"{name} = {bad!r} has Im(eps) < 0. emscatter uses the exp(-i omega t) time "
+            f"{name} = {fmt(bad)} has Im(eps) < 0. emscatter uses the exp(-i omega t) time "
             f"convention, where a lossy medium has Im(eps) >= 0; if your value comes from an "
             f"exp(+j omega t) source (engineering convention), pass numpy.conj({name})."
         )
     if np.any(arr == 0):
-        raise ValueError(f"{name} must be nonzero, got {arr[arr == 0].ravel()[0]!r}")
+        raise ValueError(f"{name} must be nonzero, got {fmt(arr[arr == 0].ravel()[0])}")
     return arr
 
 
-def wavenumber(frequency: float | None = None, wavelength: float | None = None) -> float:
+def _positive_array(name: str, value, unit: str) -> np.ndarray:
+    if isinstance(value, bool | np.bool_) or np.asarray(value).dtype == bool:
+        raise TypeError(f"{name} must be a number [{unit}] or an array of numbers, got {value!r}")
+    arr = check_finite(name, value)
+    if np.iscomplexobj(arr):
+        raise TypeError(f"{name} must be real [{unit}], got complex {_describe(value)}")
+    arr = arr.astype(float)
+    if np.any(arr <= 0):
+        bad = arr[arr <= 0].ravel()[0]
+        raise ValueError(f"{name} must be > 0 [{unit}], got {fmt(bad)}")
+    return arr
+
+
+def wavenumber(frequency=None, wavelength=None, *, warn: bool = True):
     """Free-space wavenumber ``k = 2π/λ`` [rad/m] from exactly one of frequency [Hz] or
-    wavelength [m]."""
+    wavelength [m]: a ``float`` for a scalar, an ndarray of the same shape for an array.
+
+    A frequency below 1 MHz or a wavelength above 1 km is allowed but warns
+    (:class:`PlausibilityWarning`, "did you mean GHz?") unless ``warn=False``."""
     if (frequency is None) == (wavelength is None):
         raise ValueError(
             "give exactly one of frequency [Hz] or wavelength [m], got "
-            f"frequency={frequency!r}, wavelength={wavelength!r}"
+            f"frequency={_describe(frequency) if frequency is not None else None}, "
+            f"wavelength={_describe(wavelength) if wavelength is not None else None}"
         )
     if frequency is not None:
-        f = check_positive("frequency", frequency, unit="Hz")
-        return 2.0 * math.pi * f / SPEED_OF_LIGHT
-    lam = check_positive("wavelength", wavelength, unit="m")
-    return 2.0 * math.pi / lam
+        f = _positive_array("frequency", frequency, "Hz")
+        if warn and np.any(f < FREQUENCY_WARN):
+            low = float(f.min())
+            warnings.warn(
+                f"frequency = {fmt(low)} Hz is below 1 MHz (wavelength "
+                f"{fmt(SPEED_OF_LIGHT / low, 3)} m); did you mean {fmt(low)} GHz = "
+                f"{fmt(low * 1e9)} Hz? frequency is in Hz",
+                PlausibilityWarning,
+                stacklevel=3,
+            )
+        k = 2.0 * math.pi * f / SPEED_OF_LIGHT
+    else:
+        lam = _positive_array("wavelength", wavelength, "m")
+        if warn and np.any(lam > WAVELENGTH_WARN):
+            high = float(lam.max())
+            warnings.warn(
+                f"wavelength = {fmt(high)} m is above 1 km; did you mean GHz? wavelength is in "
+                f"metres (give frequency= in Hz for a frequency)",
+                PlausibilityWarning,
+                stacklevel=3,
+            )
+        k = 2.0 * math.pi / lam
+    return float(k) if k.ndim == 0 else k
+
+
+_POL_ALIASES = {"h": "h", "v": "v", "te": "h", "tm": "v"}
 
 
 def check_polarization(pol: str, name: str = "pol") -> str:
     """One of ``"h"``, ``"v"`` (case-insensitive; ``"te"``→h, ``"tm"``→v)."""
-    aliases = {"h": "h", "v": "v", "te": "h", "tm": "v"}
-    if not isinstance(pol, str) or pol.lower() not in aliases:
-        raise ValueError(f"{name} must be one of 'h' (TE) or 'v' (TM), got {pol!r}")
-    return aliases[pol.lower()]
+    key = pol.strip().lower() if isinstance(pol, str) else None
+    if key not in _POL_ALIASES:
+        raise ValueError(
+            f"{name} must be 'h' (or 'TE') or 'v' (or 'TM'), case-insensitive, got {pol!r}"
+        )
+    return _POL_ALIASES[key]
+
+
+def pol_index(pol: str, name: str = "pol") -> int:
+    """0 for h/TE, 1 for v/TM (:func:`check_polarization`)."""
+    return POL_INDEX[check_polarization(pol, name)]
 
 
 def check_pol_pair(pair: str, name: str = "pol") -> tuple[int, int]:
-    """``"hv"`` → ``(0, 1)`` = (scattered h, incident v)."""
-    if not isinstance(pair, str) or pair.lower() not in POL_PAIRS:
-        raise ValueError(f"{name} must be one of {POL_PAIRS}, got {pair!r}")
-    p = pair.lower()
-    return POL_INDEX[p[0]], POL_INDEX[p[1]]
+    """``"hv"`` → ``(0, 1)`` = (scattered h, incident v); case-insensitive."""
+    key = pair.strip().lower() if isinstance(pair, str) else None
+    if key not in POL_PAIRS:
+        raise ValueError(
+            f"{name} must be one of {', '.join(POL_PAIRS)} (scattered, incident; "
+            f"case-insensitive), got {pair!r}"
+        )
+    return POL_INDEX[key[0]], POL_INDEX[key[1]]
 
 
 def broadcast_angles(**angles) -> list[np.ndarray]:

@@ -18,14 +18,39 @@ permittivity ε = 17 + 2i, TE (h) incidence at θi = 45°, rms height σ varied,
 from __future__ import annotations
 
 import math
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
+from .constants import SPEED_OF_LIGHT
+
 FIG53_SIGMAS = (0.005, 0.01, 0.02, 0.03, 0.045)  # [m], with λ = τ = 1 m: kσ ≤ 0.28
 FIG53_EPS = 17 + 2j
 FIG53_THETA_I = math.radians(45.0)
+EMISSIVITY_SIGMAS = (0.02, 0.045)  # [m]
+
+
+DEMO_SCHEMA = "emscatter.demo/1"
+
+
+def _meta(figure: str, **inputs) -> dict:
+    """What a demo CSV needs to be reproduced: the inputs (every demo figure uses the seed's
+    ε = 17 + 2i at λ = 1 m), the version, the command."""
+    from . import __version__
+
+    common = {
+        "eps": {"re": FIG53_EPS.real, "im": FIG53_EPS.imag},
+        "wavelength_m": 1.0,
+        "frequency_hz": SPEED_OF_LIGHT,
+    }
+    return {
+        "figure": figure,
+        "emscatter_version": __version__,
+        "command": "emscatter demo",
+        "inputs": {**common, **inputs},
+    }
 
 
 def _json_safe(d: dict) -> dict:
@@ -98,7 +123,21 @@ def surface_report(
         )
         save_figure(fig, png)
     if json_path:
-        write_json(json_path, _json_safe(stats))
+        from . import __version__
+
+        inputs = dict(
+            kind=kind,
+            hurst=hurst,
+            size=size,
+            spacing_m=spacing,
+            sigma_m=sigma,
+            length_m=length,
+            seed=seed,
+            periodic=periodic,
+            profile=profile,
+        )
+        meta = {"schema": "emscatter.surface/1", "emscatter_version": __version__, "inputs": inputs}
+        write_json(json_path, _json_safe({**meta, **stats}))
     return stats
 
 
@@ -159,7 +198,19 @@ def figure_5_3(out: Path, *, n_theta: int = 179) -> list[Path]:
     fig.tight_layout()
     return [
         save_figure(fig, out / "figure_5_3.png"),
-        write_csv(out / "figure_5_3.csv", labels, cols),
+        write_csv(
+            out / "figure_5_3.csv",
+            labels,
+            cols,
+            schema=DEMO_SCHEMA,
+            metadata=_meta(
+                "seed Figure 5.3",
+                method="spm",
+                roughness={"kind": "gaussian", "length_m": 1.0, "sigma_m": list(FIG53_SIGMAS)},
+                theta_i_deg=45.0,
+                phi_s_deg=0.0,
+            ),
+        ),
     ]
 
 
@@ -176,19 +227,36 @@ def emissivity_curves(out: Path, *, n_theta: int = 18) -> list[Path]:
     flat = 1.0 - reflectivity(FIG53_EPS, th)
     series = {"flat (Fresnel)": (flat[0], flat[1])}
     cols, labels = [th_deg, flat[0], flat[1]], ["theta_deg", "e_h_flat", "e_v_flat"]
-    for s in (0.02, 0.045):
+    flagged = np.zeros(th.shape, dtype=bool)
+    for s in EMISSIVITY_SIGMAS:
         e = api.emissivity(
             GaussianCorrelation(s, 1.0), FIG53_EPS, wavelength=1.0, theta_i=th, method="spm"
         )
         series[f"SPM σ = {s:g} m"] = (e.h, e.v)
-        cols += [e.h, e.v, e.error.max(axis=0)]
-        labels += [f"e_h_sigma{s:g}", f"e_v_sigma{s:g}", f"quadrature_error_sigma{s:g}"]
+        flagged |= ~e.info["validity"]["angle_valid"]
+        cols += [e.h, e.v, e.error.max(axis=0), e.energy_ok.astype(int)]
+        labels += [
+            f"e_h_sigma{s:g}",
+            f"e_v_sigma{s:g}",
+            f"quadrature_error_sigma{s:g}",
+            f"energy_ok_sigma{s:g}",
+        ]
     fig = emissivity_figure(
-        th_deg, series, title="Emissivity, Gaussian ℓ = 1 m, λ = 1 m, ε = 17 + 2i"
+        th_deg,
+        series,
+        title="Emissivity, Gaussian ℓ = 1 m, λ = 1 m, ε = 17 + 2i",
+        flagged=flagged,
+    )
+    meta = _meta(
+        "emissivity",
+        method="spm",
+        roughness={"kind": "gaussian", "length_m": 1.0, "sigma_m": list(EMISSIVITY_SIGMAS)},
+        theta_i_deg=th_deg.tolist(),
+        tol=1e-4,
     )
     return [
         save_figure(fig, out / "emissivity.png"),
-        write_csv(out / "emissivity.csv", labels, cols),
+        write_csv(out / "emissivity.csv", labels, cols, schema=DEMO_SCHEMA, metadata=meta),
     ]
 
 
@@ -265,12 +333,67 @@ def methods_comparison(out: Path, *, n_theta: int = 179) -> list[Path]:
     fig.tight_layout()
     return [
         save_figure(fig, out / "methods_comparison.png"),
-        write_csv(out / "methods_comparison.csv", labels, cols),
+        write_csv(
+            out / "methods_comparison.csv",
+            labels,
+            cols,
+            schema=DEMO_SCHEMA,
+            metadata=_meta(
+                "methods comparison",
+                methods=["spm", "po", "go"],
+                roughness=[
+                    {"kind": "gaussian", "sigma_m": sg, "length_m": ell}
+                    for _, sg, ell in COMPARISON_CASES
+                ],
+                theta_i_deg=30.0,
+                phi_s_deg=0.0,
+                out_of_range="ignore",
+            ),
+        ),
     ]
+
+
+def _surface_step(folder: Path, *, size: int, rel: Path, params: dict) -> dict:
+    return _json_safe(surface_report(size=size, png=folder / rel, **params))
+
+
+def _files_step(step, folder: Path, **kwargs) -> None:
+    step(folder, **kwargs)
+
+
+#: The bridges' demo steps: module run as ``python -m <module> <args> <folder>``. Each runs in a
+#: fresh interpreter because Dr.Jit variants are per process (Mitsuba's spectral variant and
+#: Sionna RT's cannot share one), and always in its quick form (a small export + render, the
+#: plate check at one frequency): the full renders and radio comparisons are examples/.
+BRIDGE_STEPS = {
+    "brdf export + render": ("emscatter.render.demo", ["--quick"], "render", False),
+    "radio plate check": ("emscatter.radio.demo", ["--quick", "--out"], "radio", True),
+}
+
+
+def _bridge_step(folder: Path, *, module: str, args: list[str], sub: str, out_last: bool) -> dict:
+    """Run one bridge's demo in a subprocess into ``folder/sub``; a failure is one clear error."""
+    import subprocess
+    import sys
+
+    target = folder / sub
+    target.mkdir(parents=True, exist_ok=True)
+    argv = [*args, str(target)] if out_last else [str(target), *args]
+    proc = subprocess.run(
+        [sys.executable, "-m", module, *argv], capture_output=True, text=True, check=False
+    )
+    if proc.returncode != 0:
+        last = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
+        raise RuntimeError(
+            f"demo step {module} failed (exit {proc.returncode}): {last} — run "
+            f"`python -m {module} {' '.join(argv)}` to see it in full"
+        )
+    return {"module": module, "stdout": proc.stdout.strip().splitlines()[-20:]}
 
 
 def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
     """Run every part of the demo into ``out``; returns the files written."""
+    from . import cache
     from .io import write_json
 
     out = Path(out)
@@ -283,17 +406,25 @@ def run_demo(out: Path, *, quick: bool = False) -> list[Path]:
     }
     written: list[Path] = []
     all_stats = {}
-    steps = list(surfaces) + ["figure 5.3", "emissivity", "methods"]
+    steps = list(surfaces) + ["figure 5.3", "emissivity", "methods", *BRIDGE_STEPS]
     for step in tqdm(steps, desc="emscatter demo", unit="step"):
         if step in surfaces:
-            png = surf_dir / f"{step}.png"
-            all_stats[step] = _json_safe(surface_report(size=size, png=png, **surfaces[step]))
-            written.append(png)
+            rel = Path("surfaces") / f"{step}.png"
+            produce = partial(_surface_step, size=size, rel=rel, params=surfaces[step])
         elif step == "figure 5.3":
-            written += figure_5_3(out, n_theta=89 if quick else 179)
+            produce = partial(_files_step, figure_5_3, n_theta=89 if quick else 179)
         elif step == "emissivity":
-            written += emissivity_curves(out, n_theta=10 if quick else 18)
+            produce = partial(_files_step, emissivity_curves, n_theta=10 if quick else 18)
+        elif step in BRIDGE_STEPS:
+            module, args, sub, out_last = BRIDGE_STEPS[step]
+            produce = partial(_bridge_step, module=module, args=args, sub=sub, out_last=out_last)
         else:
-            written += methods_comparison(out, n_theta=60 if quick else 179)
+            produce = partial(_files_step, methods_comparison, n_theta=60 if quick else 179)
+        # each step is a pure function of its parameters: cached on disk (emscatter.cache)
+        key = {"step": step, "quick": quick, "size": size}
+        value, files = cache.cached_step("demo", key, out, produce)
+        written += files
+        if step in surfaces:
+            all_stats[step] = value
     written.append(write_json(surf_dir / "stats.json", all_stats))
     return written

@@ -70,14 +70,20 @@ def curves_figure(
     ylabel: str,
     title: str,
     db: bool = True,
-    floor_db: float = -80.0,
+    floor_db: float | None = None,
 ):
-    """Several curves over an angle axis; ``db=True`` plots ``10 log10`` with a floor."""
+    """Several curves over an angle axis; ``db=True`` plots ``10 log10``.
+
+    Values are drawn as computed: zeros (−∞ dB) and NaN leave gaps rather than a fake floor;
+    ``floor_db`` (default none) clips only if asked."""
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for label, y in curves.items():
         y = np.asarray(y, dtype=float)
         if db:
-            y = np.maximum(10 * np.log10(np.maximum(y, 1e-300)), floor_db)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                y = np.where(y > 0, 10 * np.log10(np.where(y > 0, y, 1.0)), np.nan)
+            if floor_db is not None:
+                y = np.maximum(y, floor_db)
         ax.plot(x_deg, y, label=label)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
@@ -88,18 +94,67 @@ def curves_figure(
     return fig
 
 
-def emissivity_figure(theta_deg, series: dict[str, tuple[np.ndarray, np.ndarray]], *, title: str):
-    """``series[label] = (e_h, e_v)``; h solid, v dashed."""
+def _spans(x, mask):
+    """Contiguous runs of ``mask`` over the sorted axis ``x`` as ``(start, stop)`` pairs,
+    widened by half a step so a single flagged point shows."""
+    x = np.asarray(x, dtype=float)
+    mask = np.asarray(mask, dtype=bool)
+    if x.size == 0 or not mask.any():
+        return []
+    order = np.argsort(x)
+    x, mask = x[order], mask[order]
+    half = 0.5 * (np.min(np.diff(x)) if x.size > 1 else 1.0)
+    spans, start = [], None
+    for i, m in enumerate(mask):
+        if m and start is None:
+            start = x[i]
+        if start is not None and (not m or i == x.size - 1):
+            stop = x[i] if m else x[i - 1]
+            spans.append((start - half, stop + half))
+            start = None
+    return spans
+
+
+def emissivity_figure(
+    theta_deg,
+    series: dict[str, tuple[np.ndarray, np.ndarray]],
+    *,
+    title: str,
+    flagged=None,
+    flag_label: str = "energy not conserved / outside validity",
+):
+    """``series[label] = (e_h, e_v)``; h solid, v dashed.
+
+    The axis always shows all the data — never clipped to [0, 1]: the physical bounds
+    e = 0 and e = 1 are drawn as lines, and the angles in ``flagged`` (a bool array over
+    ``theta_deg``, e.g. ``~result.energy_ok``) are shaded and labelled."""
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    theta_deg = np.atleast_1d(np.asarray(theta_deg, dtype=float))
+    marker = "o" if theta_deg.size < 4 else None
+    values = []
     for i, (label, (eh, ev)) in enumerate(series.items()):
         c = colors[i % len(colors)]
-        ax.plot(theta_deg, eh, color=c, label=f"{label}  h")
-        ax.plot(theta_deg, ev, color=c, ls="--", label=f"{label}  v")
+        ax.plot(theta_deg, np.atleast_1d(eh), color=c, marker=marker, label=f"{label}  h")
+        ax.plot(theta_deg, np.atleast_1d(ev), color=c, ls="--", marker=marker, label=f"{label}  v")
+        values += [np.atleast_1d(eh), np.atleast_1d(ev)]
+    for bound in (0.0, 1.0):
+        ax.axhline(bound, color="0.3", lw=0.8, ls=":")
+    if flagged is not None:
+        for j, (a, b) in enumerate(_spans(theta_deg, flagged)):
+            ax.axvspan(
+                a, b, color="tab:red", alpha=0.15, lw=0, label=flag_label if j == 0 else None
+            )
+    finite = np.concatenate([v[np.isfinite(v)] for v in values]) if values else np.array([])
+    lo = min(0.0, float(finite.min())) if finite.size else 0.0
+    hi = max(1.0, float(finite.max())) if finite.size else 1.0
+    pad = 0.04 * (hi - lo)
+    ax.set_ylim(lo - pad, hi + pad)
     ax.set_xlabel("incidence / observation angle θ [deg]")
     ax.set_ylabel("emissivity [-]")
-    ax.set_ylim(0, 1)
-    ax.set_xlim(0, math.ceil(max(theta_deg)))
+    right = math.ceil(float(theta_deg.max())) if theta_deg.size else 90
+    left = min(0.0, float(theta_deg.min())) if theta_deg.size else 0.0
+    ax.set_xlim(left, right if right > left else left + 1)
     ax.set_title(title, fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, ncol=2)

@@ -7,12 +7,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .conventions import POL_INDEX, check_pol_pair
+from .constants import SPEED_OF_LIGHT
+from .conventions import check_pol_pair, pol_index
 
 __all__ = ["Scattering"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Scattering:
     """Result of every solver.
 
@@ -27,11 +28,15 @@ class Scattering:
         ``σ⁰ = 2π ρ ⟨|E_s|²⟩_incoh / (L |E_i|²)`` and ``r_p = 1/(2π cosθi) Σ_q ∫ σ⁰_qp dθs``
         over signed ``θs ∈ (−π/2, π/2)``.
     coherent : ndarray, shape ``(2, *shape)``
-        Coherent (specular) power reflectivity for incident h and v [-].
+        Coherent (specular) power reflectivity for incident h and v [-]. May be given as a
+        zero-argument callable: it is then computed on first access and kept (the public API
+        does this, so a bistatic or backscatter curve never pays for it unless it is read).
     method : str
-        The solver that produced it (after ``"auto"`` selection).
+        The solver that produced it (after ``"auto"`` selection); ``"a+b"`` when ``auto``
+        used several (per frequency), with the method of each element in ``info["methods"]``.
     theta_i, theta_s, phi_s, phi_i : ndarray, broadcast to ``shape`` [rad].
-    k : float, free-space wavenumber [rad/m].
+    k : free-space wavenumber [rad/m]: a float, or an ndarray of ``shape`` when the call
+        had several frequencies.
     dimension : 1 or 2.
     info : dict of extra details (validity report, series terms, ...).
     """
@@ -43,9 +48,36 @@ class Scattering:
     theta_s: np.ndarray
     phi_s: np.ndarray
     phi_i: np.ndarray
-    k: float
+    k: float | np.ndarray
     dimension: int = 2
     info: dict = field(default_factory=dict)
+
+    def __getattribute__(self, name):
+        value = object.__getattribute__(self, name)
+        if name == "coherent" and callable(value):
+            value = np.asarray(value())
+            object.__setattr__(self, "coherent", value)
+        return value
+
+    def __getstate__(self):  # pickling (e.g. to a worker process) computes a lazy part first
+        state = dict(self.__dict__)
+        state["coherent"] = self.coherent
+        return state
+
+    @property
+    def coherent_computed(self) -> bool:
+        """Whether :attr:`coherent` has been computed (False while it is still lazy)."""
+        return not callable(object.__getattribute__(self, "coherent"))
+
+    @property
+    def frequency(self):
+        """Frequency [Hz] (``c k / 2π``), a float or an ndarray like :attr:`k`."""
+        return self.k * SPEED_OF_LIGHT / (2 * math.pi)
+
+    @property
+    def wavelength(self):
+        """Free-space wavelength [m] (``2π / k``)."""
+        return 2 * math.pi / self.k
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -62,7 +94,9 @@ class Scattering:
     vv = property(lambda self: self.sigma0[1, 1])
 
     def coherent_pol(self, pol: str) -> np.ndarray:
-        return self.coherent[POL_INDEX[pol]]
+        """Coherent reflectivity for incident ``pol``: ``"h"``/``"TE"`` or ``"v"``/``"TM"``
+        (case-insensitive)."""
+        return self.coherent[pol_index(pol)]
 
     def db(self, pair: str, floor: float = 1e-30) -> np.ndarray:
         """σ⁰ of one pair in dB (``10 log10``, floored at ``floor`` to stay finite)."""

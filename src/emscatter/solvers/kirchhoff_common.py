@@ -328,7 +328,8 @@ def smith_lambda(a: np.ndarray) -> np.ndarray:
 def _a(cos_t, sin_t, s2_dir):
     """``a = cotθ/(√2 s)`` (∞ at θ = 0, 0 at θ = π/2), clipped to [0, 1e300]."""
     den = sin_t * np.sqrt(2.0 * s2_dir)
-    return np.where(den > cos_t * 1e-300, cos_t / np.where(den > 0, den, 1.0), 1e300)
+    big = den > cos_t * 1e-300  # else a ≥ 1e300: no division (a subnormal θ overflowed)
+    return np.where(big, cos_t / np.where(big, den, 1.0), 1e300)
 
 
 def shadowing_factor(g: Local, sx: float, sy: float, mode="smith") -> np.ndarray:

@@ -48,6 +48,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from ..conventions import check_angle, check_positive
+from ..kernels import dispatch
 from ..scattering import Scattering
 from .kirchhoff_common import (
     check_flag,
@@ -244,7 +245,12 @@ def bistatic(
 
     starts = range(0, n, _CHUNK)
     workers = workers_for(threads, len(starts))
-    if workers > 1:
+    if dispatch.go_sigma0(
+        g.ti_flat, g.ts_flat, g.dphi, g.eps_flat, dimension=dim, sx=sx, sy=sy, shadowing=mode,
+        out=flat, coherent_out=coh if want_coh else None, k=k, sigma=rough.sigma, threads=workers,
+    ):  # fmt: skip
+        pass  # compiled kernel (emscatter.kernels); the numpy path below is the reference
+    elif workers > 1:
         with ThreadPoolExecutor(max_workers=workers) as pool:
             list(pool.map(work, starts))  # numpy releases the GIL in its kernels
     else:

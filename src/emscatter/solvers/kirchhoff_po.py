@@ -47,6 +47,7 @@ import numpy as np
 from scipy import special
 
 from ..conventions import check_angle, check_positive
+from ..kernels import dispatch
 from ..scattering import Scattering
 from ..spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 from .kirchhoff_common import (
@@ -481,7 +482,9 @@ def bistatic(
 
     def block(st: int) -> np.ndarray:
         sl = slice(st, st + _BLOCK)
-        return series_sum(log_w, Q[sl], K[sl], rtol=rtol, max_terms=int(max_terms))
+        opts = {"rtol": rtol, "max_terms": int(max_terms)}
+        compiled = dispatch.po_log_series(rough, log_w, Q[sl], K[sl], series_sum=series_sum, **opts)
+        return compiled if compiled is not None else series_sum(log_w, Q[sl], K[sl], **opts)
 
     if workers > 1:
         with ThreadPoolExecutor(max_workers=workers) as pool:

@@ -63,8 +63,10 @@ import math
 
 import numpy as np
 
+from .. import cache
 from ..conventions import broadcast_angles, check_angle, check_positive
 from ..fresnel import PEC, fresnel_cos, is_pec
+from ..kernels import dispatch
 from ..scattering import Scattering
 from ..spectra import Roughness, check_roughness
 from .spm_second_order import (  # noqa: F401 (the tests reach the kernel through spm)
@@ -314,8 +316,14 @@ def _coherent(rough, eps_c, k, ti, shape, n_radial, n_azimuth, phi_i=0.0, k_max=
     for e, mask in groups:
         pairs = np.stack([ti_b[mask], np.mod(pi_b[mask], 2 * math.pi)], axis=1)
         uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
-        r0, r2 = _second_order_R(
-            rough, e, k, uniq[:, 0], n_radial, n_azimuth, phi_i=uniq[:, 1], k_max=k_max
+        key = {"surface": rough, "eps": e, "k": k, "angles": uniq, "nodes": (n_radial, n_azimuth),
+               "k_max": k_max}  # fmt: skip
+        r0, r2 = cache.cached(  # the quadrature costs ms per angle: kept on disk (emscatter.cache)
+            "spm2-coherent",
+            key,
+            lambda e=e, u=uniq: _second_order_R(
+                rough, e, k, u[:, 0], n_radial, n_azimuth, phi_i=u[:, 1], k_max=k_max
+            ),
         )
         r2 = r2 * rough.sigma**2
         refl = np.abs(r0) ** 2 + 2.0 * (np.conj(r0) * r2).real
@@ -389,10 +397,12 @@ def bistatic(
     fpi = pi_b.ravel()
     fe = eps_c if scalar_eps else eps_b.ravel()
     coh = np.empty((2, n)) if order < 2 else None
+    compiled = scalar_eps and dispatch.spm1_sigma0(rough, eps_c, k, fi, fs, dphi, sig)
     for s in range(0, n, _CHUNK):
         sl = slice(s, s + _CHUNK)
         e = fe if scalar_eps else fe[sl]
-        _sigma0_first(rough, e, k, fi[sl], fs[sl], dphi[sl], fpi[sl], sig[:, :, sl])
+        if not compiled:  # numpy reference path (emscatter.kernels covers the common cases)
+            _sigma0_first(rough, e, k, fi[sl], fs[sl], dphi[sl], fpi[sl], sig[:, :, sl])
         if coh is not None:
             coh[:, sl] = _fresnel_power(e, fi[sl])
     if rough.dimension == 1:

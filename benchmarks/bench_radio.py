@@ -1,0 +1,149 @@
+"""Sionna RT solver time with emscatter materials against Sionna's built-in RadioMaterial.
+
+Same scene (the furnished room of ``emscatter.radio.scenes``), same media, same rays and depth:
+built-in ``RadioMaterial`` (ITU ε′, σ; ``S = 0.3`` Lambertian where diffuse reflection is on)
+against ``EmscatterRadioMaterial`` with the roughness of ``emscatter.radio.indoor.ROUGHNESS``.
+Targets: ``PathSolver`` ≤ 1.3×, ``RadioMapSolver`` ≤ 1.5× the built-in time. The two materials
+are timed alternately in one run, after one warm-up call each (kernel compilation and the
+emscatter tables — whose one-off cost is reported apart), and the medians of ``--repeat``
+calls are compared.
+
+Run: ``.venv/bin/python benchmarks/bench_radio.py`` (≈ 3 min on 2 cores) — prints and writes
+``benchmarks/results/radio.json``. ``--quick`` for a smoke run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import platform
+import statistics
+import time
+
+
+def _versions():
+    import drjit
+    import mitsuba
+    import sionna.rt
+
+    return {
+        "sionna-rt": sionna.rt.__version__,
+        "mitsuba": mitsuba.__version__,
+        "drjit": drjit.__version__,
+    }
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__)
+    p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--samples", type=int, default=1_000_000)
+    p.add_argument("--map-samples", type=int, default=1_000_000)
+    p.add_argument("--frequency", type=float, default=28e9)
+    p.add_argument("--quick", action="store_true")
+    a = p.parse_args(argv)
+    if a.quick:
+        a.repeat, a.samples, a.map_samples = 2, 20_000, 20_000
+
+    import mitsuba as mi
+    import sionna.rt as rt
+
+    from emscatter.radio import build_log, indoor, scenes
+
+    setup = indoor.SETUPS["room"]
+    f = a.frequency
+    built = {}
+    for kind in ("builtin", "emscatter"):
+        make = indoor.material_factory("sionna" if kind == "builtin" else "rough", f)
+        sc = scenes.load(setup.scene, f, make)
+        indoor.add_devices(sc, setup)
+        built[kind] = sc
+
+    path_solver = rt.PathSolver()
+    map_solver = rt.RadioMapSolver()
+
+    def paths(sc, diffuse):
+        r = path_solver(
+            sc, max_depth=3, samples_per_src=a.samples, max_num_paths_per_src=a.samples,
+            refraction=True, diffuse_reflection=diffuse,
+        )  # fmt: skip
+        r.a[0].numpy()  # force evaluation
+
+    def radio_map(sc, diffuse):
+        r = map_solver(
+            sc, center=mi.Point3f(*setup.map_center), orientation=mi.Point3f(0, 0, 0),
+            size=mi.Point2f(*setup.map_size), cell_size=mi.Point2f(0.1, 0.1),
+            samples_per_tx=a.map_samples, max_depth=3, refraction=True,
+            diffuse_reflection=diffuse,
+        )  # fmt: skip
+        r.path_gain.numpy()
+
+    configs = {
+        "PathSolver specular+refraction": (paths, False, 1.3),
+        "PathSolver +diffuse": (paths, True, 1.3),
+        "RadioMapSolver specular+refraction": (radio_map, False, 1.5),
+        "RadioMapSolver +diffuse": (radio_map, True, 1.5),
+    }
+    results = {
+        "command": "python benchmarks/bench_radio.py" + (" --quick" if a.quick else ""),
+        "machine": platform.processor() or platform.machine(),
+        "cpus": os.cpu_count(),
+        "versions": _versions(),
+        "frequency_hz": f,
+        "samples": a.samples,
+        "map_samples": a.map_samples,
+        "repeat": a.repeat,
+        "load_average_start": os.getloadavg(),
+        "configs": {},
+    }
+    for name, (fn, diffuse, target) in configs.items():
+        first = {}
+        for kind, sc in built.items():  # warm-up: kernel compilation (+ emscatter tables)
+            t0 = time.perf_counter()
+            fn(sc, diffuse)
+            first[kind] = time.perf_counter() - t0
+        times = {"builtin": [], "emscatter": []}
+        for _ in range(a.repeat):
+            for kind, sc in built.items():
+                t0 = time.perf_counter()
+                fn(sc, diffuse)
+                times[kind].append(time.perf_counter() - t0)
+        med = {k: statistics.median(v) for k, v in times.items()}
+        ratio = med["emscatter"] / med["builtin"]
+        results["configs"][name] = {
+            "median_seconds": med,
+            "all_seconds": times,
+            "first_call_seconds": first,
+            "ratio": ratio,
+            "target": target,
+            "meets_target": ratio <= target,
+        }
+        print(
+            f"{name:<36} built-in {med['builtin']:.3f} s, emscatter {med['emscatter']:.3f} s: "
+            f"ratio {ratio:.2f} (target ≤ {target})",
+            flush=True,
+        )
+    log = build_log()
+    results["tables"] = {
+        "builds": len(log),
+        "seconds_total": sum(e["seconds"] for e in log),
+        "per_build": [{k: e[k] for k in ("label", "method", "seconds")} for e in log],
+    }
+    results["load_average_end"] = os.getloadavg()
+    print(
+        f"tables: {len(log)} builds, {results['tables']['seconds_total']:.1f} s once per frequency"
+    )
+    out = (
+        pathlib.Path(__file__).parent
+        / "results"
+        / ("radio_quick.json" if a.quick else "radio.json")
+    )
+    out.parent.mkdir(exist_ok=True)
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

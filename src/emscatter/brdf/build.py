@@ -1,0 +1,415 @@
+"""Build a :class:`~.table.BrdfTable` from any solver (or ``"auto"``) through
+:func:`emscatter.api.bistatic`.
+
+One solver call per wavelength, vectorized over the whole angle grid; only the reciprocal
+half of the grid is computed (``θi ≤ θo`` node pairs, or ``(θi, φi) ≤ (θo, φo)`` for
+anisotropic tables) and the other half is filled by reciprocity,
+``σ⁰_pq(ωi → ωo) = σ⁰_qp(ωo → ωi)`` — tested against direct evaluation. The coherent
+reflectivity is computed once per wavelength on the θi nodes only; the solvers' own coherent
+part is skipped inside the big call where they offer ``coherent=False`` (SPM's second-order
+quadrature).
+
+Geometric optics: its σ⁰ is the stationary-phase limit of the *whole* Kirchhoff intensity,
+so adding the Kirchhoff coherent term would count the specular energy twice
+(:mod:`emscatter.solvers.kirchhoff_go`); GO tables have ``coherent = 0`` and say so in
+``metadata["coherent"]``.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import numbers
+
+import numpy as np
+
+from .. import api, materials
+from ..conventions import check_positive
+from ..fresnel import check_eps
+from ..scattering import Scattering
+from ..spectra import check_roughness
+from . import frames, grid
+from .energy import apply_energy_remedy
+from .table import FORMAT_VERSION, BrdfTable
+
+__all__ = ["build_table", "default_theta", "default_phi_d", "default_phi", "material_eps"]
+
+
+def default_theta(n: int) -> np.ndarray:
+    """``n`` uniform θ nodes ``k·90°/n``, k = 0 … n−1 [rad] (0° … 89° for n = 90)."""
+    n = _check_count("n_theta", n, 2)
+    return np.arange(n) * (0.5 * math.pi / n)
+
+
+def default_phi_d(n: int) -> np.ndarray:
+    """``n`` uniform Δφ nodes on ``[0, π]`` inclusive [rad]."""
+    n = _check_count("n_phi", n, 2)
+    return np.linspace(0.0, math.pi, n)
+
+
+def default_phi(n: int) -> np.ndarray:
+    """``n`` uniform φ nodes ``2πk/n`` on ``[0, 2π)`` [rad] (anisotropic tables)."""
+    n = _check_count("n_phi", n, 4)
+    return np.arange(n) * (2 * math.pi / n)
+
+
+def _check_count(name: str, n, low: int) -> int:
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < low:
+        raise ValueError(f"{name} must be an integer ≥ {low}, got {n!r}")
+    return int(n)
+
+
+def material_eps(material, wavelength: float):
+    """Relative permittivity (``exp(−iωt)``, ``Im ε ≥ 0``) of ``material`` at ``wavelength``
+    [m]: anything :func:`emscatter.materials.eps_at` takes (a number, ``"pec"``, a material
+    name like ``"Au"`` or ``"itu:concrete"``, a :class:`~emscatter.materials.Material`) or a
+    callable ``eps(wavelength [m])``."""
+    if callable(material) and not isinstance(material, materials.Material):
+        return check_eps(np.asarray(material(wavelength)).item(), "material")
+    eps = materials.eps_at(material, wavelength=wavelength)
+    return eps if isinstance(eps, str) else check_eps(np.asarray(eps).item(), "material")
+
+
+def _describe_material(material) -> dict | str:
+    """A JSON-able description: the material's ``to_dict()`` (round-trips through
+    :func:`emscatter.materials.from_dict`) or a string for callables."""
+    if callable(material) and not isinstance(material, materials.Material):
+        return f"callable {getattr(material, '__name__', type(material).__name__)}(wavelength)"
+    return materials.as_material(material).to_dict()
+
+
+def _check_wavelengths(wavelengths) -> np.ndarray:
+    wl = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+    if wl.ndim != 1 or wl.size == 0:
+        raise ValueError(f"wavelengths must be a 1-D array [m], got shape {wl.shape}")
+    for x in wl:
+        check_positive("wavelength", float(x), unit="m")
+    if np.any(np.diff(wl) <= 0):
+        raise ValueError(f"wavelengths must be strictly increasing [m], got {wl!r}")
+    return wl
+
+
+def _solver_name(rough, k, method, eps, out_of_range) -> str:
+    name, _, _, _ = api.resolve_method(rough, k, method, "ignore", eps)
+    return name
+
+
+#: The API computes ``Scattering.coherent`` lazily (BOARD interface 3, reliability): then it
+#: skips the solvers' coherent part by itself and must not be given ``coherent=False``.
+_API_LAZY_COHERENT = hasattr(Scattering, "coherent_computed")
+
+
+def _bistatic(rough, eps, wavelength, name, ti, pi_, to, po, out_of_range, options):
+    """``api.bistatic`` at renderer-frame angles (converted by :func:`frames.to_emscatter`)."""
+    et, es, ps, ei = frames.to_emscatter(ti, pi_, to, po)
+    return api.bistatic(
+        rough,
+        eps,
+        wavelength=wavelength,
+        theta_i=et,
+        theta_s=es,
+        phi_s=ps,
+        phi_i=ei,
+        method=name,
+        out_of_range=out_of_range,
+        **options,
+    )
+
+
+def _sigma0(rough, eps, wavelength, name, ti, to, po, pi_, out_of_range, options, polarized):
+    """Unpolarized (and per-pair) f_r at renderer angles: ``(f, f_pol or None, info)``."""
+    opts = dict(options)
+    if not _API_LAZY_COHERENT:  # an API that does not defer the coherent part itself
+        module = api.solvers.get(name)
+        if "coherent" in inspect.signature(module.bistatic).parameters:
+            opts.setdefault("coherent", False)
+    res = _bistatic(rough, eps, wavelength, name, ti, pi_, to, po, out_of_range, opts)
+    sig = res.sigma0
+    if not np.all(np.isfinite(sig)):
+        raise ValueError(
+            f"solver {name!r} returned NaN/inf σ⁰ at λ = {wavelength:.6g} m (out_of_range="
+            f"{out_of_range!r}?): a table cannot hold them"
+        )
+    norm = 1.0 / (4 * math.pi * np.cos(ti) * np.cos(to))
+    f_pol = sig * norm if polarized else None
+    f = 0.5 * sig.sum(axis=(0, 1)) * norm
+    return f, f_pol, res.info
+
+
+def _coherent(rough, eps, wavelength, name, theta, phi, out_of_range, options):
+    """Coherent reflectivity (h, v) on the θi nodes (× φi nodes): shape ``(2, *grid)``."""
+    if name == "go":
+        shape = theta.shape if phi is None else (theta.size, phi.size)
+        return np.zeros((2, *shape))
+    ti = theta if phi is None else theta[:, None]
+    pr = np.zeros_like(ti) if phi is None else phi[None, :]
+    opts = {k: v for k, v in options.items() if k != "coherent"}
+    res = _bistatic(rough, eps, wavelength, name, ti, pr, ti, pr + math.pi, out_of_range, opts)
+    coh = np.clip(np.asarray(res.coherent, dtype=float), 0.0, 1.0)
+    if not np.all(np.isfinite(coh)):
+        raise ValueError(f"solver {name!r} returned a NaN coherent part at λ = {wavelength} m")
+    return coh
+
+
+def build_table(
+    surface,
+    material,
+    wavelengths,
+    *,
+    method: str = "auto",
+    resolution: tuple[int, int] = (90, 180),
+    theta=None,
+    phi=None,
+    anisotropic: bool | None = None,
+    polarized: bool = False,
+    energy: str = "rescale",
+    out_of_range: str = "warn",
+    tol: float | None = None,
+    tol_floor: float = 1e-2,
+    **options,
+) -> BrdfTable:
+    """A BRDF table of ``surface`` (2-D roughness) over ``material`` at ``wavelengths`` [m].
+
+    Parameters
+    ----------
+    surface : :class:`emscatter.spectra.Roughness` with ``dimension=2`` (lengths [m]).
+    material : permittivity, ``"pec"``, a material (name or :mod:`emscatter.materials`
+        object) or a callable ``eps(wavelength [m])``; see :func:`material_eps`.
+    wavelengths : [m], strictly increasing; only these are computed.
+    method : ``"auto"`` or a solver name (``"spm"``, ``"go"``, ``"po"``, …); ``"auto"`` may
+        pick a different solver per wavelength (recorded per wavelength).
+    resolution : ``(n_theta, n_phi)``: θ nodes ``k·90°/n_theta`` (shared by θi and θo) and
+        ``n_phi`` Δφ nodes on ``[0, π]`` (isotropic) or φ nodes on ``[0, 2π)`` (anisotropic).
+    theta, phi : explicit axes [rad] instead (θ in ``[0, π/2)``; φ as above).
+    tol : target interpolation error instead of a fixed resolution: the grid is refined from
+        a coarse one until the interpolant is within ``tol`` of direct evaluation at every
+        interval midpoint (:mod:`.adaptive`; error relative to ``max(|f|, tol_floor · peak)``);
+        the report is in ``metadata["resolution"]``.
+    anisotropic : None → from the surface (``surface.is_isotropic``).
+    polarized : also store ``f_r`` per polarization pair.
+    energy : ``"rescale"`` (default) applies the reciprocal energy remedy
+        (:mod:`.energy`) where the albedo exceeds 1; ``"off"`` only records the albedo
+        (diagnostics — such a table may hand a renderer energy it does not have).
+    out_of_range : the solvers' validity policy (``"warn"``, ``"raise"``, ``"ignore"``).
+    options : passed to the solver (e.g. ``shadowing=False`` for GO).
+    """
+    rough = check_roughness(surface, "surface")
+    if rough.dimension != 2:
+        raise ValueError("a BRDF table needs a 2-D surface (dimension=2), got a 1-D profile")
+    wl = _check_wavelengths(wavelengths)
+    if energy not in ("rescale", "off"):
+        raise ValueError(f"energy must be 'rescale' or 'off', got {energy!r}")
+    if out_of_range == "nan":
+        raise ValueError("out_of_range='nan' cannot build a table (NaN values); use 'warn'")
+    if not (isinstance(resolution, tuple | list) and len(resolution) == 2):
+        raise ValueError(f"resolution must be (n_theta, n_phi), got {resolution!r}")
+    aniso = (not rough.is_isotropic) if anisotropic is None else bool(anisotropic)
+    theta_ax = default_theta(resolution[0]) if theta is None else np.asarray(theta, float)
+    if phi is None:
+        phi_ax = default_phi(resolution[1]) if aniso else default_phi_d(resolution[1])
+    else:
+        phi_ax = np.asarray(phi, float)
+    theta_ax = grid.check_axis("theta", theta_ax, 0.0, 0.5 * math.pi, high_open=True)
+    if aniso:
+        phi_ax = grid.check_axis("phi", phi_ax, 0.0, grid.TWO_PI, high_open=True)
+    else:
+        phi_ax = grid.check_axis("phi", phi_ax, 0.0, math.pi)
+    fill = _fill_anisotropic if aniso else _fill_isotropic
+    setups = []
+    for lam in wl:
+        eps = material_eps(material, float(lam))
+        setups.append(
+            (float(lam), eps, _solver_name(rough, 2 * math.pi / lam, method, eps, out_of_range))
+        )
+    resolution_report = {
+        "n_theta": int(theta_ax.size),
+        "n_phi": int(phi_ax.size),
+        "adaptive": False,
+    }
+    if tol is not None:
+        theta_ax, phi_ax, resolution_report = _adaptive(
+            rough, setups, aniso, tol, tol_floor, out_of_range, options
+        )
+    values, pol_values, coh = [], [], []
+    per_wl = []
+    for lam, eps, name in setups:
+        f, fp, info = fill(
+            rough, eps, float(lam), name, theta_ax, phi_ax, out_of_range, options, polarized
+        )
+        values.append(f)
+        pol_values.append(fp)
+        coh.append(
+            _coherent(
+                rough,
+                eps,
+                float(lam),
+                name,
+                theta_ax,
+                phi_ax if aniso else None,
+                out_of_range,
+                options,
+            )
+        )
+        validity = info.get("validity", {})
+        per_wl.append(
+            {
+                "wavelength": float(lam),
+                "solver": name,
+                "eps": [float(np.real(eps)), float(np.imag(eps))] if eps != "pec" else "pec",
+                "valid": bool(validity.get("valid", True)),
+                "reasons": list(validity.get("reasons", [])),
+            }
+        )
+    coh = np.stack(coh, axis=1)  # (2, n_wl, ...)
+    solvers = sorted({p["solver"] for p in per_wl})
+    meta = {
+        "format_version": FORMAT_VERSION,
+        "emscatter_version": _version(),
+        "solver": solvers[0] if len(solvers) == 1 else "+".join(solvers),
+        "resolution": resolution_report,
+        "method_requested": method,
+        "per_wavelength": per_wl,
+        "surface": rough.describe(),
+        "surface_params": _surface_params(rough),
+        "material": _describe_material(material),
+        "options": {k: v for k, v in options.items() if _jsonable_scalar(v)},
+        "units": {"values": "1/sr", "wavelengths": "m", "angles": "rad", "coherent": "-"},
+        "frame": "renderer: wi, wo point away from the surface, normal +z, tangent +x, "
+        "mirror at phi_o = phi_i + pi",
+        "coherent": "zero: GO's sigma0 already holds the whole Kirchhoff intensity"
+        if solvers == ["go"]
+        else "solver's coherent reflectivity (delta lobe, not in values)",
+    }
+    grid_kw = {"phi_i": phi_ax, "phi_o": phi_ax} if aniso else {"phi_d": phi_ax}
+    table = BrdfTable(
+        wavelengths=wl,
+        theta_i=theta_ax,
+        theta_o=theta_ax,
+        values=np.stack(values),
+        coherent=0.5 * (coh[0] + coh[1]),
+        coherent_polarized=coh,
+        polarized=np.stack(pol_values, axis=2) if polarized else None,
+        metadata=meta,
+        **grid_kw,
+    )
+    if energy == "rescale":
+        return apply_energy_remedy(table)
+    return _record_albedo(table, "off")
+
+
+def _record_albedo(table: BrdfTable, remedy: str) -> BrdfTable:
+    """Record the albedo in ``metadata["energy"]`` without changing the values."""
+    alb = table.albedo().total
+    table.metadata["energy"] = {
+        "remedy": remedy,
+        "remedy_applied": False,
+        "max_albedo_before": alb.reshape(alb.shape[0], -1).max(axis=1).tolist(),
+        "albedo_exceeds_one": bool(np.any(alb > 1)),
+    }
+    return table
+
+
+def _adaptive(rough, setups, aniso, tol, floor, out_of_range, options):
+    """Axes refined to ``tol`` (:func:`.adaptive.refine_axes`) from a 10 × 13 (isotropic) or
+    10 × 16 (anisotropic) start."""
+    from .adaptive import refine_axes
+
+    def direct(ti, pi_, to, po):
+        return np.stack(
+            [
+                _sigma0(rough, eps, lam, name, ti, to, po, pi_, out_of_range, options, False)[0]
+                for lam, eps, name in setups
+            ]
+        )
+
+    theta0 = default_theta(10)
+    phi0 = default_phi(16) if aniso else default_phi_d(13)
+    theta, phi, report = refine_axes(direct, theta0, phi0, anisotropic=aniso, tol=tol, floor=floor)
+    return theta, phi, {**report, "adaptive": True}
+
+
+def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, polarized):
+    n = theta.size
+    iu, ou = np.triu_indices(n)  # θi ≤ θo
+    ti, to = theta[iu][:, None], theta[ou][:, None]
+    pi_ = np.full((1, 1), -math.pi)  # renderer φi = −π, φo = Δφ − π: emscatter φi = 0
+    f_half, fp_half, info = _sigma0(
+        rough, eps, lam, name, ti, to, phi_d[None, :] + pi_, pi_, out_of_range, options, polarized
+    )
+    f = np.empty((n, n, phi_d.size))
+    f[iu, ou] = f_half
+    f[ou, iu] = f_half
+    fp = None
+    if polarized:
+        fp = np.empty((2, 2, n, n, phi_d.size))
+        fp[:, :, iu, ou] = fp_half
+        fp[:, :, ou, iu] = fp_half.transpose(1, 0, 2, 3)  # f_pq(ωi→ωo) = f_qp(ωo→ωi)
+    return f, fp, info
+
+
+def _fill_anisotropic(rough, eps, lam, name, theta, phi, out_of_range, options, polarized):
+    nt, npf = theta.size, phi.size
+    nd = nt * npf
+    th, ph = np.meshgrid(theta, phi, indexing="ij")
+    th, ph = th.ravel(), ph.ravel()
+    a, b = np.triu_indices(nd)
+    f_half, fp_half, info = _sigma0(
+        rough, eps, lam, name, th[a], th[b], ph[b], ph[a], out_of_range, options, polarized
+    )
+    f = np.empty((nd, nd))
+    f[a, b] = f_half
+    f[b, a] = f_half
+    fp = None
+    if polarized:
+        fp = np.empty((2, 2, nd, nd))
+        fp[:, :, a, b] = fp_half
+        fp[:, :, b, a] = fp_half.transpose(1, 0, 2)
+        fp = fp.reshape(2, 2, nt, npf, nt, npf)
+    return f.reshape(nt, npf, nt, npf), fp, info
+
+
+def _jsonable_scalar(v) -> bool:
+    return isinstance(v, bool | int | float | str) or v is None
+
+
+def _surface_params(rough) -> dict:
+    out = {"type": type(rough).__name__}
+    for key in ("sigma", "length", "length_y", "hurst", "dimension"):
+        if hasattr(rough, key):
+            val = getattr(rough, key)
+            if _jsonable_scalar(val):
+                out[key] = val
+    return out
+
+
+def _version() -> str:
+    from .. import __version__
+
+    return __version__
+
+
+def fill_from_function(brdf, wavelengths, theta, phi, anisotropic: bool, metadata: dict):
+    """A table of ``brdf(wi, wo, wavelength)`` on the full node grid (no reciprocity assumed;
+    :meth:`BrdfTable.reciprocity_error` tells), ``coherent = 0``, albedo recorded."""
+    wl = _check_wavelengths(wavelengths)
+    if anisotropic:
+        ti, pi_, to, po = np.meshgrid(theta, phi, theta, phi, indexing="ij")
+        grid_kw = {"phi_i": phi, "phi_o": phi}
+    else:
+        ti, to, po = np.meshgrid(theta, theta, phi, indexing="ij")
+        pi_ = np.zeros_like(ti)
+        grid_kw = {"phi_d": phi}
+    wi, wo = frames.directions(ti, pi_), frames.directions(to, po)
+    values = np.stack([np.asarray(brdf(wi, wo, float(lam)), dtype=float) for lam in wl])
+    meta = {
+        "format_version": FORMAT_VERSION,
+        "emscatter_version": _version(),
+        "solver": "analytic",
+        "units": {"values": "1/sr", "wavelengths": "m", "angles": "rad", "coherent": "-"},
+        "coherent": "none (analytic model)",
+        **metadata,
+    }
+    table = BrdfTable(
+        wavelengths=wl, theta_i=theta, theta_o=theta, values=values, metadata=meta, **grid_kw
+    )
+    return _record_albedo(table, "off (analytic model)")

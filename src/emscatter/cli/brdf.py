@@ -1,0 +1,202 @@
+"""``emscatter brdf``: build a BRDF table from a surface and a material, and export it.
+
+Formats from the output's extension (or ``--format``): ``.npz`` (the table with its full
+metadata), ``.binary`` (MERL), ``.bsdf`` (RGL, Mitsuba's ``measured``; the render bridge's
+exporter). ``--fit`` also fits a Beckmann/GGX microfacet model and prints (or writes) the
+Mitsuba dict — the quick path when a dict is all you need.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from .args import (
+    Integer,
+    Number,
+    OutputPath,
+    add_command,
+    add_roughness_args,
+    fmt,
+    parse_eps,
+    roughness_from_args,
+)
+
+FORMATS = {".npz": "npz", ".binary": "merl", ".bsdf": "rgl"}
+
+
+def _material(text: str):
+    """A permittivity (``2.25``, ``4+0.3j``, ``pec``) or a material name (``Au``,
+    ``itu:concrete``), checked when the command runs."""
+    try:
+        return parse_eps(text)
+    except argparse.ArgumentTypeError:
+        name = text.strip()
+        if not name or not (name[0].isalpha()):
+            raise
+        return name
+
+
+def _wavelengths_nm(text: str):
+    import numpy as np
+
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            vals = np.linspace(float(a), float(b), int(n))
+        else:
+            vals = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"wavelengths must be 'a,b,c' or 'start:stop:count' in nm, got {text!r}"
+        ) from None
+    if vals.size == 0 or not np.all(np.isfinite(vals)) or np.any(vals <= 0):
+        raise argparse.ArgumentTypeError(f"wavelengths must be positive [nm], got {text!r}")
+    if np.any(vals < 10) or np.any(vals > 1e9):
+        raise argparse.ArgumentTypeError(
+            f"wavelengths {text!r} nm are outside 10 nm – 1 m; the unit here is nm "
+            "(e.g. 450,550,650)"
+        )
+    if np.any(np.diff(vals) <= 0):
+        raise argparse.ArgumentTypeError(f"wavelengths must increase, got {text!r}")
+    return vals
+
+
+def register(subparsers) -> None:
+    p = add_command(
+        subparsers,
+        "brdf",
+        help="build a BRDF table (surface + material) and export it (npz, MERL, RGL .bsdf)",
+    )
+    p.add_argument(
+        "output",
+        type=OutputPath(suffixes=tuple(FORMATS)),
+        help="output file: .npz (table + metadata), .binary (MERL) or .bsdf (RGL)",
+    )
+    add_roughness_args(p, sigma=0.15e-6, length=1.0e-6)
+    p.add_argument(
+        "--material",
+        type=_material,
+        default="Au",
+        help="material name (Au, Ag, Cu, Al, Cr, ..., itu:concrete) or a permittivity "
+        "(exp(-iωt), Im ≥ 0) or 'pec'",
+    )
+    p.add_argument(
+        "--wavelengths-nm",
+        type=_wavelengths_nm,
+        default="450,550,650",
+        help="wavelengths [nm]: 'a,b,c' or 'start:stop:count'",
+    )
+    p.add_argument("--method", default="auto", help="solver name or 'auto'")
+    p.add_argument("--n-theta", type=Integer(low=2, high=2000), default=90, help="θ nodes")
+    p.add_argument("--n-phi", type=Integer(low=4, high=4000), default=180, help="Δφ (or φ) nodes")
+    p.add_argument(
+        "--tol",
+        type=Number(low=0, high=1),
+        default=None,
+        help="target interpolation error: refine the grid adaptively instead of --n-theta/--n-phi",
+    )
+    p.add_argument("--polarized", action="store_true", help="also store f_r per polarization pair")
+    p.add_argument(
+        "--anisotropic",
+        action="store_true",
+        help="(θi, φi, θo, φo) table even for an isotropic surface",
+    )
+    p.add_argument(
+        "--energy",
+        default="rescale",
+        choices=["rescale", "off"],
+        help="reciprocal energy remedy where the albedo exceeds 1 ('off': diagnostics only)",
+    )
+    p.add_argument(
+        "--out-of-range",
+        default="warn",
+        choices=["warn", "raise", "ignore"],
+        help="what to do outside the method's validity",
+    )
+    p.add_argument("--format", choices=sorted(set(FORMATS.values())), help="override the suffix")
+    p.add_argument(
+        "--rgl-channels",
+        default="spectral",
+        choices=["spectral", "rgb"],
+        help="RGL .bsdf only: spectral or rgb tables",
+    )
+    p.add_argument(
+        "--fit",
+        choices=["beckmann", "ggx"],
+        help="also fit a microfacet model and print its Mitsuba dict (JSON)",
+    )
+    p.add_argument("--fit-json", type=OutputPath(suffixes=(".json",)), help="write the fit here")
+    p.set_defaults(func=run)
+
+
+def run(a) -> int:
+    import numpy as np
+
+    from ..brdf import build_table
+
+    fmt_name = a.format or FORMATS[a.output.suffix.lower()]
+    rough = roughness_from_args(a)
+    if rough.dimension != 2:
+        raise ValueError("--profile describes a 1-D profile; a BRDF table needs a 2-D surface")
+    wl = np.asarray(a.wavelengths_nm, float) * 1e-9
+    table = build_table(
+        rough,
+        a.material,
+        wl,
+        method=a.method,
+        resolution=(a.n_theta, a.n_phi),
+        tol=a.tol,
+        anisotropic=True if a.anisotropic else None,
+        polarized=a.polarized,
+        energy=a.energy,
+        out_of_range=a.out_of_range,
+    )
+    path = export(table, a.output, fmt_name, rgl_channels=a.rgl_channels)
+    energy = table.metadata.get("energy", {})
+    print(f"wrote {path} ({fmt_name}): {table.describe()}")
+    if energy.get("remedy_applied"):
+        worst = max(energy["max_albedo_before"])
+        print(f"energy remedy applied: albedo up to {fmt(worst)} brought to ≤ 1 (see metadata)")
+    if a.fit:
+        _fit(table, a.fit, a.fit_json)
+    return 0
+
+
+def export(table, path, fmt_name: str, *, rgl_channels: str = "spectral"):
+    """Write ``table`` in ``fmt_name`` (``npz``, ``merl``, ``rgl``); returns the path."""
+    if fmt_name == "npz":
+        from ..brdf.export_npz import write_npz
+
+        return write_npz(table, path)
+    if fmt_name == "merl":
+        from ..brdf.export_merl import write_merl
+
+        return write_merl(table, path)
+    if fmt_name == "rgl":
+        try:
+            from ..brdf.export_rgl import write_rgl
+        except ImportError:
+            raise ValueError(
+                "the RGL .bsdf exporter (emscatter.brdf.export_rgl) is not installed in this "
+                "build; write .npz or .binary instead"
+            ) from None
+        return write_rgl(path, table, channels=rgl_channels)
+    raise ValueError(f"format must be one of {sorted(set(FORMATS.values()))}, got {fmt_name!r}")
+
+
+def _fit(table, distribution: str, json_path) -> None:
+    import json
+
+    from ..brdf.fit import fit_microfacet
+    from ..io import write_json
+
+    fit = fit_microfacet(table, distribution=distribution)
+    out = {"mitsuba": fit.to_mitsuba(), "errors": fit.errors, "alpha": fit.alpha}
+    print(json.dumps(out["mitsuba"]))
+    e = fit.errors
+    print(
+        f"fit error: rms {fmt(e['rms'])} of the peak, median {fmt(100 * e['median_rel'])} %, "
+        f"p90 {fmt(100 * e['p90_rel'])} %"
+    )
+    if json_path is not None:
+        write_json(json_path, out)

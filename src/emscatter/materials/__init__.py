@@ -1,0 +1,154 @@
+"""Media whose permittivity depends on frequency or wavelength — shared by the BRDF bridge
+(metals at visible wavelengths) and the radio bridge (building materials at GHz).
+
+::
+
+    from emscatter import materials as mat
+    gold = mat.metal("Au")                       # Mitsuba 3's own η/k data (mitsuba/data/ior)
+    gold.eps(wavelength=[450e-9, 550e-9, 650e-9])
+    concrete = mat.itu("concrete")               # ITU-R P.2040, Sionna RT's table and bands
+    concrete.eps(frequency=3.5e9), concrete.conductivity(3.5e9)
+    mat.eps_from_conductivity(5.24, 0.12, 3.5e9) # ε′ + iσ/(ωε₀)   (exp(−iωt), Im ε ≥ 0)
+    mat.to_engineering(eps)                      # the exp(+jωt) form Sionna uses (conjugate)
+    mat.as_material(17 + 2j), mat.as_material("Au"), mat.as_material("itu:concrete")
+
+Every material says where its numbers come from (``.source``) and where they hold (``.band``
+[Hz]); asking outside the band raises :class:`OutOfBandError` naming the band and the ways out.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from .core import (
+    ComplexIndex,
+    Constant,
+    Drude,
+    Material,
+    OutOfBandError,
+    PerfectConductor,
+    Tabulated,
+    conductivity_from_eps,
+    eps_from_conductivity,
+    eps_from_nk,
+    format_frequency,
+    frequency_array,
+    from_engineering,
+    nk_from_eps,
+    to_engineering,
+)
+from .itu import ITU_P2040, ItuMaterial, available_itu, itu
+from .metals import available_metals, metal
+
+__all__ = [
+    "Material",
+    "Constant",
+    "ComplexIndex",
+    "Drude",
+    "Tabulated",
+    "PerfectConductor",
+    "ItuMaterial",
+    "OutOfBandError",
+    "metal",
+    "itu",
+    "available_metals",
+    "available_itu",
+    "ITU_P2040",
+    "as_material",
+    "eps_at",
+    "from_dict",
+    "eps_from_nk",
+    "nk_from_eps",
+    "eps_from_conductivity",
+    "conductivity_from_eps",
+    "to_engineering",
+    "from_engineering",
+    "frequency_array",
+    "format_frequency",
+]
+
+
+def as_material(value, *, extrapolate: bool = False) -> Material:
+    """A :class:`Material` from a Material (returned as is), a number (``Constant``), ``"pec"``,
+    a Mitsuba metal name (``"Au"``, or ``"mitsuba:Au"``) or an ITU-R P.2040 name
+    (``"concrete"``, or ``"itu:concrete"``)."""
+    if isinstance(value, Material):
+        return value
+    if isinstance(value, bool) or value is None:
+        raise TypeError(
+            f"eps must be a complex permittivity, 'pec', a material name or a "
+            f"emscatter.materials.Material, got {value!r}"
+        )
+    if isinstance(value, numbers.Number) or (
+        isinstance(value, np.ndarray | np.generic) and np.ndim(value) == 0
+    ):
+        return Constant(complex(value))
+    if isinstance(value, str):
+        text = value.strip()
+        low = text.lower()
+        if low == "pec":
+            return PerfectConductor()
+        if low.startswith("itu:"):
+            return itu(low[4:], extrapolate=extrapolate)
+        if low.startswith("mitsuba:"):
+            return metal(text[len("mitsuba:") :], extrapolate=extrapolate)
+        if low in ITU_P2040:
+            return itu(low, extrapolate=extrapolate)
+        try:
+            names = available_metals()
+        except (ModuleNotFoundError, FileNotFoundError):
+            names = []
+        if text in names:
+            return metal(text, extrapolate=extrapolate)
+        raise ValueError(
+            f"unknown material {value!r}: use 'pec', an ITU-R P.2040 name {available_itu()}, "
+            f"or a Mitsuba metal {names or '(Mitsuba not installed)'}"
+        )
+    raise TypeError(
+        f"eps must be a complex permittivity, 'pec', a material name or a "
+        f"emscatter.materials.Material, got {type(value).__name__}"
+    )
+
+
+def eps_at(value, frequency=None, wavelength=None):
+    """What the solvers take: ``"pec"`` for a perfect conductor, else the complex ε array of
+    ``value`` (anything :func:`as_material` accepts) at ``frequency`` [Hz] or ``wavelength`` [m]."""
+    mat = as_material(value)
+    if isinstance(mat, PerfectConductor):
+        frequency_array(frequency, wavelength)  # still check the frequency
+        return "pec"
+    return mat.eps(frequency=frequency, wavelength=wavelength)
+
+
+def from_dict(d: dict) -> Material:
+    """Rebuild a material from :meth:`Material.to_dict` (metadata round trip)."""
+    if not isinstance(d, dict) or "type" not in d:
+        raise ValueError(f"not a material description (needs a 'type' key): {d!r}")
+    kind = d["type"]
+    if kind == "Constant":
+        return Constant(complex(d["eps"]["re"], d["eps"]["im"]), name=d["name"], source=d["source"])
+    if kind == "ComplexIndex":
+        return ComplexIndex(d["n"], d["k"], name=d["name"], source=d["source"])
+    if kind == "Drude":
+        return Drude(
+            d["plasma_angular_frequency"],
+            d["collision_rate"],
+            d["eps_inf"],
+            name=d["name"],
+            source=d["source"],
+        )
+    if kind == "PerfectConductor":
+        return PerfectConductor()
+    if kind == "ItuMaterial":
+        return itu(d["name"], extrapolate=d.get("extrapolate", False))
+    if kind == "Tabulated":
+        common = {"name": d["name"], "source": d["source"], "extrapolate": d["extrapolate"]}
+        if "n" in d:
+            return Tabulated(
+                np.array(d["wavelength"]), n=np.array(d["n"]), k=np.array(d["k"]), **common
+            )
+        eps = np.array(d["eps_re"]) + 1j * np.array(d["eps_im"])
+        return Tabulated(np.array(d["wavelength"]), eps, **common)
+    raise ValueError(f"unknown material type {kind!r} in {d!r}")

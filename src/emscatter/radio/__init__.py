@@ -1,0 +1,108 @@
+"""The bridge to Sionna RT: radio materials whose reflection, transmission and diffuse lobe come
+from emscatter's rough-surface solvers.
+
+::
+
+    import emscatter as em
+    from emscatter import radio
+    wall = radio.MaterialSpec(surface=em.GaussianCorrelation(sigma=0.4e-3, length=4e-3),
+                              medium="concrete", thickness=0.2)      # ITU-R P.2040 concrete
+    tables = wall.tables(28e9)            # NumPy: what the material reads per ray (no Sionna)
+    tables.method, tables.valid, tables.incoherent
+
+    # in a process that runs Sionna RT (Dr.Jit variants are per process):
+    mat = wall.sionna("wall")             # an EmscatterRadioMaterial (RadioMaterialBase)
+    scene.get("wall").radio_material = mat
+
+Nothing here imports Sionna, Mitsuba or Dr.Jit except :mod:`emscatter.radio.material` (and
+the functions that run Sionna), so ``import emscatter.radio`` stays light. Modules:
+:mod:`.medium` (what a wall is made of), :mod:`.convention` (the ``exp(±jωt)`` flip),
+:mod:`.slab` (rough-slab coefficients), :mod:`.tables` (per-frequency tables from the solvers),
+:mod:`.material` (the Sionna class), :mod:`.scenes` (PLY/XML scenes from NumPy),
+:mod:`.plate`, :mod:`.indoor` and :mod:`.sweep` (the three cross-checks), :mod:`.demo`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .convention import from_sionna, sionna_eps_conductivity, sionna_permittivity, to_sionna
+from .medium import ConductiveMedium, resolve_medium
+from .slab import slab_coefficients
+from .tables import (
+    EnergyWarning,
+    RadioTables,
+    RadioValidityWarning,
+    TableOptions,
+    build_log,
+    build_tables,
+    reset_build_log,
+)
+
+__all__ = [
+    "MaterialSpec",
+    "ConductiveMedium",
+    "resolve_medium",
+    "slab_coefficients",
+    "TableOptions",
+    "RadioTables",
+    "build_tables",
+    "build_log",
+    "reset_build_log",
+    "EnergyWarning",
+    "RadioValidityWarning",
+    "to_sionna",
+    "from_sionna",
+    "sionna_permittivity",
+    "sionna_eps_conductivity",
+]
+
+
+@dataclass(frozen=True)
+class MaterialSpec:
+    """A radio material described without Sionna: roughness statistics (or ``None``: flat),
+    a medium (ITU name, Material or permittivity; or ``eps_real`` + ``conductivity`` [S/m]),
+    a slab ``thickness`` [m] (``None``: half-space), the emscatter ``method`` and grid options."""
+
+    surface: object = None
+    medium: object = None
+    eps_real: float | None = None
+    conductivity: float | None = None
+    thickness: float | None = 0.1
+    method: str = "auto"
+    out_of_range: str = "warn"
+    options: TableOptions | None = None
+
+    def material(self):
+        """The :class:`~emscatter.materials.Material` (checks the inputs)."""
+        return resolve_medium(self.medium, eps_real=self.eps_real, conductivity=self.conductivity)
+
+    def tables(self, frequency: float, label: str = "material") -> RadioTables:
+        """The tables at ``frequency`` [Hz] (raises out of the medium's band)."""
+        eps = complex(self.material().eps(frequency=frequency))
+        return build_tables(
+            self.surface,
+            eps,
+            frequency,
+            method=self.method,
+            out_of_range=self.out_of_range,
+            label=label,
+            options=self.options,
+        )
+
+    def sionna(self, name: str, color=None):
+        """An :class:`~emscatter.radio.material.EmscatterRadioMaterial` (imports Sionna RT)."""
+        from .material import EmscatterRadioMaterial
+
+        return EmscatterRadioMaterial(
+            name,
+            surface=self.surface,
+            medium=self.medium,
+            eps_real=self.eps_real,
+            conductivity=self.conductivity,
+            thickness=self.thickness,
+            method=self.method,
+            out_of_range=self.out_of_range,
+            table_options=self.options,
+            color=color,
+        )

@@ -1,0 +1,565 @@
+"""A Sionna RT radio material whose reflection, transmission and diffuse lobe come from
+emscatter (importing this module imports Sionna RT and registers the class with Mitsuba as
+``"emscatter-radio-material"``, so XML scenes can name it).
+
+Per ray, at the scene frequency and the ray's incidence angle:
+
+* **specular reflection / transmission** — the rough slab of :mod:`emscatter.radio.slab`,
+  evaluated exactly per ray in Dr.Jit (Fresnel, slab phase, Kirchhoff factors) with the front
+  face's coherent reflection ``r_coh`` = Fresnel + the interpolated roughness correction of
+  :mod:`emscatter.radio.tables`. The time convention flips here (Sionna uses ``exp(+jωt)``):
+  every complex quantity is the conjugate of emscatter's (:mod:`emscatter.radio.convention`).
+* **diffuse reflection** — direction uniform on the hemisphere (both Sionna solvers reset the
+  ray tube's solid angle to 2π after a diffuse bounce, so the lobe must not steer the
+  direction); the Jones matrix carries ``√(lobe_qp · Ω)`` (``Ω`` the incident tube's solid angle,
+  already divided by the event probability in the path solver, and divided here in
+  ``sample``), in the local ``(h, v)`` bases of the incident and scattered planes, with the
+  sign pattern of Sionna's own cross-polarization matrix. Co- and cross-polarized shares are
+  emscatter's ``σ⁰_hh, σ⁰_vv`` and ``σ⁰_hv, σ⁰_vh``.
+* **event probabilities** (``bs.pdf`` = the probability of the sampled event, as the solvers
+  expect, not a direction density) are proportional to the coherent reflected, diffuse and
+  transmitted powers (mean of the two polarizations), among the locally enabled events.
+* **diffraction** uses Sionna's own UTD wedge coefficients with the flat slab of the medium
+  (roughness does not enter the wedge).
+
+Tables are built lazily, the first time a solver traces the material at a frequency, and only
+if some object of the scene uses it (Dr.Jit traces every live material, used or not). Changing
+``scene.frequency`` checks the medium's band at once (an out-of-band ITU material fails even
+if unused, as Sionna's own ITU materials do) and picks the cached table for that frequency on
+the host. A material instance belongs to one scene (Sionna enforces it). Sionna attaches the
+materials of an XML scene at its default 3.5 GHz, before you can set the frequency: a medium
+whose band excludes 3.5 GHz (ITU floorboard, 50–100 GHz) cannot be named in XML — assign it from
+Python after setting ``scene.frequency`` (:func:`emscatter.radio.scenes.load` does).
+
+A rough wall so thick and lossy that one pass through it keeps less than 1e-6 of the field
+(−120 dB; concrete at 140 GHz, 0.2 m) is treated as a half-space (no transmission, no back
+face), which saves the slab arithmetic per ray; flat materials always keep Sionna's slab.
+"""
+
+from __future__ import annotations
+
+import math
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+from sionna.rt import RadioMaterial, RadioMaterialBase
+from sionna.rt.constants import (
+    DEFAULT_FREQUENCY,
+    DEFAULT_THICKNESS,
+    NO_JONES_MATRIX,
+    InteractionType,
+)
+from sionna.rt.utils import (
+    complex_sqrt,
+    implicit_basis_vector,
+    itu_coefficients_single_layer_slab,
+    jones_matrix_from_real_imag,
+    jones_matrix_rotator,
+    jones_matrix_to_world_implicit,
+    transverse_basis_from_normal,
+)
+
+from .. import solvers
+from ..spectra import ExponentialCorrelation, GaussianCorrelation
+from .convention import sionna_permittivity, to_sionna
+from .medium import resolve_medium
+from .tables import TableOptions, build_tables, check_policy, check_surface
+
+__all__ = ["EmscatterRadioMaterial", "PLUGIN_NAME"]
+
+PLUGIN_NAME = "emscatter-radio-material"
+_HALF_SPACE_DIFFRACTION_THICKNESS = 1e3  # [m] a half-space seen by Sionna's UTD wedge code
+
+
+def _tex_coord(x, n):
+    """Texture coordinate of a node-based grid of ``n`` nodes on [0, 1] (texel centres)."""
+    return (x * (n - 1) + 0.5) / n
+
+
+def _texture(array: np.ndarray, dim: int):
+    tensor = mi.TensorXf(np.ascontiguousarray(array, dtype=np.float32))
+    cls = {1: mi.Texture1f, 3: mi.Texture3f}[dim]
+    return cls(
+        tensor, use_accel=False, filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp
+    )
+
+
+def _opaque(x) -> mi.Float:
+    """A host scalar as an opaque Dr.Jit variable: kernels do not embed it as a literal, so
+    a new frequency or table does not trigger a new kernel compilation."""
+    v = mi.Float(float(x))
+    dr.make_opaque(v)
+    return v
+
+
+class _Slice:
+    """Dr.Jit textures of one frequency's tables (host object)."""
+
+    def __init__(self, tables):
+        self.tables = tables
+        delta = to_sionna(tables.delta)  # (2, n_cos)
+        inc = tables.incoherent_on_cos()
+        zero = np.zeros_like(inc[0])
+        # 8 channels: Dr.Jit pads other counts with a copy kernel, which fails when the table is
+        # first built inside a solver's symbolic loop (drjit 1.5: undefined '%mask').
+        per_cos = np.stack(
+            [
+                delta[0].real,
+                delta[0].imag,
+                delta[1].real,
+                delta[1].imag,
+                inc[0],
+                inc[1],
+                zero,
+                zero,
+            ],
+            axis=-1,
+        )
+        self.n_cos = tables.cos_nodes.size
+        self.per_cos = _texture(per_cos, 1)  # roughness correction + diffuse share, on cosθi
+        self.n_theta = tables.theta_nodes.size
+        self.inv_theta_max = _opaque(1.0 / float(tables.theta_nodes[-1]))
+        self.n_alpha = tables.alpha_nodes.size
+        self.n_s = tables.s_nodes.size
+        self.linear_s = tables.grading == 1.0
+        self.inv_grading = _opaque(1.0 / tables.grading)
+        self.lobe = _texture(tables.lobe, 3)
+
+
+def _parse_props(props: mi.Properties) -> dict:
+    """Keyword arguments from an XML ``<bsdf type="emscatter-radio-material">``."""
+    out: dict = {}
+
+    def take(key):
+        v = props[key]
+        del props[key]
+        return v
+
+    for key in ("medium", "method", "correlation"):
+        if key in props:
+            out[key] = str(take(key))
+    for key in ("eps_real", "conductivity", "thickness", "rms_height", "correlation_length"):
+        if key in props:
+            out[key] = float(take(key))
+    if "half_space" in props and bool(take("half_space")):
+        out["thickness"] = None
+    if "rms_height" in out or "correlation_length" in out:
+        if "rms_height" not in out or "correlation_length" not in out:
+            raise ValueError(
+                f"emscatter-radio-material {props.id()!r}: give both rms_height [m] and "
+                "correlation_length [m] (or neither, for a flat surface)"
+            )
+        kind = out.pop("correlation", "gaussian").lower()
+        cls = {"gaussian": GaussianCorrelation, "exponential": ExponentialCorrelation}.get(kind)
+        if cls is None:
+            raise ValueError(
+                f"emscatter-radio-material {props.id()!r}: correlation must be 'gaussian' or "
+                f"'exponential', got {kind!r}"
+            )
+        out["surface"] = cls(sigma=out.pop("rms_height"), length=out.pop("correlation_length"))
+    return out
+
+
+class EmscatterRadioMaterial(RadioMaterialBase):
+    """A radio material from a rough surface and a medium (module docstring).
+
+    Parameters
+    ----------
+    name : unique name in the scene (required unless loaded from XML).
+    surface : isotropic 2-D roughness statistics (:mod:`emscatter.spectra`), or ``None``
+        for a flat face — then the material is Sionna's own ``RadioMaterial`` with ``S = 0``.
+    medium : ITU-R P.2040 name (``"concrete"``), a :class:`~emscatter.materials.Material`, or
+        a permittivity (``exp(−iωt)``, ``Im ε ≥ 0``); or give ``eps_real`` [-] and
+        ``conductivity`` [S/m] instead.
+    thickness : slab thickness [m] (default 0.1 m, Sionna's default), or ``None`` for a
+        half-space (no transmission).
+    method : emscatter solver for the tables (``"auto"`` or a name); recorded per table.
+    out_of_range : ``"warn"`` (default), ``"raise"`` or ``"ignore"`` when that solver is
+        outside its validity range at the scene frequency.
+    table_options : :class:`~emscatter.radio.tables.TableOptions` (grid sizes).
+    color : RGB in [0, 1] for Sionna's previews.
+    """
+
+    def __init__(
+        self,
+        name: str | None = None,
+        surface=None,
+        medium=None,
+        *,
+        eps_real: float | None = None,
+        conductivity: float | None = None,
+        thickness: float | None = DEFAULT_THICKNESS,
+        method: str = "auto",
+        out_of_range: str = "warn",
+        table_options: TableOptions | None = None,
+        color=None,
+        props: mi.Properties | None = None,
+    ):
+        if props is None:
+            if not isinstance(name, str) or not name:
+                raise ValueError("EmscatterRadioMaterial needs a name (a non-empty string)")
+            props = mi.Properties(PLUGIN_NAME)
+            props.set_id(name)
+            if color is not None:
+                props["color"] = mi.ScalarColor3f(*color)
+        else:
+            kw = _parse_props(props)
+            surface = kw.get("surface")
+            medium = kw.get("medium")
+            eps_real = kw.get("eps_real")
+            conductivity = kw.get("conductivity")
+            thickness = kw.get("thickness", DEFAULT_THICKNESS)
+            method = kw.get("method", "auto")
+        super().__init__(props)
+        self._medium = resolve_medium(medium, eps_real=eps_real, conductivity=conductivity)
+        if thickness is not None:
+            if not (
+                isinstance(thickness, int | float) and math.isfinite(thickness) and thickness > 0
+            ):
+                raise ValueError(
+                    f"thickness must be a positive number of metres, or None for a half-space; "
+                    f"got {thickness!r}"
+                )
+            thickness = float(thickness)
+        self._thickness = thickness
+        self._surface = None if surface is None else check_surface(surface)
+        self._sigma = 0.0 if surface is None else float(surface.sigma)
+        check_policy(out_of_range)
+        if not isinstance(method, str) or (method != "auto" and method not in solvers.available()):
+            raise ValueError(
+                f"method must be 'auto' or one of {solvers.available()}, got {method!r}"
+            )
+        self._method = method
+        self._out_of_range = out_of_range
+        self._options = table_options or TableOptions()
+        self._tables: dict[float, _Slice] = {}
+        self._active: _Slice | None = None
+        self._frequency: float | None = None
+        self._set_medium_constants(DEFAULT_FREQUENCY, check=False)
+        # Attributes Sionna's UTD wedge code (RadioMaterial._diffraction_matrix) reads.
+        self._d = mi.Float(
+            thickness if thickness is not None else _HALF_SPACE_DIFFRACTION_THICKNESS
+        )
+        self._s = mi.Float(0.0)
+
+    # ------------------------------------------------------------------ host side
+    @RadioMaterialBase.scene.setter
+    def scene(self, scene):
+        RadioMaterialBase.scene.fset(self, scene)
+        self.frequency_update()
+
+    @property
+    def medium(self):
+        return self._medium
+
+    @property
+    def surface(self):
+        return self._surface
+
+    @property
+    def thickness(self) -> float | None:
+        return self._thickness
+
+    @property
+    def tables(self) -> dict:
+        """Tables built so far, by frequency [Hz] (:class:`~emscatter.radio.tables.RadioTables`)."""
+        return {f: s.tables for f, s in self._tables.items()}
+
+    @property
+    def active_tables(self):
+        """Tables of the current scene frequency, or ``None`` until a solver needs them."""
+        return None if self._active is None else self._active.tables
+
+    def _set_medium_constants(self, frequency: float, check: bool = True):
+        try:
+            eps = complex(np.asarray(self._medium.eps(frequency=frequency)))
+        except ValueError as exc:
+            if not check:
+                eps = 1.0 + 0j
+            else:
+                raise type(exc)(f"radio material {self.name!r}: {exc}") from None
+        self._eps = eps
+        eta = complex(sionna_permittivity(eps))
+        self._eta = mi.Complex2f(eta.real, eta.imag)
+        dr.make_opaque(self._eta)
+        k = 2.0 * math.pi * frequency / 299_792_458.0
+        self._wavenumber = k
+        self._k = _opaque(k)
+        self._lam = _opaque(2.0 * math.pi / k)
+        self._sig2 = _opaque(self._sigma**2)
+        d = self._thickness
+        self._d_op = None if d is None else _opaque(d)
+        # A rough wall so thick and lossy that one pass through it leaves < 1e-6 of the field
+        # (−120 dB) is a half-space: its back face and transmission are dropped (saves the
+        # slab arithmetic per ray). Flat materials keep Sionna's slab exactly.
+        one_pass = 0.0 if d is None else math.exp(-k * d * np.sqrt(eps + 0j).imag)
+        self._opaque_wall = self._surface is not None and d is not None and one_pass < 1e-6
+
+    def frequency_update(self):
+        """Check the medium at the scene frequency (raises out of band) and select that
+        frequency's tables on the host (built on first use)."""
+        if self.scene is None:
+            return
+        f = float(self.scene.frequency[0])
+        self._set_medium_constants(f)
+        self._frequency = f
+        self._active = self._tables.get(f)
+
+    def _slice(self) -> _Slice | None:
+        """The current tables, building them if a used material needs them (trace time)."""
+        if self._surface is None:
+            return None
+        if self._active is not None:
+            return self._active
+        scene = self.scene
+        if scene is None or not self.is_used or self._frequency is None:
+            return self._dummy()
+        tables = build_tables(
+            self._surface,
+            self._eps,
+            self._frequency,
+            method=self._method,
+            out_of_range=self._out_of_range,
+            label=self.name,
+            options=self._options,
+        )
+        self._active = self._tables[self._frequency] = _Slice(tables)
+        return self._active
+
+    def _dummy(self) -> _Slice:
+        """Zero tables for a material no object uses (traced by Dr.Jit, never evaluated)."""
+        if not hasattr(self, "_dummy_slice"):
+            t = build_tables(
+                None, 1.0 + 0j, DEFAULT_FREQUENCY, label=self.name, options=self._options
+            )
+            self._dummy_slice = _Slice(t)
+        return self._dummy_slice
+
+    # ------------------------------------------------------------------ per ray (Dr.Jit)
+    def _coefficients(self, cos_i, sl: _Slice | None, active):
+        """Coherent ``(r_te, r_tm, t_te, t_tm)`` (Sionna convention) of the rough slab, and the
+        diffuse share ``r_incoh,h + r_incoh,v`` at this incidence."""
+        eta = self._eta
+        zero_f = mi.Float(0.0)
+        if sl is None:  # flat: exactly Sionna's ITU slab (or its half-space limit)
+            if self._thickness is not None:
+                return (
+                    *itu_coefficients_single_layer_slab(cos_i, eta, self._d_op, self._lam),
+                    zero_f,
+                )
+        sin2 = 1.0 - dr.square(cos_i)
+        a = complex_sqrt(eta - sin2)
+        r_te = (cos_i - a) * dr.rcp(cos_i + a)
+        r_tm = (eta * cos_i - a) * dr.rcp(eta * cos_i + a)
+        if sl is not None:
+            v = sl.per_cos.eval(mi.Point1f(_tex_coord(cos_i, sl.n_cos)), active)
+            r1_te = r_te + mi.Complex2f(v[0], v[1])
+            r1_tm = r_tm + mi.Complex2f(v[2], v[3])
+            diffuse = dr.maximum(v[4] + v[5], 0.0)
+        else:
+            r1_te, r1_tm, diffuse = r_te, r_tm, zero_f
+        zero = mi.Complex2f(0.0, 0.0)
+        if self._thickness is None or self._opaque_wall:
+            return r1_te, r1_tm, zero, zero, diffuse
+        k = self._k
+        k2z = k * a
+        q_t = k * cos_i - k2z
+        chi_t = self._mean_field(-0.5 * self._sig2 * (q_t * q_t))
+        chi_i = self._mean_field(-2.0 * self._sig2 * (k2z * k2z))
+        ph = dr.exp(mi.Complex2f(0.0, -1.0) * (k * self._d_op) * a)
+        ph2 = ph * ph
+        out = []
+        for r0, r1 in ((r_te, r1_te), (r_tm, r1_tm)):
+            r_in = -r0 * chi_i
+            inv = dr.rcp(1.0 - r_in * r_in * ph2)
+            tt = (1.0 - r0 * r0) * chi_t * chi_t
+            out.append((r1 + tt * r_in * ph2 * inv, tt * ph * inv))
+        return out[0][0], out[1][0], out[0][1], out[1][1], diffuse
+
+    @staticmethod
+    def _mean_field(expo):
+        """``exp(expo)`` with ``Re(expo)`` clipped at 0 (a passive mean field cannot grow)."""
+        return dr.exp(mi.Complex2f(dr.minimum(dr.real(expo), 0.0), dr.imag(expo)))
+
+    def _lobe(self, ki, ko, sl: _Slice, active):
+        """``(hh, hv, vh, vv)`` lobe values [1/sr] for local directions ``ki`` (incident,
+        propagating) and ``ko`` (scattered)."""
+        cos_i = -ki.z
+        sin_i = dr.safe_sqrt(1.0 - cos_i * cos_i)
+        degenerate = sin_i < 1e-6
+        inv = dr.select(degenerate, 0.0, dr.rcp(sin_i))
+        e1x = dr.select(degenerate, 1.0, ki.x * inv)
+        e1y = dr.select(degenerate, 0.0, ki.y * inv)
+        dx0 = ko.x - ki.x
+        dy0 = ko.y - ki.y
+        dx = dx0 * e1x + dy0 * e1y
+        dy = dr.abs(dy0 * e1x - dx0 * e1y)
+        rho = dr.sqrt(dx * dx + dy * dy)
+        has = rho > 1e-9
+        inv_rho = dr.select(has, dr.rcp(rho), 0.0)
+        cos_a = dr.select(has, dx * inv_rho, 1.0)
+        sin_a = dr.select(has, dy * inv_rho, 0.0)
+        alpha = dr.atan2(sin_a, cos_a)
+        rmax = -sin_i * cos_a + dr.safe_sqrt(1.0 - dr.square(sin_i * sin_a))
+        t = dr.clip(rho * dr.rcp(dr.maximum(rmax, 1e-9)), 0.0, 1.0)
+        if sl.linear_s:
+            s = t
+        else:
+            s = dr.select(t > 0.0, dr.exp(dr.log(dr.maximum(t, 1e-30)) * sl.inv_grading), 0.0)
+        th = dr.clip(dr.safe_acos(cos_i) * sl.inv_theta_max, 0.0, 1.0)
+        pos = mi.Point3f(
+            _tex_coord(s, sl.n_s),
+            _tex_coord(alpha * (1.0 / math.pi), sl.n_alpha),
+            _tex_coord(th, sl.n_theta),
+        )
+        v = sl.lobe.eval(pos, active)
+        return [dr.maximum(x, 0.0) for x in v]
+
+    def _diffuse_matrix(self, to_world, ki, ko, sl: _Slice, solid_angle, active) -> mi.Matrix4f:
+        """Jones matrix (world implicit frame) of a diffuse reflection into ``ko``."""
+        hh, hv, vh, vv = self._lobe(ki, ko, sl, active)
+        n = mi.Vector3f(0.0, 0.0, 1.0)
+        h_in = to_world @ transverse_basis_from_normal(ki, n)
+        h_out = to_world @ transverse_basis_from_normal(ko, n)
+        ki_w = to_world @ ki
+        ko_w = to_world @ ko
+        w_in = jones_matrix_rotator(ki_w, implicit_basis_vector(ki_w), h_in)
+        w_out = jones_matrix_rotator(ko_w, h_out, implicit_basis_vector(ko_w))
+        # Local (h, v) Jones matrix: co-pol on the diagonal, cross-pol with the sign pattern of
+        # Sionna's XPD matrix [[a, −b], [b, a]] (norm-preserving when hv = vh, hh = vv).
+        m = mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv))
+        m = w_out @ m @ w_in
+        m = m * dr.sqrt(dr.maximum(solid_angle, 0.0))
+        return jones_matrix_from_real_imag(m, mi.Matrix2f(0.0))  # real: no phase
+
+    def _event_probabilities(self, coefs, enabled):
+        """Probabilities of specular reflection, diffuse reflection and transmission, in
+        proportion to their powers (mean of the two polarizations) among the enabled events."""
+        r_te, r_tm, t_te, t_tm, diffuse_power = coefs
+        r = dr.squared_norm(r_te) + dr.squared_norm(r_tm)
+        t = dr.squared_norm(t_te) + dr.squared_norm(t_tm)
+        prs = dr.select((enabled & InteractionType.SPECULAR) > 0, r, 0.0)
+        prd = dr.select((enabled & InteractionType.DIFFUSE) > 0, diffuse_power, 0.0)
+        pt = dr.select((enabled & InteractionType.REFRACTION) > 0, t, 0.0)
+        total = prs + prd + pt
+        none = total <= 0.0
+        norm = dr.select(none, 1.0, dr.rcp(total))
+        return prs * norm, prd * norm, pt * norm, none
+
+    def _context(self, si):
+        ki = si.wi
+        cos_i = dr.clip(-ki.z, 0.0, 1.0)
+        to_world = mi.Matrix3f(si.sh_frame.s, si.sh_frame.t, si.sh_frame.n).T
+        return ki, cos_i, to_world
+
+    def _jones(
+        self, si, to_world, ki, coefs, sl, events, ko_diff, ko_diffr, diffraction_on, active
+    ):
+        """Jones matrix (world implicit frame) of the event of each lane: specular reflection or
+        transmission, diffuse reflection into ``ko_diff``, diffraction into ``ko_diffr``."""
+        r_te, r_tm, t_te, t_tm, _ = coefs
+        reflection, diffuse, diffraction = events
+        ko_spec = dr.select(reflection, mi.reflect(-ki), ki)
+        jones = jones_matrix_to_world_implicit(
+            dr.select(reflection, r_te, t_te), dr.select(reflection, r_tm, t_tm), to_world, ki,
+            ko_spec,
+        )  # fmt: skip
+        if sl is not None:
+            jd = self._diffuse_matrix(to_world, ki, ko_diff, sl, si.t, mi.Bool(active) & diffuse)
+            jones = dr.select(diffuse, jd, jones)
+        if diffraction_on:
+            jf = RadioMaterial._diffraction_matrix(
+                self, to_world, ki, ko_diffr, si, self._eta, self._k
+            )
+            jones = dr.select(diffraction, jf, jones)
+        return jones
+
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        sl = self._slice()
+        ki, cos_i, to_world = self._context(si)
+        diffraction_on = (ctx.component & InteractionType.DIFFRACTION) > 0
+        enabled = dr.reinterpret_array(mi.UInt, si.dp_du.z)
+        diffraction = mi.Bool(active) & (enabled == InteractionType.DIFFRACTION)
+        coefs = self._coefficients(cos_i, sl, active)
+        prs, prd, pt, none = self._event_probabilities(coefs, enabled)
+        specular = sample1 < prs
+        diffuse = (sample1 >= prs) & (sample1 < prs + prd)
+        transmission = ~specular & ~diffuse
+        event = dr.select(
+            specular, mi.UInt(InteractionType.SPECULAR), mi.UInt(InteractionType.DIFFUSE)
+        )
+        event = dr.select(transmission, mi.UInt(InteractionType.REFRACTION), event)
+        event = dr.select(none, mi.UInt(InteractionType.NONE), event)
+        event = dr.select(diffraction, mi.UInt(InteractionType.DIFFRACTION), event)
+        prob = dr.select(specular, prs, dr.select(diffuse, prd, pt))
+        prob = dr.select(diffraction, 1.0, prob)
+        diffuse &= ~diffraction & ~none
+        reflection = specular | diffuse
+        ko_diff = mi.warp.square_to_uniform_hemisphere(sample2)
+        ko_diff.z = dr.abs(ko_diff.z)
+        ko = dr.select(diffuse, ko_diff, dr.select(reflection, mi.reflect(-ki), ki))
+        ko_diffr = ko
+        if diffraction_on:
+            ko_diffr = RadioMaterial._diffraction_direction(self, si, sample2.x, ki)
+            ko = dr.select(diffraction, ko_diffr, ko)
+        if (ctx.component & NO_JONES_MATRIX) == 0:
+            events = (reflection, diffuse, diffraction)
+            jones = self._jones(
+                si, to_world, ki, coefs, sl, events, ko_diff, ko_diffr, diffraction_on, active
+            )
+            # the sampled event is weighted by 1/√p (Sionna's convention for sample())
+            jones *= dr.detach(dr.select(prob > 0.0, dr.rsqrt(prob), 0.0))
+            jones = mi.Spectrum(jones)
+        else:
+            jones = mi.Spectrum(0.0)
+        bs = mi.BSDFSample3f()
+        bs.sampled_component = event
+        bs.wo = si.to_world(ko)
+        bs.pdf = prob
+        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DeltaReflection)
+        bs.eta = 1.0
+        return bs, jones
+
+    def eval(self, ctx, si, wo, active=True):
+        sl = self._slice()
+        ki, cos_i, to_world = self._context(si)
+        event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
+        diffuse = event == InteractionType.DIFFUSE
+        reflection = (event == InteractionType.SPECULAR) | diffuse
+        diffraction = event == InteractionType.DIFFRACTION
+        ko = si.to_local(wo)
+        coefs = self._coefficients(cos_i, sl, active)
+        diffraction_on = (ctx.component & InteractionType.DIFFRACTION) > 0
+        events = (reflection, diffuse, diffraction)
+        jones = self._jones(si, to_world, ki, coefs, sl, events, ko, ko, diffraction_on, active)
+        return mi.Spectrum(jones)
+
+    def pdf(self, ctx, si, wo, active=True):
+        """Probability of the event stored in ``si.dp_du.z`` with all reflection and
+        transmission events enabled (the solvers read ``bs.pdf`` from :meth:`sample`)."""
+        sl = self._slice()
+        _, cos_i, _ = self._context(si)
+        event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
+        every = InteractionType.SPECULAR | InteractionType.DIFFUSE | InteractionType.REFRACTION
+        prs, prd, pt, _ = self._event_probabilities(
+            self._coefficients(cos_i, sl, active), mi.UInt(every)
+        )
+        p = dr.select(event == InteractionType.SPECULAR, prs, prd)
+        p = dr.select(event == InteractionType.REFRACTION, pt, p)
+        return dr.select(event == InteractionType.DIFFRACTION, 1.0, p)
+
+    def traverse(self, callback):
+        """Nothing differentiable: the tables come from emscatter on the host."""
+
+    def to_string(self) -> str:
+        surf = "flat" if self._surface is None else self._surface.describe()
+        d = "half-space" if self._thickness is None else f"thickness {self._thickness:g} m"
+        t = self.active_tables
+        tab = "tables not built yet" if t is None else t.describe()
+        return (
+            f"EmscatterRadioMaterial {self.name!r}: {self._medium.describe()}; {surf}; {d}; {tab}"
+        )
+
+
+mi.register_bsdf(PLUGIN_NAME, lambda props: EmscatterRadioMaterial(props=props))

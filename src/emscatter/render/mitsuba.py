@@ -1,0 +1,548 @@
+"""An emscatter BRDF table as a Mitsuba 3 BSDF (plugin ``"emscatter"``), delta lobe included.
+
+Usage, after ``mi.set_variant(...)`` with an LLVM variant (tested here; the CUDA ones are not,
+and a scalar one would call Python once per ray)::
+
+    import mitsuba as mi
+    from emscatter.render import mitsuba as em_mi
+    mi.set_variant("llvm_ad_spectral")
+    bsdf = mi.load_dict(em_mi.bsdf_dict(table))       # registers the plugin and the table
+    # or in a scene dict / XML:  {"type": "emscatter", "table": em_mi.register_table(table)}
+    #                            <bsdf type="emscatter"><string name="table" value="KEY"/></bsdf>
+
+Scene-dict / XML parameters: ``table`` (a key from :func:`register_table`), ``coherent``
+(bool, default true: include the coherent delta lobe), ``sampling_resolution`` (int, 64).
+
+What it does (numpy preparation in :mod:`emscatter.render.plugin_data`):
+
+* ``eval``: ``f_r cosθo`` with ``f_r`` from a Dr.Jit ``Texture3f`` with linear filtering over the
+  table's own uniform (θi, θo, Δφ) nodes — the same multilinear interpolant as
+  :meth:`BrdfTable.evaluate`; spectral variants interpolate linearly between the table's
+  wavelengths (constant beyond them); RGB variants use the table's sRGB conversion.
+* ``sample`` / ``pdf``: a continuous marginal/conditional 2-D distribution over the half-vector
+  square (Mitsuba's ``MarginalContinuous2D1``, interpolated in θi between the table's nodes)
+  built from ``f_r cosθo``; the pdf is exactly that of the samples drawn.
+* the coherent part ``R_coh(θi, λ)`` is a second component of the same BSDF
+  (``DeltaReflection``, component 1; the glossy table is component 0), sampled with probability
+  ``R_coh / (R_coh + albedo)`` — a ``blendbsdf`` of a delta and a glossy lobe is biased.
+
+One-sided like Mitsuba's ``measured``: black from below (wrap it in ``twosided`` if needed).
+Polarized variants are not supported. Dr.Jit variants are per process: render in a process
+that does not also run Sionna RT.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import weakref
+
+import numpy as np
+
+from .plugin_data import PluginData, prepare
+
+__all__ = [
+    "PLUGIN_NAME",
+    "bsdf_dict",
+    "channels_of_variant",
+    "register",
+    "register_table",
+    "unregister_table",
+]
+
+PLUGIN_NAME = "emscatter"
+_TABLES: dict[str, object] = {}
+_PREPARED: dict[tuple, PluginData] = {}
+_CLASSES: dict[str, type] = {}
+_REGISTERED: set[tuple[str, str]] = set()
+_COUNTER = itertools.count()
+
+
+def _mitsuba():
+    try:
+        import mitsuba as mi
+    except ImportError as exc:  # pragma: no cover - mitsuba is installed with emscatter[render]
+        raise ImportError(
+            "the Mitsuba plugin needs mitsuba (pip install 'emscatter[render]')"
+        ) from exc
+    if mi.variant() is None:
+        raise RuntimeError("set a Mitsuba variant first, e.g. mitsuba.set_variant('llvm_ad_rgb')")
+    return mi
+
+
+def channels_of_variant(variant: str) -> str:
+    """``"spectral"``, ``"rgb"`` or ``"mono"`` for a Mitsuba variant name (polarized: error)."""
+    if "polarized" in variant:
+        raise ValueError(f"the emscatter plugin does not support polarized variants ({variant})")
+    for kind in ("spectral", "rgb", "mono"):
+        if variant.endswith(kind):
+            return kind
+    raise ValueError(f"unknown Mitsuba variant {variant!r}")
+
+
+def register_table(table, key: str | None = None) -> str:
+    """Make ``table`` (BrdfTable or BrdfFunction) available to scenes as ``{"table": key}``
+    (in this process; the registry keeps a reference until :func:`unregister_table`)."""
+    if not (hasattr(table, "evaluate") or callable(getattr(table, "_fr", None))):
+        raise TypeError(f"table must be a BrdfTable or BrdfFunction, got {type(table).__name__}")
+    if key is None:
+        key = f"emscatter-table-{next(_COUNTER)}"
+    if not isinstance(key, str) or not key:
+        raise ValueError(f"key must be a non-empty string, got {key!r}")
+    if _TABLES.get(key) is not table:
+        _TABLES[key] = table
+        for k in [k for k in _PREPARED if k[0] == key]:
+            del _PREPARED[k]
+    return key
+
+
+def unregister_table(key: str) -> None:
+    """Drop a registered table and its prepared lookups (scenes already loaded keep theirs)."""
+    if key not in _TABLES:
+        raise ValueError(f"no table registered as {key!r}")
+    del _TABLES[key]
+    for k in [k for k in _PREPARED if k[0] == key]:
+        del _PREPARED[k]
+
+
+def register(name: str = PLUGIN_NAME) -> None:
+    """Register the plugin under ``name`` for the current Mitsuba variant (idempotent)."""
+    mi = _mitsuba()
+    variant = mi.variant()
+    if (variant, name) in _REGISTERED:
+        return
+    cls = _bsdf_class(mi)
+    mi.register_bsdf(name, lambda props: cls(props))
+    _REGISTERED.add((variant, name))
+
+
+def bsdf_dict(table, *, coherent: bool = True, sampling_resolution: int = 64) -> dict:
+    """A ``mi.load_dict`` entry for ``table`` (registers the plugin and the table)."""
+    register()
+    key = _key_of(table)
+    return {
+        "type": PLUGIN_NAME,
+        "table": key,
+        "coherent": bool(coherent),
+        "sampling_resolution": int(sampling_resolution),
+    }
+
+
+_KEYS = weakref.WeakKeyDictionary()
+
+
+def _key_of(table) -> str:
+    try:
+        key = _KEYS.get(table)
+    except TypeError:
+        key = None
+    if key is None or _TABLES.get(key) is not table:
+        key = register_table(table)
+        try:
+            _KEYS[table] = key
+        except TypeError:
+            pass
+    return key
+
+
+def _prepared(key: str, channels: str, resolution: int) -> PluginData:
+    if key not in _TABLES:
+        known = ", ".join(sorted(_TABLES)) or "none"
+        raise ValueError(
+            f"emscatter plugin: no table registered as {key!r} (registered: {known}); call "
+            "emscatter.render.mitsuba.register_table(table) in this process first"
+        )
+    cache_key = (key, channels, resolution)
+    if cache_key not in _PREPARED:
+        _PREPARED[cache_key] = prepare(_TABLES[key], channels, sampling_resolution=resolution)
+    return _PREPARED[cache_key]
+
+
+def _axis_of(nodes) -> tuple[int, float, float]:
+    """``(size, start, step)`` of uniform nodes (step 1 for a single node)."""
+    nodes = np.asarray(nodes, dtype=float)
+    step = float(nodes[1] - nodes[0]) if nodes.size > 1 else 1.0
+    return int(nodes.size), float(nodes[0]), step
+
+
+def _bsdf_class(mi):
+    variant = mi.variant()
+    if variant in _CLASSES:
+        return _CLASSES[variant]
+    import drjit as dr
+
+    channels = channels_of_variant(variant)
+    linear, clamp = dr.FilterMode.Linear, dr.WrapMode.Clamp
+    glossy = mi.BSDFFlags.GlossyReflection
+    delta = mi.BSDFFlags.DeltaReflection
+    front = mi.BSDFFlags.FrontSide
+
+    def texture(cls, array):
+        return cls(mi.TensorXf(array), use_accel=False, filter_mode=linear, wrap_mode=clamp)
+
+    def coord(x, axis):
+        """Texture coordinate of angle ``x`` on a uniform axis (texel centres at the nodes)."""
+        return ((x - axis.start) * (1.0 / axis.step) + 0.5) * (1.0 / axis.size)
+
+    def elevation(w):
+        """θ [rad], accurate near the pole (as Mitsuba's ``measured``)."""
+        return 2.0 * dr.safe_asin(
+            0.5 * dr.sqrt(dr.square(w.x) + dr.square(w.y) + dr.square(w.z - 1))
+        )
+
+    class EmscatterBSDF(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            if "table" not in props:
+                raise ValueError(
+                    "emscatter plugin: give 'table' (a key from "
+                    "emscatter.render.mitsuba.register_table)"
+                )
+            res = props.get("sampling_resolution", 64)
+            self._key = props.get("table")
+            data = _prepared(str(self._key), channels, int(res))
+            self._data = data
+            self._use_delta = bool(props.get("coherent", True)) and data.has_coherent
+            # Dr.Jit texture (linear filtering) for isotropic tables with ≤ 4 channels; explicit
+            # multilinear gathers for anisotropic (4-D) and many-wavelength spectral tables
+            self._gather_spectral = data.channels == "spectral" and data.n_channels > 4
+            if data.isotropic and not self._gather_spectral:
+                self._tex = texture(mi.Texture3f, data.values)
+            else:
+                self._flat = mi.Float(data.values.ravel())
+            if data.isotropic:
+                self._coh = texture(mi.Texture1f, data.coherent)
+                self._pdelta = texture(mi.Texture1f, data.delta_probability[:, None])
+            else:
+                # rows φi, periodic: the first row repeated at 2π closes the circle
+                def periodic(a):
+                    return np.concatenate([a, a[:1]], axis=0)
+
+                self._coh = texture(mi.Texture2f, periodic(data.coherent))
+                self._pdelta = texture(mi.Texture2f, periodic(data.delta_probability[..., None]))
+            smp = data.sampler
+            self._n = smp.resolution
+            self._s_theta = _axis_of(smp.theta_i)
+            self._s_phi = (
+                None if smp.phi_i is None else (smp.phi_i.size, 2 * math.pi / smp.phi_i.size)
+            )
+            self._dens = mi.Float(smp.density.ravel())
+            self._mprob = mi.Float(smp.marginal_prob.ravel())
+            self._malias = mi.UInt32(smp.marginal_alias.ravel().astype(np.uint32))
+            self._cprob = mi.Float(smp.conditional_prob.ravel())
+            self._calias = mi.UInt32(smp.conditional_alias.ravel().astype(np.uint32))
+            if data.channels == "spectral":
+                lam = [float(x) for x in data.wavelengths_nm]
+                self._lam = lam
+                self._inv = [1.0 / (b - a) for a, b in itertools.pairwise(lam)]
+            comps = [glossy | front]
+            if self._use_delta:
+                comps.append(delta | front)
+            self.m_components = comps
+            flags = comps[0]
+            for c in comps[1:]:
+                flags = flags | c
+            self.m_flags = flags
+
+        # ---------------------------------------------------------------- lookups
+        def _to_spectrum(self, chans, si):
+            if channels == "rgb":
+                return mi.Spectrum(chans[0], chans[1], chans[2])
+            if channels == "mono":
+                return mi.Spectrum(chans[0])
+            lam, inv = self._lam, self._inv
+            wl = si.wavelengths
+            acc = mi.Spectrum(0.0)
+            n = len(lam)
+            for k in range(n):  # hat functions: linear between table wavelengths, flat beyond
+                if n == 1:
+                    w = 1.0
+                elif k == 0:
+                    w = dr.clip((lam[1] - wl) * inv[0], 0.0, 1.0)
+                elif k == n - 1:
+                    w = dr.clip((wl - lam[k - 1]) * inv[k - 1], 0.0, 1.0)
+                else:
+                    w = dr.clip(
+                        dr.minimum((wl - lam[k - 1]) * inv[k - 1], (lam[k + 1] - wl) * inv[k]),
+                        0.0,
+                        1.0,
+                    )
+                acc += w * chans[k]
+            return acc
+
+        def _azimuth(self, w):
+            phi = dr.atan2(w.y, w.x)
+            return dr.select(phi < 0, phi + 2 * math.pi, phi)  # [0, 2π)
+
+        def _grid_coords(self, si, wo):
+            """Per grid axis ``(i0, i1, t)``: neighbouring nodes and the weight of ``i1``."""
+            d = self._data
+            wi = si.wi
+            ti, to = elevation(wi), elevation(wo)
+
+            def clamped(x, axis):
+                x = dr.clip((x - axis.start) * (1.0 / axis.step), 0.0, axis.size - 1.0)
+                i0 = dr.minimum(mi.UInt32(x), max(axis.size - 2, 0))
+                return i0, dr.minimum(i0 + 1, axis.size - 1), x - mi.Float(i0)
+
+            if d.isotropic:
+                dphi = dr.abs(dr.atan2(wo.y, wo.x) - dr.atan2(wi.y, wi.x))
+                dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
+                return [clamped(ti, d.theta_i), clamped(to, d.theta_o), clamped(dphi, d.phi)]
+            a = self._azimuth(wi) * (1.0 / d.phi_i.step)
+            a0f = dr.floor(a)
+            a0 = mi.UInt32(a0f) % d.phi_i.size
+            b = self._azimuth(wo) * (1.0 / d.phi.step)  # φo: the repeated column closes 2π
+            b0f = dr.floor(b)
+            b0 = dr.minimum(mi.UInt32(b0f), d.phi.size - 1)
+            return [
+                (a0, (a0 + 1) % d.phi_i.size, a - a0f),
+                clamped(ti, d.theta_i),
+                clamped(to, d.theta_o),
+                (b0, b0 + 1, b - b0f),
+            ]
+
+        def _corners(self, coords):
+            """Flat texel indices (in texels) and weights of the multilinear interpolant."""
+            shape = self._data.values.shape[:-1]
+            if not self._data.isotropic:  # (φi·θi rows, θo, φo + 1)
+                shape = (self._data.phi_i.size, self._data.theta_i.size, *shape[1:])
+            strides = [int(np.prod(shape[k + 1 :])) for k in range(len(shape))]
+            out = [(mi.UInt32(0), mi.Float(1.0))]
+            for (i0, i1, t), stride in zip(coords, strides, strict=True):
+                out = [
+                    (idx + node * stride, w * wt)
+                    for idx, w in out
+                    for node, wt in ((i0, 1.0 - t), (i1, t))
+                ]
+            return out
+
+        def _brdf(self, si, wo, active):
+            """f_r (no cosine) as a Spectrum."""
+            d = self._data
+            if self._gather_spectral:
+                return self._brdf_spectral(si, wo, active)
+            if d.isotropic:
+                wi = si.wi
+                ti, to = elevation(wi), elevation(wo)
+                dphi = dr.abs(dr.atan2(wo.y, wo.x) - dr.atan2(wi.y, wi.x))
+                dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
+                pos = mi.Point3f(coord(dphi, d.phi), coord(to, d.theta_o), coord(ti, d.theta_i))
+                return self._to_spectrum(self._tex.eval(pos, active), si)
+            corners = self._corners(self._grid_coords(si, wo))
+            c = d.n_channels
+            chans = []
+            for k in range(c):
+                acc = mi.Float(0.0)
+                for idx, w in corners:
+                    acc += w * dr.gather(mi.Float, self._flat, idx * c + k, active)
+                chans.append(acc)
+            return self._to_spectrum(chans, si)
+
+        def _brdf_spectral(self, si, wo, active):
+            """Spectral tables with many wavelengths: per sampled wavelength, only the two
+            table wavelengths around it are interpolated (2 gathers per grid corner)."""
+            corners = self._corners(self._grid_coords(si, wo))
+            c = self._data.n_channels
+            lam, inv = self._lam, self._inv
+            wl = si.wavelengths
+            x = mi.Spectrum(0.0)  # fractional channel index, clamped to [0, c − 1]
+            for k in range(c - 1):
+                x += dr.clip((wl - lam[k]) * inv[k], 0.0, 1.0)
+            out = []
+            for j in range(len(wl)):
+                k0 = dr.minimum(mi.UInt32(x[j]), c - 2)
+                t = x[j] - mi.Float(k0)
+                v0 = mi.Float(0.0)
+                v1 = mi.Float(0.0)
+                for idx, w in corners:
+                    base = idx * c + k0
+                    v0 += w * dr.gather(mi.Float, self._flat, base, active)
+                    v1 += w * dr.gather(mi.Float, self._flat, base + 1, active)
+                out.append(dr.lerp(v0, v1, t))
+            return mi.Spectrum(*out)
+
+        def _incident_lookup(self, tex, si, active):
+            d = self._data
+            ti = elevation(si.wi)
+            if d.isotropic:
+                return tex.eval(mi.Point1f(coord(ti, d.theta_i)), active)
+            pos = mi.Point2f(
+                coord(ti, d.theta_i),
+                (self._azimuth(si.wi) * (1.0 / d.phi_i.step) + 0.5) * (1.0 / (d.phi_i.size + 1)),
+            )
+            return tex.eval(pos, active)
+
+        def _delta_probability(self, ctx, si, active):
+            has_g = ctx.is_enabled(glossy, 0)
+            has_d = self._use_delta and ctx.is_enabled(delta, 1)
+            if has_g and has_d:
+                return self._incident_lookup(self._pdelta, si, active)[0]
+            return mi.Float(1.0 if has_d else 0.0)
+
+        def _slices(self, si):
+            """Incident sampling nodes around ``si.wi`` and their mixture weights."""
+            n_t, t0, dt = self._s_theta
+            x = dr.clip((elevation(si.wi) - t0) * (1.0 / dt), 0.0, n_t - 1.0)
+            i0 = dr.minimum(mi.UInt32(x), max(n_t - 2, 0))
+            t = x - mi.Float(i0)
+            i1 = dr.minimum(i0 + 1, n_t - 1)
+            if self._s_phi is None:
+                return [(i0, 1.0 - t), (i1, t)]
+            n_p, dp = self._s_phi
+            y = self._azimuth(si.wi) * (1.0 / dp)
+            j0f = dr.floor(y)
+            tp = y - j0f
+            j0 = mi.UInt32(j0f) % n_p
+            j1 = (j0 + 1) % n_p
+            return [
+                (j0 * n_t + i0, (1.0 - tp) * (1.0 - t)),
+                (j0 * n_t + i1, (1.0 - tp) * t),
+                (j1 * n_t + i0, tp * (1.0 - t)),
+                (j1 * n_t + i1, tp * t),
+            ]
+
+        def _density(self, slices, row, col, active):
+            """Mixture density w.r.t. u of cell (row, col)."""
+            n = self._n
+            cell = row * n + col
+            pdf = mi.Float(0.0)
+            for idx, w in slices:
+                pdf += w * dr.gather(mi.Float, self._dens, idx * (n * n) + cell, active)
+            return pdf
+
+        def _pick(self, prob, alias, base, u, active):
+            """Walker alias draw: bin and the leftover uniform variate."""
+            n = self._n
+            x = u * n
+            i = dr.minimum(mi.UInt32(x), n - 1)
+            frac = x - mi.Float(i)
+            p = dr.gather(mi.Float, prob, base + i, active)
+            a = dr.gather(mi.UInt32, alias, base + i, active)
+            keep = frac < p
+            v = dr.select(
+                keep, frac / dr.maximum(p, 1e-30), (frac - p) / dr.maximum(1.0 - p, 1e-30)
+            )
+            return dr.select(keep, i, a), dr.clip(v, 0.0, 1.0)
+
+        def _cell(self, si, m):
+            """(row, col) of half-vector ``m`` in the sampling grid."""
+            n = self._n
+            phi_m = dr.atan2(m.y, m.x)
+            if self._data.isotropic:
+                phi_m = phi_m - dr.atan2(si.wi.y, si.wi.x)
+            uy = (phi_m + math.pi) * (0.5 / math.pi)
+            uy = uy - dr.floor(uy)
+            ux = dr.sqrt(elevation(m) * (2.0 / math.pi))
+            return dr.minimum(mi.UInt32(uy * n), n - 1), dr.minimum(mi.UInt32(ux * n), n - 1)
+
+        def _glossy_pdf(self, si, wo, active):
+            """Density [1/sr] of ``wo``: the half-vector's cell density over 4 (wi·h)."""
+            m = dr.normalize(si.wi + wo)
+            row, col = self._cell(si, m)
+            dens = self._density(self._slices(si), row, col, active)
+            dot = dr.dot(si.wi, m)
+            return dr.select(active & (dot > 0), dens / (4.0 * dot), 0.0)
+
+        def _sample_glossy(self, si, xi, sample2, active):
+            """``(wo, pdf)`` from the alias tables; ``xi`` picks the incident node."""
+            slices = self._slices(si)
+            if len(slices) == 2:
+                (i0, _), (i1, t) = slices
+                idx = dr.select(xi < t, i1, i0)
+            else:  # anisotropic: θ decision, then φ decision from the leftover variate
+                (s00, _), (s01, _), (s10, _), (s11, _) = slices
+                n_t, t0, dt = self._s_theta
+                x = dr.clip((elevation(si.wi) - t0) * (1.0 / dt), 0.0, n_t - 1.0)
+                t = x - dr.floor(x)
+                up = xi < t
+                xi2 = dr.select(
+                    up, xi / dr.maximum(t, 1e-30), (xi - t) / dr.maximum(1.0 - t, 1e-30)
+                )
+                n_p, dp = self._s_phi
+                y = self._azimuth(si.wi) * (1.0 / dp)
+                right = xi2 < (y - dr.floor(y))
+                idx = dr.select(right, dr.select(up, s11, s10), dr.select(up, s01, s00))
+            n = self._n
+            row, vy = self._pick(self._mprob, self._malias, idx * n, sample2.y, active)
+            col, vx = self._pick(self._cprob, self._calias, (idx * n + row) * n, sample2.x, active)
+            dens = self._density(slices, row, col, active)
+            # uniform in the cell's solid angle: φh linear in the row, cosθh linear in the column
+            phi_m = (2.0 * (mi.Float(row) + vy) * (1.0 / n) - 1.0) * math.pi
+            if self._data.isotropic:
+                phi_m = phi_m + dr.atan2(si.wi.y, si.wi.x)
+            ca = dr.cos(dr.square(mi.Float(col) * (1.0 / n)) * (0.5 * math.pi))
+            cb = dr.cos(dr.square(mi.Float(col + 1) * (1.0 / n)) * (0.5 * math.pi))
+            c_t = dr.lerp(ca, cb, vx)
+            s_t = dr.safe_sqrt(1.0 - dr.square(c_t))
+            s_p, c_p = dr.sincos(phi_m)
+            m = mi.Vector3f(c_p * s_t, s_p * s_t, c_t)
+            dot = dr.dot(si.wi, m)
+            wo = dr.fma(m, 2.0 * dot, -si.wi)
+            return wo, dr.select(dot > 0, dens / (4.0 * dot), 0.0)
+
+        # ---------------------------------------------------------------- BSDF interface
+        def eval(self, ctx, si, wo, active=True):
+            cos_o = mi.Frame3f.cos_theta(wo)
+            active = active & (mi.Frame3f.cos_theta(si.wi) > 0) & (cos_o > 0)
+            if not ctx.is_enabled(glossy, 0):
+                return mi.Spectrum(0.0)
+            val = self._brdf(si, wo, active) * cos_o
+            return dr.select(active, val, mi.Spectrum(0.0))
+
+        def pdf(self, ctx, si, wo, active=True):
+            active = active & (mi.Frame3f.cos_theta(si.wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+            if not ctx.is_enabled(glossy, 0):
+                return mi.Float(0.0)
+            p_d = self._delta_probability(ctx, si, active)
+            return (1.0 - p_d) * self._glossy_pdf(si, wo, active)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            wi = si.wi
+            active = active & (mi.Frame3f.cos_theta(wi) > 0)
+            bs = dr.zeros(mi.BSDFSample3f)
+            has_g = ctx.is_enabled(glossy, 0)
+            has_d = self._use_delta and ctx.is_enabled(delta, 1)
+            if not (has_g or has_d):
+                return bs, mi.Spectrum(0.0)
+            p_d = self._delta_probability(ctx, si, active)
+            pick_d = active & (sample1 < p_d)
+            pick_g = active & ~pick_d
+            xi = dr.clip((sample1 - p_d) / dr.maximum(1.0 - p_d, 1e-30), 0.0, 1.0)
+            wo_g, pdf_g = self._sample_glossy(si, xi, sample2, pick_g)
+            ok_g = pick_g & (mi.Frame3f.cos_theta(wo_g) > 0) & (pdf_g > 0)
+            f_g = self._brdf(si, wo_g, ok_g) * mi.Frame3f.cos_theta(wo_g)
+            w_g = f_g / ((1.0 - p_d) * pdf_g)
+            # delta: the mirror direction with weight R_coh / P(delta)
+            wo_d = mi.Vector3f(-wi.x, -wi.y, wi.z)
+            if self._use_delta:
+                r_coh = self._to_spectrum(self._incident_lookup(self._coh, si, pick_d), si)
+                w_d = r_coh / dr.maximum(p_d, 1e-12)
+            else:
+                w_d = mi.Spectrum(0.0)
+            bs.wo = dr.select(pick_d, wo_d, wo_g)
+            bs.pdf = dr.select(pick_d, p_d, (1.0 - p_d) * pdf_g)
+            bs.eta = 1.0
+            bs.sampled_type = dr.select(pick_d, mi.UInt32(+delta), mi.UInt32(+glossy))
+            bs.sampled_component = dr.select(pick_d, mi.UInt32(1), mi.UInt32(0))
+            valid = pick_d | ok_g
+            weight = dr.select(pick_d, w_d, w_g)
+            return bs, dr.select(valid, weight, mi.Spectrum(0.0))
+
+        def traverse(self, callback):
+            pass
+
+        def to_string(self):
+            d = self._data
+            grid = "×".join(str(s) for s in d.values.shape[:-1])
+            kind = "isotropic" if d.isotropic else "anisotropic"
+            return (
+                f"EmscatterBSDF[table={self._key!r}, {kind} "
+                f"{grid} nodes, {d.n_channels} {d.channels} channels, delta lobe={self._use_delta}]"
+            )
+
+    _CLASSES[variant] = EmscatterBSDF
+    return EmscatterBSDF

@@ -1,0 +1,351 @@
+"""Sionna RT checks run in a fresh interpreter (Dr.Jit variants are per process, and pytest-xdist
+workers also run Mitsuba tests): ``python tests/radio_worker.py CHECK [CHECK ...]`` prints one
+JSON object ``{check: result}`` on its last line. Used by tests/test_radio_sionna.py.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import tempfile
+import traceback
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+
+def _paths_power(paths):
+    re, im = (np.asarray(x.numpy()) for x in paths.a)
+    p = (re**2 + im**2)[:, 0, 0, 0, :]
+    tau = np.asarray(paths.tau.numpy())
+    tau = tau[:, 0, 0, 0, :] if tau.ndim == 5 else tau[:, 0, :]
+    return p, tau
+
+
+def _add_devices(scene, tx, rxs, pol="V"):
+    import sionna.rt as rt
+
+    arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
+    scene.tx_array = arr
+    scene.rx_array = arr
+    scene.add(rt.Transmitter("tx", position=list(tx)))
+    for i, p in enumerate(rxs):
+        scene.add(rt.Receiver(f"rx{i}", position=list(p)))
+
+
+def check_flat_builtin():
+    """Flat emscatter material vs Sionna's RadioMaterial, per path and per radio-map cell."""
+    import mitsuba as mi
+    import sionna.rt as rt
+
+    from emscatter.radio import indoor, scenes
+    from emscatter.radio.material import EmscatterRadioMaterial
+
+    f = 28e9
+    setup = indoor.SETUPS["room"]
+    out = {}
+
+    def builtin(obj, medium, thickness):
+        er, sig = indoor.medium_at(medium, f).eps_real_and_conductivity(f)
+        return rt.RadioMaterial(
+            f"b-{obj}", thickness=thickness, relative_permittivity=float(er),
+            conductivity=float(sig),
+        )  # fmt: skip
+
+    def flat(obj, medium, thickness):
+        return EmscatterRadioMaterial(f"e-{obj}", medium=medium, thickness=thickness)
+
+    results = {}
+    for name, make in (("builtin", builtin), ("emscatter", flat)):
+        scene = scenes.load(setup.scene, f, make)
+        _add_devices(scene, setup.tx, setup.rx)
+        paths = rt.PathSolver(deterministic=True)(
+            scene, max_depth=3, samples_per_src=20_000, refraction=True
+        )
+        p, tau = _paths_power(paths)
+        rm = rt.RadioMapSolver()(
+            scene, center=mi.Point3f(3.0, 2.5, 1.2), orientation=mi.Point3f(0, 0, 0),
+            size=mi.Point2f(6.0, 5.0), cell_size=mi.Point2f(0.25, 0.25), samples_per_tx=20_000,
+            max_depth=3, refraction=True, seed=3,
+        )  # fmt: skip
+        results[name] = (p, tau, np.asarray(rm.path_gain.numpy())[0])
+    (pb, tb, mb), (pe, te, me) = results["builtin"], results["emscatter"]
+    worst = 0.0
+    npaths = 0
+    same_delays = True
+    for i in range(pb.shape[0]):
+        kb, ke = pb[i] > 0, pe[i] > 0
+        ob, oe = np.argsort(tb[i][kb]), np.argsort(te[i][ke])
+        xb, xe = pb[i][kb][ob], pe[i][ke][oe]
+        if xb.size != xe.size:
+            same_delays = False
+            continue
+        same_delays &= bool(np.allclose(tb[i][kb][ob], te[i][ke][oe], rtol=0, atol=1e-12))
+        worst = max(worst, float(np.max(np.abs(10 * np.log10(xe / xb)))))
+        npaths += int(xb.size)
+    both = (mb > 0) & (me > 0)
+    out["paths"] = npaths
+    out["same_delays"] = same_delays
+    out["max_path_db"] = worst
+    out["map_cells"] = int(both.sum())
+    out["map_same_support"] = bool(np.array_equal(mb > 0, me > 0))
+    out["max_map_db"] = float(np.max(np.abs(10 * np.log10(me[both] / mb[both]))))
+    return out
+
+
+def check_xml_plugin():
+    """An XML scene names the class; rough material runs in both solvers with diffuse on."""
+    import mitsuba as mi
+    import sionna.rt as rt
+
+    import emscatter.radio.material as m
+    from emscatter.radio import scenes
+
+    d = Path(tempfile.mkdtemp(prefix="radio-xml-"))
+    scenes.write_ply(d / "floor.ply", scenes.quad([-5, -5, 0], [10, 0, 0], [0, 10, 0]))
+    (d / "scene.xml").write_text(
+        '<scene version="2.1.0">\n'
+        f'<bsdf type="{m.PLUGIN_NAME}" id="rough-floor">'
+        '<string name="medium" value="concrete"/>'
+        '<float name="rms_height" value="0.0004"/>'
+        '<float name="correlation_length" value="0.004"/>'
+        '<float name="thickness" value="0.2"/></bsdf>\n'
+        '<shape type="ply" id="floor"><string name="filename" value="floor.ply"/>'
+        '<ref id="rough-floor" name="bsdf"/></shape>\n</scene>\n'
+    )
+    scene = rt.load_scene(str(d / "scene.xml"), merge_shapes=False)
+    scene.frequency = 28e9
+    mat = scene.get("rough-floor")
+    _add_devices(scene, (0, 0, 2.0), [(2.0, 0.5, 1.5)])
+    paths = rt.PathSolver()(scene, max_depth=2, samples_per_src=50_000, diffuse_reflection=True)
+    p, _ = _paths_power(paths)
+    rm = rt.RadioMapSolver()(
+        scene, center=mi.Point3f(0, 0, 1.5), orientation=mi.Point3f(0, 0, 0),
+        size=mi.Point2f(6, 6), cell_size=mi.Point2f(0.5, 0.5), samples_per_tx=50_000,
+        max_depth=2, diffuse_reflection=True,
+    )  # fmt: skip
+    pg = np.asarray(rm.path_gain.numpy())
+    return {
+        "type": type(mat).__name__,
+        "surface_sigma": float(mat.surface.sigma),
+        "thickness": mat.thickness,
+        "method": mat.active_tables.method,
+        "num_paths": int(np.count_nonzero(p)),
+        "paths_finite": bool(np.all(np.isfinite(p))),
+        "map_finite": bool(np.all(np.isfinite(pg))),
+        "map_cells_lit": int(np.count_nonzero(pg > 0)),
+        "describe": mat.to_string(),
+    }
+
+
+def check_evaluations():
+    """Tables only for the used materials at the frequencies actually solved."""
+    import sionna.rt as rt
+
+    import emscatter as em
+    from emscatter.radio import build_log, reset_build_log, scenes
+    from emscatter.radio.material import EmscatterRadioMaterial
+    from emscatter.radio.tables import TableOptions, clear_cache
+
+    clear_cache()
+    reset_build_log()
+    spec = scenes.SceneSpec(
+        meshes={
+            "floor": scenes.quad([-4, -4, 0], [8, 0, 0], [0, 8, 0]),
+            "wall": scenes.quad([4, -4, 0], [0, 8, 0], [0, 0, 3]),
+        },
+        media={"floor": ("concrete", 0.2), "wall": ("plasterboard", 0.0125)},
+    )
+    surfaces = {
+        "floor": em.GaussianCorrelation(sigma=0.31e-3, length=4e-3),
+        "wall": em.GaussianCorrelation(sigma=0.07e-3, length=2e-3),
+    }
+
+    opts = TableOptions(n_cos=65, n_cos_spm=9, n_theta=16, n_alpha=13, n_s=32)
+
+    def make(obj, medium, thickness):
+        return EmscatterRadioMaterial(obj + "-mat", surface=surfaces[obj], medium=medium,
+                                      thickness=thickness, table_options=opts)  # fmt: skip
+
+    # Loaded at Sionna's default 3.5 GHz, then moved: nothing may be built at 3.5 GHz.
+    sc = scenes.load(spec, 3.5e9, make)
+    unused = EmscatterRadioMaterial(
+        "unused-mat", surface=em.GaussianCorrelation(sigma=0.5e-3, length=5e-3), medium="brick",
+        table_options=opts,
+    )  # fmt: skip
+    sc.add(unused)
+    _add_devices(sc, (0, 0, 2.0), [(2.0, 1.0, 1.5)])
+    log = []
+    import mitsuba as mi
+
+    for f in (28e9, 140e9, 28e9):
+        sc.frequency = f
+        rt.PathSolver()(sc, max_depth=2, samples_per_src=20_000, diffuse_reflection=True)
+        rt.RadioMapSolver()(
+            sc, center=mi.Point3f(0, 0, 1.5), orientation=mi.Point3f(0, 0, 0),
+            size=mi.Point2f(4, 4), cell_size=mi.Point2f(1, 1), samples_per_tx=10_000,
+            max_depth=2, diffuse_reflection=True,
+        )  # fmt: skip
+        log.append([(e["label"], e["frequency"]) for e in build_log()])
+    used = {m.name: m.is_used for m in sc.radio_materials.values()}
+    return {
+        "log": [[list(x) for x in step] for step in log],
+        "used": used,
+        "unused_tables": sorted(unused.tables),
+        "points": [e["bistatic_points"] for e in build_log()],
+    }
+
+
+def check_errors():
+    """Out-of-band (used or not), reuse in a second scene, bad props."""
+    import sionna.rt as rt
+
+    import emscatter as em
+    from emscatter.radio import scenes
+    from emscatter.radio.material import EmscatterRadioMaterial
+
+    out = {}
+    spec = scenes.plate(4.0)
+    sc = scenes.load(spec, 28e9, lambda o, m, t: EmscatterRadioMaterial("p", medium="concrete"))
+    metal = EmscatterRadioMaterial("idle-metal", medium="metal")  # ITU metal: 1–100 GHz
+    sc.add(metal)
+    try:
+        sc.frequency = 140e9
+        out["out_of_band"] = None
+    except ValueError as exc:
+        out["out_of_band"] = f"{type(exc).__name__}: {exc}"
+    sc2 = rt.load_scene()
+    try:
+        sc2.add(metal)
+        out["reuse"] = None
+    except ValueError as exc:
+        out["reuse"] = str(exc)
+    try:
+        EmscatterRadioMaterial("w", surface=em.GaussianCorrelation(sigma=1e-3, length=1e-2),
+                               medium="concrete", thickness=-1)  # fmt: skip
+        out["thickness"] = None
+    except ValueError as exc:
+        out["thickness"] = str(exc)
+    try:
+        EmscatterRadioMaterial("w", eps_real=4.0, conductivity=-0.1)
+        out["conductivity"] = None
+    except ValueError as exc:
+        out["conductivity"] = str(exc)
+    for key, kwargs in (
+        ("unknown", {"medium": "unobtainium"}),
+        ("method", {"medium": "concrete", "method": "sqm"}),
+        ("policy", {"medium": "concrete", "out_of_range": "nan"}),
+        (
+            "anisotropic",
+            {"medium": "concrete",
+             "surface": em.GaussianCorrelation(sigma=1e-4, length=5e-3, length_y=1e-2)},
+        ),
+    ):  # fmt: skip
+        try:
+            EmscatterRadioMaterial("w", **kwargs)
+            out[key] = None
+        except ValueError as exc:
+            out[key] = str(exc)
+    return out
+
+
+def check_rough_solvers():
+    """Rough materials at 140 GHz in both solvers with every interaction type on (specular,
+    diffuse, refraction, diffraction): finite, non-negative, and energy stays below the
+    transmitter's (path gain < 1)."""
+    import mitsuba as mi
+    import sionna.rt as rt
+
+    from emscatter.radio import indoor, scenes
+    from emscatter.radio.tables import TableOptions
+
+    f = 140e9
+    setup = indoor.SETUPS["room"]
+    opts = TableOptions(n_cos=65, n_cos_spm=9, n_theta=16, n_alpha=13, n_s=32)
+    scene = scenes.load(setup.scene, f, indoor.material_factory("rough", f, table_options=opts))
+    _add_devices(scene, setup.tx, setup.rx)
+    paths = rt.PathSolver()(
+        scene, max_depth=2, samples_per_src=20_000, refraction=True, diffuse_reflection=True,
+        diffraction=True,
+    )  # fmt: skip
+    p, tau = _paths_power(paths)
+    types = np.asarray(paths.interactions.numpy())
+    rm = rt.RadioMapSolver()(
+        scene, center=mi.Point3f(*setup.map_center), orientation=mi.Point3f(0, 0, 0),
+        size=mi.Point2f(*setup.map_size), cell_size=mi.Point2f(0.5, 0.5),
+        samples_per_tx=20_000, max_depth=2, diffuse_reflection=True, refraction=True,
+    )  # fmt: skip
+    pg = np.asarray(rm.path_gain.numpy())
+    from sionna.rt.constants import InteractionType as it
+
+    return {
+        "gain": p.sum(axis=1).tolist(),
+        "finite": bool(np.all(np.isfinite(p)) and np.all(np.isfinite(pg))),
+        "nonneg": bool(np.all(p >= 0) and np.all(pg >= 0)),
+        "delays_finite": bool(np.all(np.isfinite(tau[p > 0]))),
+        "map_lit": int(np.count_nonzero(pg > 0)),
+        "map_max": float(pg.max()),
+        "kinds": sorted(
+            name
+            for name, v in (
+                ("specular", it.SPECULAR),
+                ("diffuse", it.DIFFUSE),
+                ("refraction", it.REFRACTION),
+                ("diffraction", it.DIFFRACTION),
+            )
+            if np.any(types == v)
+        ),  # fmt: skip
+    }
+
+
+def check_slab_convention():
+    """emscatter's NumPy slab (exp(−iωt)) conjugated = Sionna's own ITU slab coefficients."""
+    import drjit as dr
+    import mitsuba as mi
+    import sionna.rt  # noqa: F401  (sets the variant)
+    from sionna.rt.utils import itu_coefficients_single_layer_slab
+
+    from emscatter import materials
+    from emscatter.radio import slab_coefficients, to_sionna
+    from emscatter.radio.convention import sionna_permittivity
+
+    c = np.linspace(0.01, 1.0, 50)
+    worst = 0.0
+    for name, f, d in (("concrete", 3.5e9, 0.1), ("glass", 28e9, 0.006), ("wood", 140e9, 0.04)):
+        eps = complex(materials.itu(name).eps(frequency=f))
+        k = 2 * math.pi * f / 299_792_458.0
+        ours = np.stack(slab_coefficients(eps, c, k, d))
+        eta = complex(sionna_permittivity(eps))
+        got = itu_coefficients_single_layer_slab(
+            mi.Float(c), mi.Complex2f(eta.real, eta.imag), mi.Float(d), 299_792_458.0 / f
+        )
+        theirs = np.stack([np.asarray(dr.real(g)) + 1j * np.asarray(dr.imag(g)) for g in got])
+        worst = max(worst, float(np.max(np.abs(to_sionna(ours) - theirs))))
+    return {"max_abs_diff": worst}
+
+
+CHECKS = {name[6:]: fn for name, fn in globals().items() if name.startswith("check_")}
+
+
+def main(argv):
+    results = {}
+    for name in argv:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                results[name] = {"result": CHECKS[name]()}
+            except Exception:  # the test shows the traceback
+                results[name] = {"error": traceback.format_exc()}
+        results[name]["warnings"] = [
+            f"{w.category.__name__}: {w.message}"
+            for w in caught
+            if w.category.__module__.startswith("emscatter") or "emscatter" in str(w.filename)
+        ]
+    print(json.dumps(results, default=str))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))
