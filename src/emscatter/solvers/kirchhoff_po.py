@@ -47,6 +47,7 @@ import numpy as np
 from scipy import special
 
 from ..conventions import check_angle, check_positive
+from ..fresnel import check_eps, is_pec
 from ..kernels import dispatch
 from ..scattering import Scattering
 from ..spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
@@ -85,19 +86,23 @@ __all__ = ["bistatic", "check_validity", "VALIDITY", "series_sum", "log_nfold"]
 #: the algebraic tail scatters into), where the IEM is within 1 dB; ratio 1/H (2 for the
 #: exponential) ranks PO as a fallback.
 #: Per angle (with ``theta_i``), ``grazing``: Kirchhoff without shadowing needs the grazing
-#: angle large against the facet tilts, ``a = cotθi/(√2 s) ≥ 4.5`` (``s`` the larger
+#: angle large against the facet tilts, ``a = cotθi/(√2 s) ≥ a_min`` (``s`` the larger
 #: per-direction rms slope; Smith's shadowing parameter, Smith 1967; Thorsos 1988 JASA 83,
-#: 78, on the Kirchhoff approximation toward grazing). The limit is measured: over 2592
-#: (roughness, ε, θi) cases PO's emissivity left [0, 1] by more than 0.01 only where
-#: ``a < 4.1`` (validation/angular_validity/energy_scan_summary.md; e down to −0.23 for a PEC at
-#: 75°, a = 0.8, where Smith's illuminated fraction is still 0.95 — the energy error is not
-#: shadowing alone). Slopes of non-differentiable spectra are those of the spectrum below
-#: ``2k`` (:mod:`.validity`).
+#: 78, on the Kirchhoff approximation toward grazing). The limits are measured
+#: (validation/angular_validity/energy_scan_summary.md, 2592 (roughness, ε, θi) cases): PO's
+#: emissivity leaves [0, 1] by more than 0.01 for a conductor where ``a < 4.1`` (e down to
+#: −0.23 at 75°, a = 0.8, where Smith's illuminated fraction is still 0.95: not shadowing
+#: alone), for a dielectric (ε = 3, 17 + 2i) only where ``a < 0.75``: ``a_min`` = 4.5 for a
+#: perfect conductor or ``|ε| ≥ 100`` (or when ``eps`` is not given), 1.0 otherwise.
+#: Slopes of non-differentiable spectra are those of the spectrum below ``2k``
+#: (:mod:`.validity`).
 VALIDITY = {
     "k_l_min": 4.0,
     "curvature_factor": 2.76,
     "rms_slope_max": 0.4,
     "grazing_a_min": 4.5,
+    "grazing_a_min_dielectric": 1.0,
+    "conductor_abs_eps": 100.0,
     "smoothness_min": 1.0,
 }
 
@@ -105,6 +110,16 @@ _SRC_H = (
     "tangent plane on a locally smooth surface (Ulaby, Moore & Fung 1982 §12-4); validity maps: "
     "PO 1.1–2.2 dB off (v) on exponential profiles at every kℓ ≤ 20"
 )
+
+
+def _conductor_like(eps) -> bool:
+    """True for a perfect conductor, ``|ε| ≥ 100`` anywhere, or an unknown medium."""
+    if eps is None:
+        return True
+    eps = check_eps(eps)
+    if is_pec(eps):
+        return True
+    return bool(np.any(np.abs(np.asarray(eps)) >= VALIDITY["conductor_abs_eps"]))
 
 
 def smoothness_exponent(rough) -> float:
@@ -157,8 +172,9 @@ def check_validity(roughness, k: float, *, eps=None, theta_i=None, **solver_opti
     ti = None
     if theta_i is not None:
         ti = check_angle("theta_i", theta_i)
+        a_min = v["grazing_a_min"] if _conductor_like(eps) else v["grazing_a_min_dielectric"]
         angle_checks.append(
-            angle_lower("grazing", grazing_parameter(ti, max(sx, sy)), v["grazing_a_min"],
+            angle_lower("grazing", grazing_parameter(ti, max(sx, sy)), a_min,
                         "a = cotθi/(√2 s) (grazing angle against the facet tilts)", _SRC_SH)
         )  # fmt: skip
     return build_report(

@@ -200,16 +200,19 @@ def cell_slope(ks: float, kl: float, correlation: str = "gaussian", taper: float
 
 
 def _points_per_wavelength(
-    ks: float, kl: float, correlation: str = "gaussian", taper: float = 2.5
+    ks: float, kl: float, correlation: str = "gaussian", taper: float = 2.5, eps="pec"
 ) -> float:
-    """≥ 8 along the arc at 3 rms slopes; Gaussian: ≥ 10 per wavelength and ≥ 5 per
-    correlation length; tapered exponential: ``π/dx ≥ 3 × 1.3 K_c`` (its spectrum is below
-    1e-10 beyond ``1.3 K_c``)."""
+    """Points per wavelength *in the denser medium* (as :func:`emscatter.solvers.mom.bistatic`
+    counts them): ≥ 10, ≥ 8 along the arc at 3 rms slopes; Gaussian: ≥ 5 per correlation
+    length; tapered exponential: ``π/dx ≥ 3 × 1.3 K_c`` (its spectrum is below 1e-10 beyond
+    ``1.3 K_c``), i.e. ``7.8·taper`` points per free-space wavelength."""
+    from ..solvers.mom_solve import _n_eff
+
     m = cell_slope(ks, kl, correlation, taper)
     arc = 8.2 * math.sqrt(1 + 9 * m * m)
     if correlation == "gaussian":
         return float(max(10.0, arc, 5 * 2 * math.pi / kl))
-    return float(max(math.ceil(7.8 * taper), arc))
+    return float(max(10.0, arc, math.ceil(7.8 * taper) / _n_eff(eps)))
 
 
 def _angles(cfg: MapConfig):
@@ -258,7 +261,7 @@ def mom_reference(ks: float, kl: float, cfg: MapConfig, index: tuple[int, int] =
     if slope > cfg.max_slope:
         return {**base, "status": f"not computed: rms slope {slope:.2f} > {cfg.max_slope}"}
     _, _, ts, ps = _angles(cfg)
-    ppw = _points_per_wavelength(ks, kl, cfg.correlation, cfg.taper)
+    ppw = _points_per_wavelength(ks, kl, cfg.correlation, cfg.taper, cfg.eps)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # resolution/validity notes: the map reports them
         ref = mom.bistatic(
@@ -336,7 +339,7 @@ def references(cfg: MapConfig, store: Path | None = None, *, progress: bool = Tr
     ]
 
     def cost(a):  # ~ (unknowns)²: the dense cells first for load balance
-        ppw = _points_per_wavelength(a[0], a[1], cfg.correlation, cfg.taper)
+        ppw = _points_per_wavelength(a[0], a[1], cfg.correlation, cfg.taper, cfg.eps)
         return -(max(cfg.min_length_wl, 20 * a[1] / K) * ppw)
 
     jobs.sort(key=cost)
