@@ -18,7 +18,7 @@ from pathlib import Path
 
 from .maps import FULL, PUBLISHED, SMALL, MapConfig, compute_map, tag_of
 
-__all__ = ["run_validation", "reselect"]
+__all__ = ["run_validation", "reselect", "reselect_all"]
 
 
 def run_validation(
@@ -36,6 +36,7 @@ def run_validation(
     configs = [config] if config is not None else (list(PUBLISHED) if full else [SMALL])
     out = Path(out)
     paths: list[Path] = []
+    maps = []
     for cfg in configs:
         store = out / f"mom_{tag_of(cfg)}.json"
         t0 = time.perf_counter()
@@ -43,9 +44,21 @@ def run_validation(
         seconds = _mom_seconds(store) or time.perf_counter() - t0
         paths.extend(write_map(rows, cfg, out, seconds=seconds))
         paths.append(store)
+        maps.append((cfg, rows))
     if full and config is None:
+        paths.extend(_model_figures(maps, out))
         paths.append(emissivity_table(out))
     return paths
+
+
+def _model_figures(maps, out: Path) -> list[Path]:
+    """``validity_iem.png``: the IEM's own map over every published map (when registered)."""
+    from .. import solvers
+    from .map_files import plot_method
+
+    if "iem" not in solvers.available():
+        return []
+    return [plot_method(maps, "iem", Path(out) / "validity_iem.png")]
 
 
 def _mom_seconds(store: Path) -> float:
@@ -59,10 +72,25 @@ def _mom_seconds(store: Path) -> float:
 def reselect(out: Path, cfg: MapConfig = FULL) -> list[Path]:
     """Re-evaluate every approximation and the ``auto`` choice of a map from its stored MoM
     references (no MoM run) and rewrite its files — after a model or criterion change."""
+    return _reselect(out, cfg)[0]
+
+
+def _reselect(out: Path, cfg: MapConfig):
     store = Path(out) / f"mom_{tag_of(cfg)}.json"
     if not store.exists():
         raise FileNotFoundError(f"{store} missing: run `emscatter validate --full --out {out}`")
     from .map_files import write_map
 
     rows = compute_map(cfg, store=store, progress=False)
-    return write_map(rows, cfg, out, seconds=_mom_seconds(store))
+    return write_map(rows, cfg, out, seconds=_mom_seconds(store)), rows
+
+
+def reselect_all(out: Path) -> list[Path]:
+    """:func:`reselect` for every published map, and the model figures; the command is in
+    validation/validity_maps/README.md."""
+    paths, maps = [], []
+    for cfg in PUBLISHED:
+        p, rows = _reselect(out, cfg)
+        paths += p
+        maps.append((cfg, rows))
+    return paths + _model_figures(maps, out)

@@ -13,7 +13,15 @@ import numpy as np
 from ..io import atomic_path, save_figure, write_csv, write_json
 from .maps import CAP_DB, TOL_DB, MapConfig, map_methods, selector_failures, tag_of
 
-__all__ = ["CSV_HEADER", "write_map", "read_map", "plot_map", "markdown_table", "TITLES"]
+__all__ = [
+    "CSV_HEADER",
+    "write_map",
+    "read_map",
+    "plot_map",
+    "plot_method",
+    "markdown_table",
+    "TITLES",
+]
 
 CSV_HEADER = (
     "k_sigma",
@@ -203,3 +211,62 @@ def read_map(path) -> list[dict]:
             r[key] = int(r[key])
         r["valid"] = r["valid"] == "True"
     return rows
+
+
+def plot_method(rows_by_cfg: list[tuple[MapConfig, list[dict]]], method: str, path) -> Path:
+    """One method's error [dB] on every map (columns) and polarization (rows): the map a
+    model's own README figure shows (e.g. the IEM's)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import LogNorm
+    from matplotlib.ticker import FuncFormatter
+
+    ncol = len(rows_by_cfg)
+    fig, axes = plt.subplots(
+        2, ncol, figsize=(4.6 * ncol, 8.4), constrained_layout=True, squeeze=False
+    )
+    norm = LogNorm(vmin=0.05, vmax=CAP_DB)
+    mesh = None
+    for j, (cfg, rows) in enumerate(rows_by_cfg):
+        ks = np.asarray(cfg.k_sigma, dtype=float)
+        kl = np.asarray(cfg.k_l, dtype=float)
+        for i, pol in enumerate("hv"):
+            ax = axes[i, j]
+            z = _matrix(rows, method, pol, ks, kl)
+            mesh = ax.pcolormesh(
+                _edges(kl),
+                _edges(ks),
+                np.clip(np.ma.masked_invalid(z), 0.05, CAP_DB),
+                norm=norm,
+                cmap="viridis_r",
+            )
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            for axis in (ax.xaxis, ax.yaxis):
+                axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+                axis.set_minor_formatter(FuncFormatter(lambda v, _: ""))
+            ax.set_xticks(kl)
+            ax.set_yticks(ks)
+            ax.tick_params(labelsize=7)
+            finite = np.isfinite(z)
+            if finite.sum() >= 4:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    ax.contour(kl, ks, np.where(finite, z, CAP_DB), levels=[TOL_DB],
+                               colors="red", linewidths=2)  # fmt: skip
+            for a in range(ks.size):
+                for b in range(kl.size):
+                    if np.isfinite(z[a, b]):
+                        ax.text(kl[b], ks[a], f"{z[a, b]:.2g}", ha="center", va="center",
+                                fontsize=7, color="white" if z[a, b] > 3 else "black")  # fmt: skip
+            ax.set_title(f"{_title(cfg)}, {pol}", fontsize=9)
+            ax.set_xlabel("kℓ")
+            ax.set_ylabel("kσ")
+    fig.suptitle(
+        f"{TITLES.get(method, method)}: error against the method of moments [dB] "
+        "(θi = 20°, 1-D profiles; red line: 1 dB; blank: not computed or MoM below its noise)"
+    )
+    fig.colorbar(mesh, ax=axes, shrink=0.6, label="error [dB]")
+    return save_figure(fig, path)

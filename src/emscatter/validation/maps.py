@@ -203,16 +203,19 @@ def _points_per_wavelength(
     ks: float, kl: float, correlation: str = "gaussian", taper: float = 2.5, eps="pec"
 ) -> float:
     """Points per wavelength *in the denser medium* (as :func:`emscatter.solvers.mom.bistatic`
-    counts them): ≥ 10, ≥ 8 along the arc at 3 rms slopes; Gaussian: ≥ 5 per correlation
-    length; tapered exponential: ``π/dx ≥ 3 × 1.3 K_c`` (its spectrum is below 1e-10 beyond
+    counts them): ≥ 10 and ≥ 8 along the arc at 3 rms slopes (the fields), and the geometry
+    in free-space units divided by the index: Gaussian ≥ 5 points per correlation length;
+    tapered exponential ``π/dx ≥ 3 × 1.3 K_c`` (its spectrum is below 1e-10 beyond
     ``1.3 K_c``), i.e. ``7.8·taper`` points per free-space wavelength."""
     from ..solvers.mom_solve import _n_eff
 
     m = cell_slope(ks, kl, correlation, taper)
     arc = 8.2 * math.sqrt(1 + 9 * m * m)
     if correlation == "gaussian":
-        return float(max(10.0, arc, 5 * 2 * math.pi / kl))
-    return float(max(10.0, arc, math.ceil(7.8 * taper) / _n_eff(eps)))
+        geometry = 5 * 2 * math.pi / kl
+    else:
+        geometry = math.ceil(7.8 * taper)
+    return float(max(10.0, arc, geometry / _n_eff(eps)))
 
 
 def _angles(cfg: MapConfig):
