@@ -322,3 +322,27 @@ def test_bad_options_are_named():
                      (dict(crosspol_order=1), "crosspol_order")):  # fmt: skip
         with pytest.raises(ValueError, match=word):
             iem.bistatic(rough, 15 + 2j, K, 0.3, 0.3, math.pi, **kw)
+
+
+def test_stored_energy_scan_is_inside_unit_interval_where_valid():
+    """validation/iem/energy_scan.csv (PYTHONPATH=src python validation/iem/energy_scan.py):
+    840 emissivities (Gaussian/exponential, kσ = 0.2–3, kℓ = 2–20, θ = 0–80°, ε = PEC, 3,
+    15 + 2i). Wherever check_validity says valid, ε = 3 and 15 + 2i give e ∈ [0, 1] and the
+    perfect conductor |e| ≤ 1 % on the negative side (energy created: at most 0.7 % here);
+    every energy violation beyond that (e < −0.01) is flagged by the report."""
+    path = pathlib.Path(__file__).parents[1] / "validation" / "iem" / "energy_scan.csv"
+    with open(path) as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 840
+    flagged = 0
+    for r in rows:
+        cls = GaussianCorrelation if r["correlation"] == "gaussian" else ExponentialCorrelation
+        rough = cls(float(r["k_sigma"]) / K, float(r["k_l"]) / K)
+        eps = "pec" if r["eps"] == "pec" else complex(r["eps"])
+        rep = iem.check_validity(rough, K, eps=eps, theta_i=math.radians(float(r["theta_deg"])))
+        e = (float(r["e_h"]), float(r["e_v"]))
+        if rep["valid"]:
+            assert min(e) >= (-0.01 if eps == "pec" else 0.0) and max(e) <= 1.0, r
+        elif min(e) < -0.01:
+            flagged += 1
+    assert flagged > 50

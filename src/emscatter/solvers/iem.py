@@ -96,6 +96,15 @@ spectrum, ``Ŵₙ = k² · 2π wₙ⁽¹ᴰ⁾/(2k)`` — the mapping between th
 first-order SPM and the physical-optics series obey (:mod:`.spm`, :mod:`.kirchhoff_po`).
 
 Numerics: the series sums to ``rtol`` in log space (:mod:`.iem_series`); no fixed term count.
+Compiled kernels (:mod:`.iem_jit`, numba, optional; ``EMSCATTER_KERNELS=numpy`` forces the
+reference path) cover Gaussian and exponential correlations.
+
+Known traits (validation/iem/README.md): for high-permittivity soils toward 60–70° AIEM's vv
+falls below the 1992 IEM/I2EM (the lower-medium terms are attenuated by ``e^{−σ² Re q₂²}``,
+which the versions without the lower-medium phase lack); for exponential spectra the model,
+like physical optics, loses energy at kσ ≳ 0.5 (a PEC "emits" 0.1–0.8): emissivities are upper
+bounds there; near grazing (θ > 70°, and > 45° for conductors) it can create energy — the
+validity report flags those angles.
 """
 
 from __future__ import annotations
@@ -104,10 +113,11 @@ import math
 
 import numpy as np
 
-from ..conventions import check_positive
+from ..conventions import check_angle, check_positive
 from ..fresnel import PEC, fresnel_cos, is_pec
 from ..scattering import Scattering
 from ..spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
+from . import iem_jit
 from . import iem_kernels as kern
 from .iem_series import _orders_needed as iem_series_orders
 from .iem_series import _too_many, direct_sum, iem_series, orders_table
@@ -116,14 +126,28 @@ from .kirchhoff_common import (
     coherent_local,
     geometry,
     smith_lambda,
-    validity_report,
 )
 from .kirchhoff_po import log_nfold
+from .validity import angle_upper, build_report, check_solver_options, upper
 
-__all__ = ["bistatic", "check_validity", "VALIDITY", "nominal_rms_slope"]
+__all__ = ["bistatic", "check_validity", "VALIDITY", "OPTIONS", "nominal_rms_slope"]
+
+#: Options :func:`bistatic` takes (for :func:`check_validity` and ``select.check_options``).
+OPTIONS = (
+    "coherent", "rtol", "max_terms", "fresnel", "complementary", "first_order", "reciprocal",
+    "shadowing", "rms_slope", "crosspol", "crosspol_order",
+)  # fmt: skip
+_SRC_KS = "Fung, Li & Chen 1992; Wu & Chen 2004 (AIEM vs 3-D MoM up to kσ ≈ 3)"
+_SRC_SLOPE = "single scattering; Ulaby & Long 2014 I2EM codes (σ/ℓ ≤ 0.25)"
+_SRC_ANGLE = "validation/iem/energy_scan.csv (emissivity in [0, 1])"
 
 #: Validity limits (see :func:`check_validity`).
-VALIDITY = {"k_sigma_max": 3.0, "rms_slope_max": 0.4, "theta_i_max_deg": 70.0}
+VALIDITY = {
+    "k_sigma_max": 3.0,
+    "rms_slope_max": 0.4,
+    "theta_i_max_deg": 70.0,
+    "theta_i_max_conductor_deg": 45.0,
+}
 
 _BACK_TOL = 1e-9
 _SPM_SIGN = (-1.0, 1.0, -1.0, 1.0)  # I₁(AIEM) ≈ s · 4 f_SPM (hh, hv, vh, vv): basis signs
@@ -149,7 +173,7 @@ class _Options:
     __slots__ = ("fresnel", "complementary", "first_order", "rtol", "max_terms")
 
 
-def _amplitudes(si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options):
+def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options):
     """Series components for flat geometries (k = 1, φi = 0): ``la, ph`` (4, N, J), ``lx, sx``
     (N, J) and the first-order amplitude ``d`` (4, N), pols ordered (hh, hv, vh, vv)."""
     pec = is_pec(eps)
@@ -158,7 +182,7 @@ def _amplitudes(si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options
     cos_l = np.sqrt(np.clip(0.5 * (1.0 + cs * css - si * ss * cf), 0.0, 1.0))
     rh_l, rv_l = fresnel_cos(eps, cos_l)
     if opt.fresnel == "transition" and not pec:
-        g_h, g_v = kern.transition_factor(eps, cs, ks, log_w, K)
+        g_h, g_v = _transition(rough, eps, cs, ks, log_w, K, opt.rtol)
         rh_t, rv_t = rh_i + (rh_l - rh_i) * g_h, rv_i + (rv_l - rv_i) * g_v
     else:
         rh_t, rv_t = rh_i, rv_i
@@ -264,6 +288,33 @@ def _spectral_args(rough, k, loc, n):
     return np.abs(qx) * (k * rough.length), math.log(0.5 * math.pi * k * rough.length)
 
 
+def _transition(rough, eps, cs, ks, log_w, K, rtol):
+    """Fresnel transition factors (γ_h, γ_v), compiled sums where covered."""
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is None:
+        return kern.transition_factor(eps, cs, ks, log_w, K)
+    with np.errstate(divide="ignore"):
+        lq = np.log((ks * cs) ** 2)
+    sums = [iem_jit.poisson_sums(lq + math.log(b), K, spec, rough.dimension, rtol=rtol * 1e-2)
+            for b in (1.0, 2.0, 4.0)]  # fmt: skip
+    return kern.transition_from_sums(eps, cs, ks, *sums)
+
+
+def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
+    """The series (:func:`.iem_series.iem_series`), compiled where :mod:`.iem_jit` covers it."""
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is not None:
+        ls, lp, status = iem_jit.series_rows(
+            la, lx, ph, sx, d, log_ks2, spec, rough.dimension, K, pref,
+            rtol=opt.rtol, max_terms=opt.max_terms,
+        )  # fmt: skip
+        if status:
+            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, log_ks2))
+        return ls, lp
+    return iem_series(la, lx, ph, sx, d, log_ks2, log_w, K, pref, rtol=opt.rtol,
+                      max_terms=opt.max_terms)  # fmt: skip
+
+
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     """Exact-backscatter σ⁰ (2, 2, n): the closed-form terms of
     :func:`.iem_kernels.backscatter_terms`, two components (Kirchhoff, lower medium) plus the
@@ -278,9 +329,20 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     si, cs = np.broadcast_to(loc.si, (n,)), np.broadcast_to(loc.ci, (n,))
     eps_f = eps if (is_pec(eps) or np.ndim(eps) == 0) else np.broadcast_to(eps, (n,))
     pec = is_pec(eps_f)
-    rh, rv = fresnel_cos(eps_f, cs)
     if opt.complementary != "aiem":  # the 1992 model: general terms
         return None
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is not None and (pec or np.ndim(eps_f) == 0):
+        l_hh, l_vv, lp, status = iem_jit.backscatter(
+            si, cs, eps_f, ks, K, pref, spec, rough.dimension,
+            transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
+        )  # fmt: skip
+        if status:
+            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
+        sig = np.zeros((2, 2, n))
+        sig[0, 0], sig[1, 1] = np.exp(l_hh), np.exp(l_vv)
+        return sig, 0.0, float(np.max(lp)) if n else -np.inf
+    rh, rv = fresnel_cos(eps_f, cs)
     (u_h, u_v), lower = kern.backscatter_terms(si, cs, eps_f, rh, rv)
     # components: Kirchhoff (base 2 kz), the lower-medium α⁺, α⁻ terms, (and d at n = 1)
     e_k = -2.0 * ks2 * cs * cs
@@ -301,8 +363,16 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
         sx[:, j] = np.where(x < 0, -1.0, 1.0)
     log_ks2 = 2.0 * math.log(ks)
     log_rtol = math.log(opt.rtol)
-    q_k = ks2 * 4.0 * cs * cs
-    N = int(np.max(iem_series_orders(q_k, log_rtol))) + 2 if n else 2
+    # orders: enough for every component whose mass bound is relevant (as in iem_series)
+    mass = [np.log(4.0 * np.maximum(np.abs(rh), np.abs(rv)) + 1e-300) * 2 + 2 * e_k]
+    if lower is not None:
+        for gh, gv in ((gp_h, gp_v), (gm_h, gm_v)):
+            mass.append(2 * (np.log(np.maximum(np.abs(gh), np.abs(gv)) + 1e-300) + e_g))
+    q_all = np.exp(log_ks2 + 2.0 * lx)
+    mass = np.stack(mass, axis=1) + q_all
+    relevant = mass >= np.max(mass, axis=1, keepdims=True) + log_rtol - 10.0
+    q_size = np.max(np.where(relevant & np.isfinite(lx), q_all, 0.0), axis=1)
+    N = int(np.max(iem_series_orders(q_size, log_rtol))) + 2 if n else 2
     if N > opt.max_terms:
         raise RuntimeError(_too_many(opt.rtol, opt.max_terms, N, log_ks2))
     table = orders_table(log_ks2, log_w, K, N)
@@ -388,12 +458,13 @@ def _single(rough, eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w):
         g_si, g_cs, g_ss, g_css, g_sf, g_cf = si, cs, ss, css, sf, cf
         g_K, g_pref, g_eps = K, np.broadcast_to(pref, (n,)), eps_f
     la, lx, ph, sxx, d = _amplitudes(
-        g_si, g_cs, g_ss, g_css, g_sf, g_cf, g_eps, ks, log_w, g_K, opt
+        rough, g_si, g_cs, g_ss, g_css, g_sf, g_cf, g_eps, ks, log_w, g_K, opt
     )
     pols = (0, 1, 2, 3) if dim == 2 and np.any(g_sf != 0) else (0, 3)
     m = la.shape[1]
     P = len(pols)
-    log_s, log_prec = iem_series(
+    log_s, log_prec = _series(
+        rough,
         la[list(pols)].reshape(P * m, -1),
         np.tile(lx, (P, 1)),
         ph[list(pols)].reshape(P * m, -1),
@@ -403,8 +474,7 @@ def _single(rough, eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w):
         log_w,
         np.tile(g_K, P),
         np.tile(g_pref, P),
-        rtol=opt.rtol,
-        max_terms=opt.max_terms,
+        opt,
     )
     vals = np.zeros((4, m))
     vals[list(pols)] = np.exp(log_s).reshape(P, m)
@@ -608,29 +678,50 @@ def _add_crosspol(sig, rough, g, k, slope, order):
         sig[1, 0, idx[sub]] += hv
 
 
-def check_validity(roughness, k: float, *, eps=None, theta_i=None) -> dict:
-    """Validity report (BOARD interface 1)."""
+def _conductor(eps) -> bool:
+    """PEC, a metal (Re ε < 0) or a good conductor (|ε| ≥ 100) — any element of an array."""
+    if eps is None:
+        return False
+    if isinstance(eps, str):
+        return is_pec(eps)
+    e = np.asarray(eps, dtype=complex)
+    return bool(np.any((e.real < 0) | (np.abs(e) >= 100.0)))
+
+
+def check_validity(roughness, k: float, *, eps=None, theta_i=None, **solver_options) -> dict:
+    """Validity report (BOARD interface 1, built by :mod:`.validity`): ``valid``, ``reasons``
+    (check, value, limit, factor), ``checks``, ``details``, ``excess`` (max log(value/limit));
+    with ``theta_i`` [rad] also ``angle_valid``, ``angle_excess`` (theta_i's shape) and
+    ``angle_reasons``. ``solver_options``: the names :func:`bistatic` takes (:data:`OPTIONS`;
+    the limits do not depend on them), anything else is an error naming the method.
+
+    Limits (:data:`VALIDITY`), from the literature and this module's own checks:
+
+    * ``kσ ≤ 3`` — Fung et al. 1992/1994 and SMRT's ``iem_fung92``; Wu & Chen (2004) find AIEM
+      within ~1 dB of 3-D MoM backscatter up to kσ ≈ 3. (The 1992 model's extra condition
+      ``kσ·kℓ < 1.2√|ε|`` comes from dropping the Green's-function phase; AIEM keeps it.)
+    * nominal rms slope ``≤ 0.4`` (√2σ/ℓ Gaussian, σ/ℓ exponential; Ulaby & Long's I2EM codes
+      restrict σ/ℓ ≤ 0.25, i.e. 0.35 for a Gaussian): single scattering, no multiple bounces.
+    * ``θi ≤ 70°`` (dielectrics) or ``≤ 45°`` (PEC, metals, ``|ε| ≥ 100``, when ``eps`` is
+      given): energy. validation/iem/energy_scan.csv — over kσ = 0.2–3, kℓ = 2–20 inside the
+      two limits above, the emissivity of ε = 3 and 15 + 2i stays in [0, 1] up to 70°, while a
+      perfect conductor reflects more than it receives (e < −0.02, v) from 50–60° on.
+    """
+    check_solver_options("iem", solver_options, OPTIONS)
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
     v = VALIDITY
-    ks = k * rough.sigma
     slope = max(nominal_rms_slope(rough))
     checks = [
-        ("k_sigma", ks <= v["k_sigma_max"], f"kσ = {ks:.3g} > {v['k_sigma_max']}",
-         ks / v["k_sigma_max"]),
-        ("rms_slope", slope <= v["rms_slope_max"],
-         f"nominal rms slope = {slope:.3g} > {v['rms_slope_max']}", slope / v["rms_slope_max"]),
-    ]  # fmt: skip
-    rep = validity_report(rough, k, checks)
+        upper("k_sigma", k * rough.sigma, v["k_sigma_max"], "kσ", _SRC_KS),
+        upper("rms_slope", slope, v["rms_slope_max"], "nominal rms slope", _SRC_SLOPE),
+    ]
+    angle_checks, ti = [], None
     if theta_i is not None:
-        th = np.asarray(theta_i, dtype=float)
-        lim = math.radians(v["theta_i_max_deg"])
-        ok = th <= lim
-        rep["angle_valid"] = ok & rep["valid"]
-        rep["angle_reasons"] = (
-            [] if np.all(ok) else [f"θi = {math.degrees(float(np.max(th))):.3g}° > "
-                                   f"{v['theta_i_max_deg']}° (energy, shadowing)"]
-        )  # fmt: skip
-        if not np.all(ok):
-            rep["valid"] = False
-    return rep
+        ti = check_angle("theta_i", theta_i)
+        cond = _conductor(eps)
+        lim = v["theta_i_max_conductor_deg"] if cond else v["theta_i_max_deg"]
+        what = "θi [deg] (conductor: energy)" if cond else "θi [deg] (energy, shadowing)"
+        angle_checks.append(angle_upper("theta_i", np.degrees(ti), lim, what, _SRC_ANGLE))
+    return build_report(rough, k, checks, theta_i=ti, angle_checks=angle_checks,
+                        rms_slope=slope)  # fmt: skip

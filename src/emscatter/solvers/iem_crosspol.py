@@ -73,6 +73,18 @@ def _graded(a: float, b: float, centers, finest: float, m: int):
     return x, wx
 
 
+def _log_T(rough, log_w, Q, K):
+    """log of the physical-optics series ``T(Q, K) = e^{−Q} Σ Q^{n−1}/n! wₙ(K)`` (compiled
+    sums where :mod:`.iem_jit` covers the correlation)."""
+    from . import iem_jit
+
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is None or np.any(Q <= 0):
+        return series_sum(log_w, Q, K, rtol=1e-10)
+    lq = np.log(Q)
+    return iem_jit.poisson_sums(lq, K, spec, rough.dimension, rtol=1e-10) - lq - Q
+
+
 @lru_cache(maxsize=64)
 def _spectral_part(rough, k: float, theta: float, phi_i: float, slope: tuple, order: int):
     """Nodes (u, v as r·(cos, sin) in the incidence frame), and the weights
@@ -107,7 +119,7 @@ def _spectral_part(rough, k: float, theta: float, phi_i: float, slope: tuple, or
     Km = np.broadcast_to(scaled_K(u - s, v), u.shape).ravel()
     Kp = np.broadcast_to(scaled_K(u + s, v), u.shape).ravel()
     Qa = np.full(Km.size, Q)
-    lt = series_sum(log_w, np.concatenate([Qa, Qa]), np.concatenate([Km, Kp]), rtol=1e-10)
+    lt = _log_T(rough, log_w, np.concatenate([Qa, Qa]), np.concatenate([Km, Kp]))
     lt_m, lt_p = lt[: Km.size], lt[Km.size :]
     # intermediate-wave shadowing: a = cotθ_r/(√2 s) with cotθ_r = q/r, slope along its azimuth
     sx, sy = slope
