@@ -26,8 +26,8 @@ from .validation.maps import (
     references,
     rough_of,
     selector_failures,
-    surface_of,
     sigma0_methods,
+    surface_of,
     tag_of,
 )
 

@@ -92,7 +92,7 @@ def covered_go(dimension: int, sx: float, sy: float, eps, shadowing) -> bool:
     return (
         dimension == 2
         and sx == sy
-        and shadowing in (None, "smith", "separable", "correlated")
+        and shadowing in (None, "smith", "separable", "correlated", "direction-correlated")
         and _scalar_eps(eps) is not None
     )
 

@@ -24,14 +24,16 @@ import numpy as np
 from ._runtime import inline, jit, run_fused
 from ._vmath import vcos, verfcx_parts, vexp, vsin
 
-NO_SHADOWING, SEPARABLE, CORRELATED, SMITH = 0, 1, 2, 3
+NO_SHADOWING, SEPARABLE, CORRELATED, SMITH, DIRECTIONAL = 0, 1, 2, 3, 4
 #: kirchhoff_common.check_shadowing's modes: "smith" is the separable product except in the
-#: exact backscatter direction (|q|² > 4(1 − 1e-12)), where the monostatic 1/(1 + Λi) applies
+#: exact backscatter direction (|q|² > 4(1 − 1e-12)), where the monostatic 1/(1 + Λi) applies;
+#: "direction-correlated" is 1/(1 + max Λ + λ(ψ) min Λ), ψ = arccos(−cos Δφ)
 SHADOWING_CODES = {
     None: NO_SHADOWING,
     "separable": SEPARABLE,
     "correlated": CORRELATED,
     "smith": SMITH,
+    "direction-correlated": DIRECTIONAL,
 }
 _SQRT_PI = math.sqrt(math.pi)
 _TAU_EPS = 1e-28  # as kirchhoff_common._TAU_EPS
@@ -116,7 +118,11 @@ def _go_kernel(ti, ts, dphi, pec, er, ei, s2, shadowing, two_k_sigma, hh, hv, vh
         if shadowing != 0:
             lam_i = _smith_lambda(_shadow_a(ci, si, s2))
             lam_s = _smith_lambda(_shadow_a(cs, ss, s2))
-            if shadowing == CORRELATED:
+            if shadowing == DIRECTIONAL:
+                psi = math.acos(min(max(-cd, -1.0), 1.0))
+                corr = 4.41 * psi / (4.41 * psi + 1.0)
+                val = val / (1.0 + max(lam_i, lam_s) + corr * min(lam_i, lam_s))
+            elif shadowing == CORRELATED:
                 val = val * (1.0 / (1.0 + lam_i + lam_s))
             elif shadowing == SMITH and q2 > 4.0 * (1.0 - 1e-12):
                 val = val * (1.0 / (1.0 + lam_i))

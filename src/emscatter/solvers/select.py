@@ -12,6 +12,17 @@ Outside every validity range the least-bad candidate is used and the caller's
 ``"ignore"``. Per-angle choices (e.g. an energy fallback) read each report's
 ``angle_valid`` / ``angle_excess``.
 
+**Measured correction** (:mod:`.measured`): for Gaussian and exponential roughness inside the
+validity maps' box (kσ ∈ [0.05, 3], kℓ ∈ [0.5, 20]) with a known medium class, the criteria's
+ranking is corrected by the maps' measured σ⁰ errors at the nearest cell: where the criteria's
+first method is measured more than 1 dB off while another candidate is measured within 1 dB
+and has no angle-specific failure (an angle check failing by more than its roughness
+checks), the cheapest such candidate goes first; where no method is valid and none is measured
+within 1 dB, the candidates without angle-specific failures are ordered by measured error
+(the maps are at θi = 20°; angle checks keep their say). Each report then
+carries ``measured_error_dB`` and the first one ``measured`` (map, cell) and ``picked_by``
+(``"criteria"`` or ``"measured"``).
+
 :func:`check_options` maps the solver options a caller passed to the method actually used:
 an option of that method is kept; an accuracy or execution knob that a closed-form method
 satisfies anyway (``threads``, ``rtol``, ``max_terms``) is dropped; ``shadowing=False`` is
@@ -26,6 +37,8 @@ import math
 import warnings
 from functools import lru_cache
 from typing import Literal
+
+import numpy as np
 
 from . import AUTO_ORDER, get
 
@@ -102,8 +115,48 @@ def rank_methods(
         return (1, r.get("excess", math.inf), len(r.get("reasons", [])), order[n])
 
     ranked = sorted(supported, key=key)
+    ranked = _measured_correction(ranked, reports, roughness, k, eps, methods)
     ranked += [n for n in methods if reports[n].get("unsupported")]
     return [(n, reports[n]) for n in ranked]
+
+
+def _measured_correction(ranked, reports, roughness, k, eps, methods) -> list[str]:
+    """The criteria's ranking corrected by the measured map errors (module docstring)."""
+    from .measured import TOL_DB, measured_errors
+
+    meas = measured_errors(roughness, k, eps)
+    if meas is None or not ranked:
+        return ranked
+    err = {n: meas["errors"].get(n, math.nan) for n in ranked}
+    for n in ranked:
+        reports[n] = {**reports[n], "measured_error_dB": err[n]}
+
+    def angles_ok(n):  # no angle-specific failure (one worse than the roughness checks')
+        r = reports[n]
+        a = r.get("angle_valid")
+        if a is None or bool(np.all(a)):
+            return True
+        worst = float(np.max(r.get("angle_excess", math.inf)))
+        return worst <= r.get("roughness_excess", 0.0) + 1e-9
+
+    first = ranked[0]
+    good = [n for n in methods if n in err and err[n] <= TOL_DB and angles_ok(n)]
+    picked_by = "criteria"
+    if good and not err[first] <= TOL_DB:
+        ranked = [good[0]] + [n for n in ranked if n != good[0]]
+        picked_by = "measured"
+    elif not good and not reports[first]["valid"]:
+        finite = [n for n in ranked if math.isfinite(err[n]) and angles_ok(n)]
+        finite.sort(key=lambda n: err[n])
+        if finite and finite[0] != first:
+            ranked = finite + [n for n in ranked if n not in finite]
+            picked_by = "measured"
+    reports[ranked[0]] = {
+        **reports[ranked[0]],
+        "measured": {"map": meas["map"], "cell": meas["cell"]},
+        "picked_by": picked_by,
+    }
+    return ranked
 
 
 def select_method(

@@ -29,9 +29,12 @@ def run_validation(
     Gaussian and exponential, PEC and ε = 3) and the emissivity table with ``full=True``,
     or ``config``. MoM references go to ``out/mom_<tag>.json`` as each cell finishes and
     are reused by a later run (resume, or re-evaluation after a model change). Writes
-    ``validity_<tag>.csv/.json/.md`` and ``validity_<tag>_{h,v}.png``; returns the paths."""
+    ``validity_<tag>.csv/.json/.md`` and ``validity_<tag>_{h,v}.png``; with ``full=True``
+    also ``measured_errors.json`` (the table ``auto`` reads, :mod:`emscatter.solvers.measured`;
+    :func:`reselect_all` installs it) and ``validity_iem.png``; returns the paths."""
     from .emissivity_table import emissivity_table
     from .map_files import write_map
+    from .measured_table import write_measured
 
     configs = [config] if config is not None else (list(PUBLISHED) if full else [SMALL])
     out = Path(out)
@@ -46,6 +49,7 @@ def run_validation(
         paths.append(store)
         maps.append((cfg, rows))
     if full and config is None:
+        paths.append(write_measured(maps, out / "measured_errors.json"))
         paths.extend(_model_figures(maps, out))
         paths.append(emissivity_table(out))
     return paths
@@ -69,28 +73,41 @@ def _mom_seconds(store: Path) -> float:
     return float(sum(c.get("seconds", 0.0) for c in cells))
 
 
-def reselect(out: Path, cfg: MapConfig = FULL) -> list[Path]:
-    """Re-evaluate every approximation and the ``auto`` choice of a map from its stored MoM
-    references (no MoM run) and rewrite its files — after a model or criterion change."""
-    return _reselect(out, cfg)[0]
-
-
-def _reselect(out: Path, cfg: MapConfig):
+def _store(out: Path, cfg: MapConfig) -> Path:
     store = Path(out) / f"mom_{tag_of(cfg)}.json"
     if not store.exists():
         raise FileNotFoundError(f"{store} missing: run `emscatter validate --full --out {out}`")
+    return store
+
+
+def reselect(out: Path, cfg: MapConfig = FULL) -> list[Path]:
+    """Re-evaluate every approximation and the ``auto`` choice of a map from its stored MoM
+    references (no MoM run) and rewrite its files — after a model or criterion change
+    (``auto`` reads the installed measured table; :func:`reselect_all` renews it)."""
     from .map_files import write_map
 
+    store = _store(out, cfg)
     rows = compute_map(cfg, store=store, progress=False)
-    return write_map(rows, cfg, out, seconds=_mom_seconds(store)), rows
+    return write_map(rows, cfg, out, seconds=_mom_seconds(store))
 
 
-def reselect_all(out: Path) -> list[Path]:
-    """:func:`reselect` for every published map, and the model figures; the command is in
-    validation/validity_maps/README.md."""
-    paths, maps = [], []
+def reselect_all(out: Path, *, install_table: bool = True) -> list[Path]:
+    """Every published map from its stored MoM references: evaluate the approximations,
+    write the measured-error table (``out/measured_errors.json`` and, with
+    ``install_table``, the one the package reads), then ``auto``'s choice with that table,
+    and the map files and model figures. The command is in validation/validity_maps/README.md."""
+    from ..solvers.measured import TABLE_PATH
+    from .map_files import write_map
+    from .maps import refresh_auto
+    from .measured_table import write_measured
+
+    maps = []
     for cfg in PUBLISHED:
-        p, rows = _reselect(out, cfg)
-        paths += p
-        maps.append((cfg, rows))
+        maps.append((cfg, compute_map(cfg, store=_store(out, cfg), progress=False)))
+    paths = [write_measured(maps, Path(out) / "measured_errors.json")]
+    if install_table:
+        paths.append(write_measured(maps, TABLE_PATH))
+    for cfg, rows in maps:
+        refresh_auto(rows, cfg)
+        paths += write_map(rows, cfg, out, seconds=_mom_seconds(_store(out, cfg)))
     return paths + _model_figures(maps, out)

@@ -48,7 +48,8 @@ TITLES = {
     "po": "Kirchhoff PO σ⁰",
     "go": "Kirchhoff GO σ⁰ (shadowed)",
     "go_surface": "GO σ⁰, full slope of the (tapered) surface",
-    "iem": "IEM σ⁰",
+    "iem": "IEM σ⁰ (AIEM)",
+    "iem92": "IEM σ⁰, 1992 configuration (fung92, incident Fresnel)",
 }
 
 
@@ -72,6 +73,19 @@ def _matrix(rows, method, pol, ks, kl, key="error_dB"):
     return z
 
 
+def _log_axes(ax, x: np.ndarray, y: np.ndarray) -> None:
+    """Log axes ticked at the grid values, plain number labels."""
+    from matplotlib.ticker import FuncFormatter
+
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_formatter(FuncFormatter(lambda v, _: ""))
+    ax.set_xticks(x)
+    ax.set_yticks(y)
+
+
 def _title(cfg: MapConfig) -> str:
     eps = cfg.eps if isinstance(cfg.eps, str) else f"ε = {complex(cfg.eps)}"
     return f"{eps}, θi = {cfg.theta_i_deg:g}°, {cfg.correlation} 1-D"
@@ -85,7 +99,6 @@ def plot_map(rows: list[dict], cfg: MapConfig, pol: str, path, methods=None) -> 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
-    from matplotlib.ticker import FuncFormatter
 
     methods = tuple(methods or map_methods(cfg))
     present = {r["method"] for r in rows}
@@ -113,13 +126,7 @@ def plot_map(rows: list[dict], cfg: MapConfig, pol: str, path, methods=None) -> 
             if r["method"] == m and r["pol"] == pol and r["status"].startswith("not computed"):
                 nc[_cell(ks, kl, r)] = 1
         ax.pcolormesh(xe, ye, np.ma.masked_equal(nc, 0), cmap="Greys", vmin=0, vmax=4)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        for axis in (ax.xaxis, ax.yaxis):
-            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-            axis.set_minor_formatter(FuncFormatter(lambda v, _: ""))
-        ax.set_xticks(kl)
-        ax.set_yticks(ks)
+        _log_axes(ax, kl, ks)
         finite = np.isfinite(z)
         if finite.sum() >= 4 and ks.size > 1 and kl.size > 1:
             zc = np.where(finite, z, CAP_DB)
@@ -221,7 +228,6 @@ def plot_method(rows_by_cfg: list[tuple[MapConfig, list[dict]]], method: str, pa
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
-    from matplotlib.ticker import FuncFormatter
 
     ncol = len(rows_by_cfg)
     fig, axes = plt.subplots(
@@ -242,13 +248,7 @@ def plot_method(rows_by_cfg: list[tuple[MapConfig, list[dict]]], method: str, pa
                 norm=norm,
                 cmap="viridis_r",
             )
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            for axis in (ax.xaxis, ax.yaxis):
-                axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-                axis.set_minor_formatter(FuncFormatter(lambda v, _: ""))
-            ax.set_xticks(kl)
-            ax.set_yticks(ks)
+            _log_axes(ax, kl, ks)
             ax.tick_params(labelsize=7)
             finite = np.isfinite(z)
             if finite.sum() >= 4:

@@ -18,7 +18,10 @@ Approximations (rows ``method``):
 * ``go`` — Kirchhoff geometric optics σ⁰ with Smith shadowing and the slope ``auto`` would use
   (for the exponential: its spectrum below ``2k``, :mod:`emscatter.solvers.validity`);
 * ``go_surface`` (exponential maps) — GO with the full slope of the map's surface;
-* ``iem`` — the integral-equation model (1-D form), when registered;
+* ``iem`` — the integral-equation model (1-D form, AIEM: what ``method="iem"`` and ``auto``
+  use), when registered;
+* ``iem92`` — the same solver in its 1992 configuration (``complementary="fung92",
+  fresnel="incident"``; Fung et al. 1992), a diagnostic row (not a candidate of ``auto``);
 * ``spm2`` — second-order SPM **coherent reflectivity** against the MoM coherent reflectivity.
 
 Exponential maps: a sampled exponential profile is not differentiable, and the MoM (whose TM
@@ -82,11 +85,14 @@ __all__ = [
     "compute_map",
     "selector_failures",
     "auto_choice",
+    "refresh_auto",
     "tag_of",
 ]
 
 K = 2 * math.pi  # wavelength 1 m
 AUTO_TO_MAP = {"spm": "spm1", "go": "go", "po": "po", "iem": "iem"}
+#: The IEM's 1992 configuration (map row ``iem92``).
+IEM92 = {"complementary": "fung92", "fresnel": "incident"}
 CAP_DB = 30.0
 DYNAMIC_RANGE_DB = 20.0
 TOL_DB = 1.0
@@ -316,6 +322,16 @@ def _store_key(cfg: MapConfig) -> dict:
     return json.loads(json.dumps(d))  # tuples → lists, as read back
 
 
+def _same_config(stored, key: dict, cfg: MapConfig) -> bool:
+    """A store's configuration matches ``key``; ``taper`` may be missing from a Gaussian
+    map's store (written before the field existed; it applies to exponential maps only)."""
+    if not isinstance(stored, dict):
+        return False
+    if cfg.correlation == "gaussian" and "taper" not in stored:
+        stored = {**stored, "taper": key["taper"]}
+    return stored == key
+
+
 def references(cfg: MapConfig, store: Path | None = None, *, progress: bool = True) -> dict:
     """MoM references of every cell, ``{(i, j): reference}``; with ``store`` (a JSON path)
     cells already there (same configuration) are reused and each new cell is written as soon
@@ -328,7 +344,7 @@ def references(cfg: MapConfig, store: Path | None = None, *, progress: bool = Tr
     key = _store_key(cfg)
     if store is not None and Path(store).exists():
         data = json.loads(Path(store).read_text())
-        if data.get("config") != key:
+        if not _same_config(data.get("config"), key, cfg):
             raise ValueError(
                 f"{store} holds references for another configuration: {data.get('config')}; "
                 "remove it or pass another store"
@@ -378,7 +394,7 @@ def sigma0_methods(cfg: MapConfig) -> tuple[str, ...]:
 
     base = ["spm1", "go", "po"]
     if "iem" in solvers.available():
-        base.append("iem")
+        base += ["iem", "iem92"]
     if cfg.correlation != "gaussian":
         base.append("go_surface")
     return tuple(base)
@@ -410,7 +426,9 @@ def _approximations(rough, nominal, cfg: MapConfig) -> tuple[dict, float]:
             rough, cfg.eps, K, ti, ts, ps, threads=1, coherent=False
         ).sigma0
     if "iem" in solvers.available():
-        out["iem"] = solvers.get("iem").bistatic(rough, cfg.eps, K, ti, ts, ps).sigma0
+        iem = solvers.get("iem")
+        out["iem"] = iem.bistatic(rough, cfg.eps, K, ti, ts, ps, coherent=False).sigma0
+        out["iem92"] = iem.bistatic(rough, cfg.eps, K, ti, ts, ps, coherent=False, **IEM92).sigma0
     r2 = spm.bistatic(rough, cfg.eps, K, ti, 0.0, 0.0, order=2).coherent
     return {m: np.stack([v[0, 0], v[1, 1]]) for m, v in out.items()}, r2
 
@@ -426,7 +444,7 @@ def evaluate_cell(ref: dict, cfg: MapConfig) -> list[dict]:
     auto, reports = select_method(rough, K, eps=cfg.eps, theta_i=ti)
     methods = map_methods(cfg)
     solver_of = {"spm1": "spm", "spm2": "spm", "go": "go", "go_surface": "go", "po": "po"}
-    solver_of["iem"] = "iem"
+    solver_of["iem"] = solver_of["iem92"] = "iem"
     valid = {}
     for m in methods:
         name = solver_of[m]
@@ -434,24 +452,8 @@ def evaluate_cell(ref: dict, cfg: MapConfig) -> list[dict]:
         valid[m] = bool(rep["valid"])
     base = {"k_sigma": ks, "k_l": kl, "rms_slope": ref["rms_slope"], "auto": AUTO_TO_MAP[auto]}
     if ref["status"] != "ok":
-        return [
-            {
-                **base,
-                "method": m,
-                "pol": p,
-                "error_dB": math.nan,
-                "max_error_dB": math.nan,
-                "n_bins": 0,
-                "mom_se_dB": math.nan,
-                "valid": valid[m],
-                "status": ref["status"],
-                "realizations": 0,
-                "unknowns": 0,
-                "seconds": 0.0,
-            }
-            for m in methods
-            for p in "hv"
-        ]
+        empty = {**base, "realizations": 0, "unknowns": 0, "seconds": 0.0}
+        return [r for p in "hv" for r in _blank_rows(empty, p, methods, valid, ref["status"])]
     signed, edges, _, _ = _angles(cfg)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -464,20 +466,7 @@ def evaluate_cell(ref: dict, cfg: MapConfig) -> list[dict]:
     for ip, p in enumerate("hv"):
         if balance[ip] is not None and abs(balance[ip] - 1.0) > ENERGY_TOL:
             why = f"MoM energy balance off: R + T = {balance[ip]:.3f} (tolerance {ENERGY_TOL})"
-            rows += [
-                {
-                    **common,
-                    "method": m,
-                    "pol": p,
-                    "error_dB": math.nan,
-                    "max_error_dB": math.nan,
-                    "n_bins": 0,
-                    "mom_se_dB": math.nan,
-                    "valid": valid[m],
-                    "status": why,
-                }
-                for m in methods
-            ]
+            rows += _blank_rows(common, p, methods, valid, why)
             continue
         mom_b = _bin_means(signed, np.asarray(ref["sigma0"][ip]), edges)
         se_b = _bin_means(signed, np.asarray(ref["standard_error"][ip]), edges)
@@ -518,6 +507,16 @@ def evaluate_cell(ref: dict, cfg: MapConfig) -> list[dict]:
             }
         )
     return rows
+
+
+def _blank_rows(common: dict, pol: str, methods, valid: dict, status: str) -> list[dict]:
+    """Rows without an error (cell not computed, or its MoM reference rejected)."""
+    nan = math.nan
+    return [
+        {**common, "method": m, "pol": pol, "error_dB": nan, "max_error_dB": nan, "n_bins": 0,
+         "mom_se_dB": nan, "valid": valid[m], "status": status}
+        for m in methods
+    ]  # fmt: skip
 
 
 def _energy_balance(ref: dict, cfg: MapConfig) -> list:
@@ -571,3 +570,14 @@ def auto_choice(k_sigma: float, k_l: float, cfg: MapConfig = FULL) -> str:
     rough = rough_of(k_sigma, k_l, cfg.correlation)
     ti = math.radians(cfg.theta_i_deg)
     return AUTO_TO_MAP[select_method(rough, K, eps=cfg.eps, theta_i=ti)[0]]
+
+
+def refresh_auto(rows: list[dict], cfg: MapConfig) -> list[dict]:
+    """Set every row's ``auto`` to today's choice (after the measured table changed)."""
+    choice: dict = {}
+    for r in rows:
+        key = (r["k_sigma"], r["k_l"])
+        if key not in choice:
+            choice[key] = auto_choice(*key, cfg)
+        r["auto"] = choice[key]
+    return rows
