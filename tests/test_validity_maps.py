@@ -153,9 +153,9 @@ def test_committed_map_po_holds_in_thorsos_regime():
 # --------------------------------------------------------------------------- live cells
 LIVE = {
     # (correlation, eps): the cells — one where SPM holds, one where Kirchhoff does
-    ("gaussian", "pec"): ((0.1, 8.0), (1.0, 10.0)),
-    ("gaussian", 3.0): ((1.0, 10.0),),
-    ("exponential", "pec"): ((0.1, 8.0), (1.0, 10.0)),
+    ("gaussian", "pec"): ((0.1, 8.0), (1.0, 8.0)),
+    ("gaussian", 3.0): ((1.0, 8.0),),
+    ("exponential", "pec"): ((0.1, 8.0), (1.0, 8.0)),
     ("exponential", 3.0): ((0.1, 8.0),),
 }
 
@@ -173,7 +173,8 @@ def test_live_cells_auto_within_1dB_where_any_model_is(tmp_path):
         )
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            paths += vm.run_validation(tmp_path, config=cfg, progress=False)
+            plots = (corr, eps) == ("gaussian", "pec")  # one map's PNGs (the slow part)
+            paths += vm.run_validation(tmp_path, config=cfg, progress=False, plots=plots)
         rows = [
             r
             for r in vm.read_map(tmp_path / f"validity_{vm.tag_of(cfg)}.csv")
@@ -190,7 +191,7 @@ def test_live_cells_auto_within_1dB_where_any_model_is(tmp_path):
                 assert by[(1.0, "spm1", p)]["auto"] != "spm1", (corr, eps)
     names = {p.name for p in paths}
     assert {"validity_pec.csv", "validity_pec.json", "validity_pec_h.png", "mom_pec.json"} <= names
-    assert "validity_exp_eps3+0j_v.png" in names
+    assert {"validity_exp_eps3+0j.csv", "mom_exp_eps3+0j.json", "validity_pec_v.png"} <= names
     for p in paths:
         assert p.stat().st_size > 0
     with open(next(p for p in paths if p.name.endswith("_h.png")), "rb") as fh:

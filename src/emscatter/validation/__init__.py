@@ -22,7 +22,12 @@ __all__ = ["run_validation", "reselect", "reselect_all"]
 
 
 def run_validation(
-    out: Path, *, full: bool = False, config: MapConfig | None = None, progress: bool = True
+    out: Path,
+    *,
+    full: bool = False,
+    config: MapConfig | None = None,
+    progress: bool = True,
+    plots: bool = True,
 ) -> list[Path]:
     """Compute and write the validity maps (``emscatter validate``): the small PEC grid
     (:data:`.maps.SMALL`) by default, the four published maps (:data:`.maps.PUBLISHED`:
@@ -31,7 +36,8 @@ def run_validation(
     are reused by a later run (resume, or re-evaluation after a model change). Writes
     ``validity_<tag>.csv/.json/.md`` and ``validity_<tag>_{h,v}.png``; with ``full=True``
     also ``measured_errors.json`` (the table ``auto`` reads, :mod:`emscatter.solvers.measured`;
-    :func:`reselect_all` installs it) and ``validity_iem.png``; returns the paths."""
+    :func:`reselect_all` installs it) and ``validity_iem.png``; ``plots=False`` skips the
+    PNGs (tests); returns the paths."""
     from .emissivity_table import emissivity_table
     from .map_files import write_map
     from .measured_table import write_measured
@@ -45,7 +51,7 @@ def run_validation(
         t0 = time.perf_counter()
         rows = compute_map(cfg, store=store, progress=progress)
         seconds = _mom_seconds(store) or time.perf_counter() - t0
-        paths.extend(write_map(rows, cfg, out, seconds=seconds))
+        paths.extend(write_map(rows, cfg, out, seconds=seconds, plots=plots))
         paths.append(store)
         maps.append((cfg, rows))
     if full and config is None:

@@ -182,8 +182,11 @@ def markdown_table(rows: list[dict], methods=None) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_map(rows: list[dict], cfg: MapConfig, out: Path, *, seconds: float = 0.0) -> list:
-    """CSV, JSON, one PNG per pol and the Markdown table, named ``validity_<tag>.*``."""
+def write_map(
+    rows: list[dict], cfg: MapConfig, out: Path, *, seconds: float = 0.0, plots: bool = True
+) -> list:
+    """CSV, JSON, one PNG per pol (unless ``plots=False``) and the Markdown table, named
+    ``validity_<tag>.*``."""
     out = Path(out)
     tag = tag_of(cfg)
     cols = [np.array([r[h] for r in rows], dtype=object) for h in CSV_HEADER]
@@ -196,7 +199,7 @@ def write_map(rows: list[dict], cfg: MapConfig, out: Path, *, seconds: float = 0
         "methods": list(dict.fromkeys(r["method"] for r in rows)),
     }
     paths.append(write_json(out / f"validity_{tag}.json", meta))
-    for p in "hv":
+    for p in "hv" if plots else "":
         paths.append(plot_map(rows, cfg, p, out / f"validity_{tag}_{p}.png"))
     md = out / f"validity_{tag}.md"
     with atomic_path(md) as tmp:
