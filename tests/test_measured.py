@@ -69,3 +69,12 @@ def test_valid_and_measured_within_tolerance_keeps_the_criteria():
     rough = GaussianCorrelation(0.05 / K, 5.848 / K, dimension=1)
     name, rep = select.rank_methods(rough, K, eps="pec", theta_i=math.radians(20))[0]
     assert name == "spm" and rep["valid"] and rep["picked_by"] == "criteria"
+
+
+def test_a_limit_between_the_roughness_and_the_cell_centre_keeps_its_say():
+    # kσ = 0.29 (SPM valid, kσ ≤ 0.3) is nearest to the cell kσ = 0.39, kℓ = 3.2 of the ε = 3
+    # map, where SPM is invalid and measured 1.06 dB off: the criteria's choice stands.
+    rough = GaussianCorrelation(0.29 / K, 3.67 / K)
+    name, rep = select.rank_methods(rough, K, eps=5.3 + 0.2j, theta_i=math.radians(30))[0]
+    assert name == "spm" and rep["valid"]
+    assert "picked_by" not in rep

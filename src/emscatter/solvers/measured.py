@@ -26,7 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TABLE_PATH", "TOL_DB", "measured_errors", "medium_class", "load_table"]
+__all__ = [
+    "TABLE_PATH",
+    "TOL_DB",
+    "measured_errors",
+    "medium_class",
+    "load_table",
+    "cell_roughness",
+]
 
 TABLE_PATH = Path(__file__).with_name("data") / "measured_errors.json"
 #: A candidate is "within tolerance" where its measured error is at most this [dB].
@@ -101,3 +108,10 @@ def measured_errors(roughness, k: float, eps) -> dict | None:
         }
         return {"errors": errors, "cell": (m["k_sigma"][i], m["k_l"][j]), "map": m["tag"]}
     return None
+
+
+def cell_roughness(roughness, k: float, cell: tuple[float, float]):
+    """The roughness of a map cell's centre ``(kσ, kℓ)``, of ``roughness``'s class and
+    dimension (isotropic)."""
+    ks, kl = cell
+    return type(roughness)(ks / k, kl / k, dimension=roughness.dimension)

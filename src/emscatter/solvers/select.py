@@ -14,7 +14,9 @@ Outside every validity range the least-bad candidate is used and the caller's
 
 **Measured correction** (:mod:`.measured`): for Gaussian and exponential roughness inside the
 validity maps' box (kσ ∈ [0.05, 3], kℓ ∈ [0.5, 20]) with a known medium class, the criteria's
-ranking is corrected by the maps' measured σ⁰ errors at the nearest cell: where the criteria's
+ranking is corrected by the maps' measured σ⁰ errors at the nearest cell — when the criteria
+put the cell's centre in the same regime (same first method, equally valid; so a limit
+between the roughness and the cell centre keeps its say): where the criteria's
 first method is measured more than 1 dB off while another candidate is measured within 1 dB
 and has no angle-specific failure (an angle check failing by more than its roughness
 checks), the cheapest such candidate goes first; where no method is valid and none is measured
@@ -99,6 +101,14 @@ def rank_methods(
     [rad/m], permittivity ``eps`` and incidence angles ``theta_i`` [rad] (any shape, optional).
 
     Raises ValueError when no method supports the roughness."""
+    ranked, reports = _criteria_rank(roughness, k, eps, theta_i, methods)
+    ranked = _measured_correction(ranked, reports, roughness, k, eps, theta_i, methods)
+    ranked += [n for n in methods if reports[n].get("unsupported")]
+    return [(n, reports[n]) for n in ranked]
+
+
+def _criteria_rank(roughness, k, eps, theta_i, methods) -> tuple[list[str], dict]:
+    """Supported methods ranked by their validity criteria alone, and every report."""
     reports = {n: _report(n, roughness, k, eps, theta_i) for n in methods}
     supported = [n for n in methods if not reports[n].get("unsupported")]
     if not supported:
@@ -114,18 +124,22 @@ def rank_methods(
             return (0, 0.0, 0, order[n])
         return (1, r.get("excess", math.inf), len(r.get("reasons", [])), order[n])
 
-    ranked = sorted(supported, key=key)
-    ranked = _measured_correction(ranked, reports, roughness, k, eps, methods)
-    ranked += [n for n in methods if reports[n].get("unsupported")]
-    return [(n, reports[n]) for n in ranked]
+    return sorted(supported, key=key), reports
 
 
-def _measured_correction(ranked, reports, roughness, k, eps, methods) -> list[str]:
+def _measured_correction(ranked, reports, roughness, k, eps, theta_i, methods) -> list[str]:
     """The criteria's ranking corrected by the measured map errors (module docstring)."""
-    from .measured import TOL_DB, measured_errors
+    from .measured import TOL_DB, cell_roughness, measured_errors
 
     meas = measured_errors(roughness, k, eps)
     if meas is None or not ranked:
+        return ranked
+    # the cell speaks for this roughness only if the criteria put both in the same regime
+    center, center_reports = _criteria_rank(
+        cell_roughness(roughness, k, meas["cell"]), k, eps, theta_i, methods
+    )
+    first = ranked[0]
+    if center[:1] != [first] or center_reports[first]["valid"] != reports[first]["valid"]:
         return ranked
     err = {n: meas["errors"].get(n, math.nan) for n in ranked}
     for n in ranked:
@@ -139,7 +153,6 @@ def _measured_correction(ranked, reports, roughness, k, eps, methods) -> list[st
         worst = float(np.max(r.get("angle_excess", math.inf)))
         return worst <= r.get("roughness_excess", 0.0) + 1e-9
 
-    first = ranked[0]
     good = [n for n in methods if n in err and err[n] <= TOL_DB and angles_ok(n)]
     picked_by = "criteria"
     if good and not err[first] <= TOL_DB:
