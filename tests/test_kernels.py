@@ -129,7 +129,9 @@ def test_spm_bistatic_same_with_and_without_kernels(monkeypatch):
 
 
 # ----------------------------------------------------------------------------- GO
-@pytest.mark.parametrize("shadowing", [False, "smith", "separable", "correlated"])
+@pytest.mark.parametrize(
+    "shadowing", [False, "smith", "separable", "correlated", "direction-correlated"]
+)
 @pytest.mark.parametrize("eps", ["pec", 17 + 2j, -30 + 5j])
 def test_go_kernel_matches_numpy_reference(eps, shadowing, numpy_path):
     from emscatter.kernels.go import go_sigma0

@@ -154,7 +154,9 @@ def test_go_equals_cook_torrance_beckmann(shadow, ly):
     ti, ts = rng.uniform(0, 1.5, n), rng.uniform(0, 1.5, n)
     pi_, ps = rng.uniform(0, 2 * math.pi, n), rng.uniform(0, 2 * math.pi, n)
     for eps in (17 + 2j, (0.2 + 3j) ** 2, "pec"):
-        res = go.bistatic(rough, eps, K0, ti, ts, ps, pi_, shadowing=shadow)
+        # Cook–Torrance's separable Smith G (Walter et al. 2007), as Mitsuba
+        mode = "separable" if shadow else False
+        res = go.bistatic(rough, eps, K0, ti, ts, ps, pi_, shadowing=mode)
         brdf = res.unpolarized() / (4 * math.pi * np.cos(ti) * np.cos(ts))
         ref = _cook_torrance(eps, ti, pi_, ts, ps, ax, ay, shadow)
         np.testing.assert_allclose(brdf, ref, rtol=1e-10, atol=1e-300)
@@ -454,10 +456,24 @@ def test_go_backscatter_monostatic_shadowing(m2):
     # issue 7: −0.75 dB at m² = 0.5, 70° between the two
     if m2 == 0.5:
         assert 10 * math.log10(sep.hh[4] / res.hh[4]) == pytest.approx(-0.75, abs=0.05)
-    # off backscatter the default is the separable product (Mitsuba's form)
-    near = go.bistatic(rough, 6 + 1j, K0, th[4], th[4] - 0.01, math.pi)
-    far = go.bistatic(rough, 6 + 1j, K0, th[4], th[4] - 0.01, math.pi, shadowing="separable")
-    assert near.hh == pytest.approx(far.hh, rel=1e-12)
+    # the default is continuous (BOARD, lead: no one-point step at retro-reflection): next to
+    # backscatter it tends to the monostatic value, while "smith" keeps the separable product
+    # there; off the plane it is 1/(1 + max Λ + λ(ψ) min Λ), λ(ψ) = 4.41ψ/(4.41ψ + 1)
+    # (Ginneken et al. 1998; Heitz 2014 §6), ψ the azimuth between wi and wo
+    for d in (1e-3, 1e-5):
+        near = go.bistatic(rough, 6 + 1j, K0, th[4], th[4] - d, math.pi)
+        bare = go.bistatic(rough, 6 + 1j, K0, th[4], th[4] - d, math.pi, shadowing=False)
+        assert near.hh / bare.hh == pytest.approx(1 / (1 + lam[4]), rel=10 * d)
+        step = go.bistatic(rough, 6 + 1j, K0, th[4], th[4] - d, math.pi, shadowing="smith")
+        assert step.hh / bare.hh == pytest.approx(1 / (1 + lam[4]) ** 2, rel=10 * d)
+    ti, ts, dphi = 0.6, 0.9, 2.2  # scattered azimuth φs − φi; ψ = π − Δφ
+    bare = go.bistatic(rough, 6 + 1j, K0, ti, ts, dphi, shadowing=False).hh
+    got = go.bistatic(rough, 6 + 1j, K0, ti, ts, dphi).hh
+    s2 = m2 / 2
+    li, ls = (kc.smith_lambda(1 / (math.tan(t) * math.sqrt(2 * s2))) for t in (ti, ts))
+    psi = math.pi - dphi
+    corr = 4.41 * psi / (4.41 * psi + 1)
+    assert got == pytest.approx(bare / (1 + max(li, ls) + corr * min(li, ls)), rel=1e-12)
     # 1-D profiles: the same monostatic factor
     prof = GaussianCorrelation(sigma, 2 * sigma / math.sqrt(m2), dimension=1)
     a = go.bistatic(prof, 6 + 1j, K0, th, th, math.pi).hh

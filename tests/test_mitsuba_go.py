@@ -69,7 +69,7 @@ def _mitsuba_eval(bsdf_dict: dict, ti, pi_, to, po) -> np.ndarray:
 
 
 def _ours(rough, eps, ti, pi_, to, po) -> np.ndarray:
-    res = go.bistatic(rough, eps, K0, ti, to, po, pi_, shadowing=True)
+    res = go.bistatic(rough, eps, K0, ti, to, po, pi_, shadowing="separable")  # Mitsuba's form
     # f_r · cosθo = σ⁰_unpolarized / (4π cosθi)
     return res.unpolarized() / (4 * math.pi * np.cos(ti))
 

@@ -30,7 +30,7 @@ def test_auto_leaves_spm_for_rough_algebraic_spectra(cls):
     the wave sees (|K| ≤ 2k) the Kirchhoff methods are ranked on their real excess."""
     rough = cls(3.0 / K, 20.0 / K)
     ranked = select.rank_methods(rough, K)
-    assert ranked[0][0] in ("po", "go")
+    assert ranked[0][0] in ("po", "go", "iem")
     assert all(math.isfinite(r["excess"]) for _, r in ranked)
 
 

@@ -1,12 +1,16 @@
 """Validity maps: the auto selector against the method of moments, and MoM vs SPM2 emissivity.
 
-The committed maps (validation/validity_maps/, made by ``emscatter validate --full``) are read
-back; small live cells and the emissivity comparison are computed here (tiny MoM runs).
+The committed maps (validation/validity_maps/, made by ``emscatter validate --full``: Gaussian
+and exponential 1-D profiles, PEC and ε = 3, kσ ∈ [0.05, 3] × kℓ ∈ [0.5, 20], θi = 20°) are
+read back — both their tables and their stored MoM references, re-evaluated here with the
+current models; small live cells (tiny MoM runs) cover every correlation × medium.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
+import math
 import warnings
 from pathlib import Path
 
@@ -16,11 +20,7 @@ import pytest
 from emscatter import validity_maps as vm
 
 MAPS = Path(__file__).resolve().parents[1] / "validation" / "validity_maps"
-PEC_CSV = MAPS / "validity_pec.csv"
-
-
-def _read(path: Path) -> list[dict]:
-    return vm.read_map(path)
+PUBLISHED = {vm.tag_of(c): c for c in vm.PUBLISHED}
 
 
 # --------------------------------------------------------------------------- metric
@@ -56,6 +56,8 @@ def test_selector_failure_detection():
     assert vm.selector_failures(rows("spm1", {"spm1": 3.0, "go": 0.5, "po": 2.0}))
     assert not vm.selector_failures(rows("go", {"spm1": 3.0, "go": 0.5, "po": 2.0}))
     assert not vm.selector_failures(rows("po", {"spm1": 3.0, "go": 1.5, "po": 2.0}))
+    # a diagnostic row (GO on the grid's slope) is not a candidate of auto
+    assert not vm.selector_failures(rows("po", {"spm1": 3.0, "po": 1.5, "go_surface": 0.5}))
 
 
 def test_config_rejects_bad_values():
@@ -65,34 +67,56 @@ def test_config_rejects_bad_values():
         dataclasses.replace(vm.TINY, k_sigma=(0.1, -1.0))
     with pytest.raises(ValueError, match="theta_i_deg"):
         dataclasses.replace(vm.TINY, theta_i_deg=75.0)
+    with pytest.raises(ValueError, match="correlation"):
+        dataclasses.replace(vm.TINY, correlation="fbm")
 
 
-# --------------------------------------------------------------------------- committed map
-PUBLISHED = {"pec": vm.FULL, "eps3+0j": vm.FULL_DIELECTRIC}
-
-
+# --------------------------------------------------------------------------- committed maps
 def _committed(tag: str) -> list[dict]:
     path = MAPS / f"validity_{tag}.csv"
     if not path.exists():
         pytest.fail(f"{path} missing: run `emscatter validate --full --out {MAPS}`")
-    return _read(path)
+    return vm.read_map(path)
 
 
-@pytest.fixture(scope="module")
-def committed():
-    return _committed("pec")
+def test_committed_maps_auto_within_1dB_and_current():
+    """Issue 7: where any of auto's candidates is within 1 dB of the MoM, auto is within
+    1 dB (both polarizations) — Gaussian and exponential, PEC and dielectric. Each committed
+    table is today's: auto's choice in every cell (criteria + the installed measured table),
+    the installed table equals these maps' errors, and sample cells re-evaluated from the
+    stored MoM references give the committed errors (rewrite everything with
+    ``vm.reselect_all`` whenever a model or criterion changes)."""
+    from emscatter.solvers import measured
+    from emscatter.validation.measured_table import measured_maps
 
-
-@pytest.mark.parametrize("tag", sorted(PUBLISHED))
-def test_committed_map_auto_never_loses_to_a_method_within_1dB(tag):
-    assert vm.selector_failures(_committed(tag)) == []
-
-
-@pytest.mark.parametrize("tag", sorted(PUBLISHED))
-def test_committed_map_auto_column_is_the_current_selector(tag):
-    # the map must be regenerated (or `vm.reselect`) whenever a VALIDITY criterion changes
-    for r in _committed(tag):
-        assert r["auto"] == vm.auto_choice(r["k_sigma"], r["k_l"], PUBLISHED[tag]), r
+    table = {m["tag"]: m for m in measured.load_table()["maps"]}
+    for tag, cfg in PUBLISHED.items():
+        committed = _committed(tag)
+        assert vm.selector_failures(committed) == [], tag
+        autos = {(r["k_sigma"], r["k_l"]): r["auto"] for r in committed}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for (ks, kl), auto in autos.items():
+                assert vm.auto_choice(ks, kl, cfg) == auto, (tag, ks, kl)
+        mine = measured_maps([(cfg, committed)])[0]
+        for name, z in mine["errors"].items():
+            a = np.array(z, dtype=float)
+            b = np.array(table[tag]["errors"][name], dtype=float)
+            np.testing.assert_allclose(a, b, atol=2e-3, err_msg=f"{tag} {name}")
+        store = MAPS / f"mom_{tag}.json"
+        if not store.exists():
+            pytest.fail(f"{store} missing: run `emscatter validate --full --out {MAPS}`")
+        cells = [c for c in json.loads(store.read_text())["cells"] if c["status"] == "ok"]
+        old = {(r["k_sigma"], r["k_l"], r["method"], r["pol"]): r for r in committed}
+        for ref in (cells[0], cells[len(cells) // 2]):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                rows = vm.evaluate_cell(ref, cfg)
+            for r in rows:
+                o = old[(r["k_sigma"], r["k_l"], r["method"], r["pol"])]
+                a, b = r["error_dB"], o["error_dB"]
+                ok = (math.isnan(a) and math.isnan(b)) or a == pytest.approx(b, abs=0.01)
+                assert ok and r["valid"] == o["valid"], (tag, r, o)
 
 
 @pytest.mark.parametrize("tag", sorted(PUBLISHED))
@@ -100,25 +124,25 @@ def test_committed_map_has_every_cell_and_method(tag):
     cfg, rows = PUBLISHED[tag], _committed(tag)
     cells = {(r["k_sigma"], r["k_l"]) for r in rows}
     assert len(cells) == len(cfg.k_sigma) * len(cfg.k_l)
-    assert len(rows) == len(cells) * len(vm.METHODS) * 2
     assert {r["realizations"] for r in rows if r["status"] == "ok"} == {cfg.realizations}
     computed = [r for r in rows if r["status"] == "ok"]
-    assert len(computed) > 0.6 * len(rows)
+    assert len(computed) > 0.5 * len(rows)
 
 
-def test_committed_map_spm1_holds_at_small_k_sigma(committed):
+def test_committed_map_spm1_holds_at_small_k_sigma():
     # Thorsos & Jackson (1989, JASA 86, 261): first-order SPM accurate for kσ ≪ 1.
-    small = [r for r in committed if r["method"] == "spm1" and r["k_sigma"] <= 0.1]
-    assert small
-    for r in small:
-        assert r["error_dB"] < 1.0, r
+    for tag in ("pec", "exp_pec"):
+        small = [r for r in _committed(tag) if r["method"] == "spm1" and r["k_sigma"] <= 0.1]
+        assert small
+        for r in small:
+            assert r["error_dB"] < 1.0, r
 
 
-def test_committed_map_po_holds_in_thorsos_regime(committed):
-    # Thorsos (1988, JASA 83, 78): Kirchhoff accurate for kℓ ≳ 6 at moderate kσ.
+def test_committed_map_po_holds_in_thorsos_regime():
+    # Thorsos (1988, JASA 83, 78): Kirchhoff accurate for kℓ ≳ 6 at moderate kσ (Gaussian).
     rows = [
         r
-        for r in committed
+        for r in _committed("pec")
         if r["method"] == "po" and r["k_l"] >= 10 and 0.3 <= r["k_sigma"] <= 1.6
     ]
     assert rows
@@ -127,40 +151,53 @@ def test_committed_map_po_holds_in_thorsos_regime(committed):
 
 
 # --------------------------------------------------------------------------- live cells
-@pytest.fixture(scope="module")
-def live(tmp_path_factory):
-    out = tmp_path_factory.mktemp("validity")
+LIVE = {
+    # (correlation, eps): the cells — one where SPM holds, one where Kirchhoff does
+    ("gaussian", "pec"): ((0.1, 8.0), (1.0, 8.0)),
+    ("gaussian", 3.0): ((1.0, 8.0),),
+    ("exponential", "pec"): ((0.1, 8.0), (1.0, 8.0)),
+    ("exponential", 3.0): ((0.1, 8.0),),
+}
+
+
+@pytest.mark.parametrize(("corr", "eps"), list(LIVE), ids=lambda v: str(v))
+def test_live_cells_auto_within_1dB_where_any_model_is(tmp_path, corr, eps):
+    """Tiny live MoM runs (12 realizations, 16 λ) for every correlation × medium: where any
+    model is within 1 dB, auto is; SPM holds and is picked at kσ = 0.1, auto leaves it at
+    kσ = 1 (3+ dB off); the files are written (PNGs for the Gaussian PEC map only)."""
+    cells = LIVE[(corr, eps)]
+    ks = tuple(sorted({c[0] for c in cells}))
+    kl = tuple(sorted({c[1] for c in cells}))
     cfg = dataclasses.replace(
-        vm.TINY, k_sigma=(0.1, 1.0), k_l=(10.0,), realizations=12, min_length_wl=16.0
+        vm.TINY, k_sigma=ks, k_l=kl, realizations=12, eps=eps, correlation=corr
     )
-    paths = vm.run_validation(out, config=cfg, progress=False)
-    return cfg, paths
-
-
-def test_run_validation_writes_files(live):
-    cfg, paths = live
+    plots = (corr, eps) == ("gaussian", "pec")  # one map's PNGs (the slow part)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        paths = vm.run_validation(tmp_path, config=cfg, progress=False, plots=plots)
+    tag = vm.tag_of(cfg)
+    rows = [
+        r
+        for r in vm.read_map(tmp_path / f"validity_{tag}.csv")
+        if (r["k_sigma"], r["k_l"]) in cells
+    ]
+    assert vm.selector_failures(rows) == [], (corr, eps)
+    by = {(r["k_sigma"], r["method"], r["pol"]): r for r in rows}
+    for p in "hv":
+        if (0.1, "spm1", p) in by:
+            assert by[(0.1, "spm1", p)]["auto"] == "spm1", (corr, eps)
+            assert by[(0.1, "spm1", p)]["error_dB"] < 1.0, (corr, eps, p)
+        if (1.0, "spm1", p) in by:
+            assert by[(1.0, "spm1", p)]["error_dB"] > 3.0, (corr, eps, p)
+            assert by[(1.0, "spm1", p)]["auto"] != "spm1", (corr, eps)
     names = {p.name for p in paths}
-    assert {"validity_pec.csv", "validity_pec.json", "validity_pec_h.png"} <= names
+    assert {f"validity_{tag}.csv", f"validity_{tag}.json", f"mom_{tag}.json"} <= names
     for p in paths:
         assert p.stat().st_size > 0
-    rows = _read(next(p for p in paths if p.suffix == ".csv"))
-    assert len(rows) == len(cfg.k_sigma) * len(cfg.k_l) * len(vm.METHODS) * 2
-    with open(next(p for p in paths if p.name.endswith("_h.png")), "rb") as fh:
-        assert fh.read(8) == b"\x89PNG\r\n\x1a\n"
-
-
-def test_live_cells_auto_choice_is_within_1dB(live):
-    cfg, paths = live
-    rows = _read(next(p for p in paths if p.suffix == ".csv"))
-    assert vm.selector_failures(rows) == []
-    by = {(r["k_sigma"], r["method"], r["pol"]): r for r in rows}
-    # kσ = 0.1: auto → SPM; kσ = 1, kℓ = 10: auto → PO (SPM invalid, 10+ dB off)
-    assert by[(0.1, "spm1", "h")]["auto"] == "spm1"
-    assert by[(1.0, "po", "h")]["auto"] == "po"
-    for p in "hv":
-        assert by[(0.1, "spm1", p)]["error_dB"] < 1.0
-        assert by[(1.0, "po", p)]["error_dB"] < 1.0
-        assert by[(1.0, "spm1", p)]["error_dB"] > 3.0
+    if plots:
+        assert {f"validity_{tag}_h.png", f"validity_{tag}_v.png"} <= names
+        with open(tmp_path / f"validity_{tag}_h.png", "rb") as fh:
+            assert fh.read(8) == b"\x89PNG\r\n\x1a\n"
 
 
 # --------------------------------------------------------------------------- emissivity

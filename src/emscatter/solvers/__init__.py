@@ -36,7 +36,7 @@ _REGISTRY: dict[str, str] = {
 }
 
 #: Methods that ``method="auto"`` may choose, cheapest first.
-AUTO_ORDER: tuple[str, ...] = ("spm", "go", "po")
+AUTO_ORDER: tuple[str, ...] = ("spm", "go", "po", "iem")
 
 
 def register(name: str, module: str) -> None:

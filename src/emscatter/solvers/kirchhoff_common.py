@@ -62,6 +62,7 @@ __all__ = [
     "tangent_plane_checks",
     "illuminated_fraction",
     "shadowing_angle_check",
+    "grazing_parameter",
     "validity_report",
 ]
 
@@ -389,18 +390,21 @@ def _a(cos_t, sin_t, s2_dir):
     return np.where(big, cos_t / np.where(big, den, 1.0), 1e300)
 
 
-def shadowing_factor(g: Local, sx: float, sy: float, mode="smith") -> np.ndarray:
-    """Shadowing/masking factor [-].
+def shadowing_factor(g: Local, sx: float, sy: float, mode="direction-correlated") -> np.ndarray:
+    """Shadowing/masking factor [-], with Smith's ``Λ(a)`` (Smith 1967) per direction.
 
-    ``"smith"`` (default): separable ``G1(θi) G1(θs)`` with Smith's ``G1 = 1/(1+Λ(a))``
-    (Smith 1967; the form of Mitsuba 3's microfacet models, Walter et al. 2007 eqs. 23–27),
-    except in the exact backscatter direction, where shadowing and masking are one event and
-    the monostatic ``1/(1+Λ(a_i))`` applies (Sancer 1969; Bourlier, Berginc & Saillard 2002,
-    IEEE TAP 50, 312; SMRT's ``geometrical_optics_backscatter``); ``"separable"``: the
-    product everywhere (the previous default); ``"correlated"``: height-correlated
-    ``1/(1+Λ(a_i)+Λ(a_s))`` (Sancer 1969, IEEE TAP 17, 577; Heitz 2014). The slope variance
-    along each direction's azimuth is ``sx cos²φ + sy sin²φ`` (anisotropic Gaussian slopes);
-    for a profile it is ``sx``.
+    ``"direction-correlated"`` (default): direction-and-height-correlated Smith form
+    ``1/(1 + max(Λi, Λs) + λ(ψ) min(Λi, Λs))``, ``λ(ψ) = 4.41ψ/(4.41ψ + 1)`` (Ginneken,
+    Stavridi & Koenderink 1998, Appl. Opt. 37, 130; Heitz 2014, JCGT 3(2) §6), ψ the azimuth
+    between the directions to the source and to the receiver (renderer frame ``wi``, ``wo``):
+    continuous, the monostatic ``1/(1+Λ)`` at backscatter (ψ = 0: one event, not two;
+    Sancer 1969; SMRT's ``geometrical_optics_backscatter``), near height-correlated at ψ = π.
+    ``"separable"``: ``G1(θi) G1(θs)`` everywhere (Mitsuba 3's microfacet models, Walter et al.
+    2007 eqs. 23–27); ``"smith"``: separable, monostatic only in the exact backscatter
+    direction (the previous default: a one-point step); ``"correlated"``: height-correlated
+    ``1/(1+Λi+Λs)`` (Sancer 1969, IEEE TAP 17, 577; Heitz 2014). The slope variance along each
+    direction's azimuth is ``sx cos²φ + sy sin²φ`` (anisotropic Gaussian slopes); for a profile
+    it is ``sx``.
     """
     if sy > 0 and sx != sy:
         s2i = sx * np.cos(g.phi_i) ** 2 + sy * np.sin(g.phi_i) ** 2
@@ -409,6 +413,10 @@ def shadowing_factor(g: Local, sx: float, sy: float, mode="smith") -> np.ndarray
         s2i = s2s = sx
     lam_i = np.broadcast_to(smith_lambda(_a(g.ci, g.si, s2i)), (g.n,))
     lam_s = np.broadcast_to(smith_lambda(_a(g.cs, g.ss, s2s)), (g.n,))
+    if mode == "direction-correlated":
+        psi = np.arccos(np.clip(-g.cd, -1.0, 1.0))  # φs − (φi + π), folded to [0, π]
+        corr = 4.41 * psi / (4.41 * psi + 1.0)
+        return 1.0 / (1.0 + np.maximum(lam_i, lam_s) + corr * np.minimum(lam_i, lam_s))
     if mode == "correlated":
         return 1.0 / (1.0 + lam_i + lam_s)
     out = (1.0 / (1.0 + lam_i)) * (1.0 / (1.0 + lam_s))
@@ -431,19 +439,22 @@ def check_flag(name: str, value) -> bool:
     return bool(value)
 
 
-SHADOWING_CHOICES = ("smith", "separable", "correlated", False)
+SHADOWING_CHOICES = ("direction-correlated", "separable", "correlated", "smith", False)
 
 
 def check_shadowing(shadowing_opt) -> str | None:
-    if shadowing_opt is True or shadowing_opt == "smith":
-        return "smith"
+    """The shadowing mode (:func:`shadowing_factor`): True → ``"direction-correlated"``."""
+    if shadowing_opt is True or shadowing_opt == "direction-correlated":
+        return "direction-correlated"
     if shadowing_opt is False or shadowing_opt is None:
         return None
-    if shadowing_opt in ("correlated", "separable"):
+    if shadowing_opt in ("correlated", "separable", "smith"):
         return shadowing_opt
     raise ValueError(
-        "shadowing must be True/'smith' (separable, monostatic at backscatter), 'separable', "
-        f"'correlated', or False/None, got {shadowing_opt!r}"
+        "shadowing must be True/'direction-correlated' (continuous, monostatic at "
+        "backscatter), 'separable' (Mitsuba's form), 'correlated' (height-correlated), "
+        f"'smith' (separable, monostatic only at exact backscatter) or False/None, "
+        f"got {shadowing_opt!r}"
     )
 
 
@@ -483,6 +494,13 @@ def illuminated_fraction(theta_i, s2: float) -> np.ndarray:
     ti = np.asarray(theta_i, dtype=float)
     s, c = np.sin(ti), np.cos(ti)
     return 1.0 / (1.0 + smith_lambda(_a(c, s, s2)))
+
+
+def grazing_parameter(theta_i, s2: float) -> np.ndarray:
+    """Smith's ``a = cotθi/(√2 s)`` [-] (∞ at normal incidence) for the per-direction slope
+    variance ``s2 = s²``."""
+    ti = np.asarray(theta_i, dtype=float)
+    return _a(np.cos(ti), np.sin(ti), s2)
 
 
 def shadowing_angle_check(name, theta_i, sx, sy, limit, what, source):

@@ -11,8 +11,11 @@ per-direction variances ``sx = ⟨ζx²⟩``, ``sy = ⟨ζy²⟩`` (anisotropic 
 
     p(ζx, ζy) = exp(−ζx²/(2 sx) − ζy²/(2 sy)) / (2π √(sx sy))
 
-and ``S`` an optional shadowing factor (default: Smith's separable ``G1(θi) G1(θs)``, and in
-the exact backscatter direction the monostatic ``1/(1+Λ(θi))`` — one event, not two).
+and ``S`` an optional shadowing factor (default: the direction-and-height-correlated Smith
+form ``1/(1 + max(Λi, Λs) + λ(ψ) min(Λi, Λs))``, Ginneken et al. 1998 / Heitz 2014 §6 —
+continuous in every direction and the monostatic ``1/(1+Λ(θi))`` at backscatter, one event
+not two; ``"separable"`` is Mitsuba's ``G1(θi) G1(θs)``;
+:func:`.kirchhoff_common.shadowing_factor`).
 Written with the half vector ``ĥ = q/|q|``,
 ``p / cos⁴θh = D(ĥ)`` is the Beckmann distribution of total mean-square slope
 ``m² = sx + sy`` (``α = m`` in Mitsuba 3; the seed's eq. 2.14 with ``m = 2σ/T``, eq. 3.1), so
@@ -206,9 +209,11 @@ def bistatic(
     eps : relative permittivity (complex, ``Im ε ≥ 0``, broadcasts with the angles) or "pec".
     k : free-space wavenumber [rad/m] (enters only the coherent part and validity).
     theta_i, theta_s, phi_s, phi_i : angles [rad], numpy-broadcast.
-    shadowing : True/"smith" (separable Smith as Mitsuba 3, monostatic ``1/(1+Λ)`` in the
-        exact backscatter direction), "separable" (the product everywhere), "correlated"
-        (height-correlated), or False (:func:`.kirchhoff_common.shadowing_factor`).
+    shadowing : True/"direction-correlated" (default: continuous, ``1/(1+Λ)`` at
+        backscatter), "separable" (``G1(θi) G1(θs)``, Mitsuba 3's roughconductor),
+        "correlated" (height-correlated), "smith" (separable, monostatic only at the exact
+        backscatter point; the previous default) or False
+        (:func:`.kirchhoff_common.shadowing_factor`).
     k_max : spectral cutoff [rad/m] of the slope variance for correlations whose slope
         variance is infinite (exponential, power law); default ``2k``, the spectrum the wave
         sees (:mod:`emscatter.solvers.validity`). Ignored for a Gaussian unless given.

@@ -47,6 +47,7 @@ import numpy as np
 from scipy import special
 
 from ..conventions import check_angle, check_positive
+from ..fresnel import check_eps, is_pec
 from ..kernels import dispatch
 from ..scattering import Scattering
 from ..spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
@@ -56,11 +57,18 @@ from .kirchhoff_common import (
     coherent_local,
     fresnel_factors,
     geometry,
-    shadowing_angle_check,
+    grazing_parameter,
     tangent_plane_checks,
     workers_for,
 )
-from .validity import build_report, check_solver_options, upper, wave_slope_variances
+from .validity import (
+    angle_lower,
+    build_report,
+    check_solver_options,
+    lower,
+    upper,
+    wave_slope_variances,
+)
 
 __all__ = ["bistatic", "check_validity", "VALIDITY", "series_sum", "log_nfold"]
 
@@ -72,22 +80,72 @@ __all__ = ["bistatic", "check_validity", "VALIDITY", "series_sum", "log_nfold"]
 #: 1.3–1.8 dB at m ≈ 0.65. Outside every method's range, ``method="auto"`` takes the method
 #: whose criteria are exceeded by the smallest factor (report ``"excess"``), which is PO in
 #: those cells rather than SPM at kσ > 0.3 (1.3–17 dB off).
-#: Per angle (with ``theta_i``): Kirchhoff without shadowing needs the shadowed part of the
-#: surface small — Smith's illuminated fraction ``G1(θi) ≥ 0.9`` (Smith 1967; Thorsos 1988
-#: JASA 83, 78, on the Kirchhoff approximation near grazing). Slopes of non-differentiable
-#: spectra are those of the spectrum below ``2k`` (:mod:`.validity`).
+#: ``smoothness``: the tangent plane needs a locally smooth (differentiable) surface; the
+#: exponential maps (validation/validity_maps, exp_*) find PO 1.1–2.2 dB off in v at every
+#: kℓ ≤ 20 and kσ ≤ 0.8 (its local-specular polarization factor is wrong at the large angles
+#: the algebraic tail scatters into), where the IEM is within 1 dB; ratio 1/H (2 for the
+#: exponential) ranks PO as a fallback. The check applies to conductors (PEC, ``|ε| ≥ 100``,
+#: or ``eps`` not given): over ε = 3 the same exponential surfaces give PO within 0.6–0.9 dB
+#: at kσ ≈ 0.8 and kℓ ≥ 3 (validation/validity_maps, exp_eps3+0j) — the TM polarization factor
+#: that fails is the conductor's.
+#: Per angle (with ``theta_i``), ``grazing``: Kirchhoff without shadowing needs the grazing
+#: angle large against the facet tilts, ``a = cotθi/(√2 s) ≥ a_min`` (``s`` the larger
+#: per-direction rms slope; Smith's shadowing parameter, Smith 1967; Thorsos 1988 JASA 83,
+#: 78, on the Kirchhoff approximation toward grazing). The limits are measured
+#: (validation/angular_validity/energy_scan_summary.md, 2592 (roughness, ε, θi) cases): PO's
+#: emissivity leaves [0, 1] by more than 0.01 for a conductor where ``a < 4.1`` (e down to
+#: −0.23 at 75°, a = 0.8, where Smith's illuminated fraction is still 0.95: not shadowing
+#: alone), for a dielectric (ε = 3, 17 + 2i) only where ``a < 0.75``: ``a_min`` = 4.5 for a
+#: perfect conductor or ``|ε| ≥ 100`` (or when ``eps`` is not given), 1.0 otherwise.
+#: Slopes of non-differentiable spectra are those of the spectrum below ``2k``
+#: (:mod:`.validity`).
 VALIDITY = {
     "k_l_min": 4.0,
     "curvature_factor": 2.76,
     "rms_slope_max": 0.4,
-    "illuminated_min": 0.9,
+    "grazing_a_min": 4.5,
+    "grazing_a_min_dielectric": 1.0,
+    "conductor_abs_eps": 100.0,
+    "smoothness_min": 1.0,
 }
+
+_SRC_H = (
+    "tangent plane on a locally smooth surface (Ulaby, Moore & Fung 1982 §12-4); validity maps: "
+    "PO 1.1–2.2 dB off (v) on exponential profiles at every kℓ ≤ 20"
+)
+
+
+def _conductor_like(eps) -> bool:
+    """True for a perfect conductor, ``|ε| ≥ 100`` anywhere, or an unknown medium."""
+    if eps is None:
+        return True
+    eps = check_eps(eps)
+    if is_pec(eps):
+        return True
+    return bool(np.any(np.abs(np.asarray(eps)) >= VALIDITY["conductor_abs_eps"]))
+
+
+def smoothness_exponent(rough) -> float:
+    """``H`` of ``1 − ρ(r) ∝ r^{2H}`` at small lags: 1 for a differentiable correlation
+    (finite slope variance: Gaussian, band-limited), ½ for the exponential, the Hurst
+    exponent for the power law."""
+    if rough._mss_closed() is not None:
+        return 1.0
+    if isinstance(rough, PowerLawCorrelation):
+        return float(rough.hurst)
+    if isinstance(rough, ExponentialCorrelation):
+        return 0.5
+    return 1.0
+
 
 #: Options of :func:`bistatic` (what ``check_validity`` accepts).
 OPTIONS = ("rtol", "max_terms", "threads", "coherent")
 
 _SRC_M = "validity maps (validation/validity_maps); Ulaby, Moore & Fung 1982 Table 12.2"
-_SRC_SH = "Smith 1967; Thorsos 1988 JASA 83 78 (Kirchhoff without shadowing near grazing)"
+_SRC_SH = (
+    "Smith 1967; Thorsos 1988 JASA 83 78 (Kirchhoff toward grazing); limit from "
+    "validation/angular_validity/energy_scan_summary.md"
+)
 
 _LOG_2PI = math.log(2 * math.pi)
 _BLOCK = 1 << 15  # geometries per series block (one thread each)
@@ -95,8 +153,8 @@ _BLOCK = 1 << 15  # geometries per series block (one thread each)
 
 def check_validity(roughness, k: float, *, eps=None, theta_i=None, **solver_options) -> dict:
     """Validity report (BOARD interface 1, :mod:`.validity`) for ``k`` [rad/m]; criteria in
-    :data:`VALIDITY`. ``theta_i`` [rad] adds the per-angle shadowing check; ``eps`` is
-    accepted for the common signature (the limits do not depend on it)."""
+    :data:`VALIDITY`. ``theta_i`` [rad] adds the per-angle grazing check; ``eps`` selects the
+    conductor or dielectric limits (grazing, smoothness; a conductor when not given)."""
     check_solver_options("po", solver_options, OPTIONS)
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
@@ -107,13 +165,24 @@ def check_validity(roughness, k: float, *, eps=None, theta_i=None, **solver_opti
         *tangent_plane_checks(rough, k, v),
         upper("rms_slope", m, v["rms_slope_max"], "total rms slope m", _SRC_M),
     ]
+    if _conductor_like(eps):
+        checks.append(
+            lower(
+                "smoothness",
+                smoothness_exponent(rough),
+                v["smoothness_min"],
+                "exponent H of 1 − ρ(r) ∝ r^{2H} (1: differentiable; conductors)",
+                _SRC_H,
+            )
+        )
     angle_checks = []
     ti = None
     if theta_i is not None:
         ti = check_angle("theta_i", theta_i)
+        a_min = v["grazing_a_min"] if _conductor_like(eps) else v["grazing_a_min_dielectric"]
         angle_checks.append(
-            shadowing_angle_check("illuminated", ti, sx, sy, v["illuminated_min"],
-                                  "Smith's illuminated fraction G1(θi)", _SRC_SH)
+            angle_lower("grazing", grazing_parameter(ti, max(sx, sy)), a_min,
+                        "a = cotθi/(√2 s) (grazing angle against the facet tilts)", _SRC_SH)
         )  # fmt: skip
     return build_report(
         rough, k, checks, theta_i=ti, angle_checks=angle_checks, rms_slope=m, slope_cutoff=k_cut
@@ -125,6 +194,9 @@ def log_nfold(roughness):
     """``f(n, K) = log(w_n / L)`` for the scaled wavenumber ``K`` (``√((qxℓx)²+(qyℓy)²)``,
     or ``|qx|ℓ`` for a profile), ``L = ℓxℓy`` (2-D) or ``ℓ`` (1-D); ``n`` ≥ 1 (float ok)."""
     d = roughness.dimension
+    table = getattr(roughness, "log_nfold_table", None)
+    if table is not None:  # a roughness that tabulates its own n-fold spectra
+        return table()
     if isinstance(roughness, GaussianCorrelation):
         if d == 2:
             return lambda n, K: -math.log(4 * math.pi) - np.log(n) - K * K / (4 * n)
@@ -347,16 +419,18 @@ def _continuum_sum(lt, idx: np.ndarray, n0: np.ndarray, log_rtol: float):
     PO at kσ = 1e3 used to walk ~10⁴ terms per geometry). ``ok`` is False where the window
     does not reach the tolerance or would cross ``n = 1`` (those take the direct sum)."""
     n = n0.astype(float).copy()
+    d2 = np.full(n.shape, -1.0)
+    todo = np.arange(n.size)
     for _ in range(8):  # Newton on d lt/dn with central differences of step ≈ the width
-        h = np.sqrt(n)
-        f0 = lt(n[:, None], idx)[:, 0]
-        fp = lt((n + h)[:, None], idx)[:, 0]
-        fm = lt((n - h)[:, None], idx)[:, 0]
-        d1 = (fp - fm) / (2 * h)
-        d2 = np.minimum((fp - 2 * f0 + fm) / (h * h), -1e-300)
-        step = np.clip(-d1 / d2, -0.5 * n, 0.5 * n)
-        n = np.maximum(n + step, 2.0)
-        if np.all(np.abs(step) < 1e-3 * h):
+        nt = n[todo]
+        h = np.sqrt(nt)
+        f = lt(np.stack([nt, nt + h, nt - h], axis=1), idx[todo])
+        d1 = (f[:, 1] - f[:, 2]) / (2 * h)
+        d2[todo] = np.minimum((f[:, 1] - 2 * f[:, 0] + f[:, 2]) / (h * h), -1e-300)
+        step = np.clip(-d1 / d2[todo], -0.5 * nt, 0.5 * nt)
+        n[todo] = np.maximum(nt + step, 2.0)
+        todo = todo[np.abs(step) >= 1e-3 * h]
+        if not todo.size:
             break
     width = 1.0 / np.sqrt(-d2)
     L0 = lt(n[:, None], idx)[:, 0]

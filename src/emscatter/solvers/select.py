@@ -12,6 +12,19 @@ Outside every validity range the least-bad candidate is used and the caller's
 ``"ignore"``. Per-angle choices (e.g. an energy fallback) read each report's
 ``angle_valid`` / ``angle_excess``.
 
+**Measured correction** (:mod:`.measured`): for Gaussian and exponential roughness inside the
+validity maps' box (kσ ∈ [0.05, 3], kℓ ∈ [0.5, 20]) with a known medium class, the criteria's
+ranking is corrected by the maps' measured σ⁰ errors at the nearest cell — when the criteria
+put the cell's centre in the same regime (same first method, equally valid; so a limit
+between the roughness and the cell centre keeps its say): where the criteria's
+first method is measured more than 1 dB off while another candidate is measured within 1 dB
+and has no angle-specific failure (an angle check failing by more than its roughness
+checks), the cheapest such candidate goes first; where no method is valid and none is measured
+within 1 dB, the candidates without angle-specific failures are ordered by measured error
+(the maps are at θi = 20°; angle checks keep their say). Each report then
+carries ``measured_error_dB`` and the first one ``measured`` (map, cell) and ``picked_by``
+(``"criteria"`` or ``"measured"``).
+
 :func:`check_options` maps the solver options a caller passed to the method actually used:
 an option of that method is kept; an accuracy or execution knob that a closed-form method
 satisfies anyway (``threads``, ``rtol``, ``max_terms``) is dropped; ``shadowing=False`` is
@@ -26,6 +39,8 @@ import math
 import warnings
 from functools import lru_cache
 from typing import Literal
+
+import numpy as np
 
 from . import AUTO_ORDER, get
 
@@ -86,6 +101,14 @@ def rank_methods(
     [rad/m], permittivity ``eps`` and incidence angles ``theta_i`` [rad] (any shape, optional).
 
     Raises ValueError when no method supports the roughness."""
+    ranked, reports = _criteria_rank(roughness, k, eps, theta_i, methods)
+    ranked = _measured_correction(ranked, reports, roughness, k, eps, theta_i, methods)
+    ranked += [n for n in methods if reports[n].get("unsupported")]
+    return [(n, reports[n]) for n in ranked]
+
+
+def _criteria_rank(roughness, k, eps, theta_i, methods) -> tuple[list[str], dict]:
+    """Supported methods ranked by their validity criteria alone, and every report."""
     reports = {n: _report(n, roughness, k, eps, theta_i) for n in methods}
     supported = [n for n in methods if not reports[n].get("unsupported")]
     if not supported:
@@ -101,9 +124,52 @@ def rank_methods(
             return (0, 0.0, 0, order[n])
         return (1, r.get("excess", math.inf), len(r.get("reasons", [])), order[n])
 
-    ranked = sorted(supported, key=key)
-    ranked += [n for n in methods if reports[n].get("unsupported")]
-    return [(n, reports[n]) for n in ranked]
+    return sorted(supported, key=key), reports
+
+
+def _measured_correction(ranked, reports, roughness, k, eps, theta_i, methods) -> list[str]:
+    """The criteria's ranking corrected by the measured map errors (module docstring)."""
+    from .measured import TOL_DB, cell_roughness, measured_errors
+
+    meas = measured_errors(roughness, k, eps)
+    if meas is None or not ranked:
+        return ranked
+    # the cell speaks for this roughness only if the criteria put both in the same regime
+    center, center_reports = _criteria_rank(
+        cell_roughness(roughness, k, meas["cell"]), k, eps, theta_i, methods
+    )
+    first = ranked[0]
+    if center[:1] != [first] or center_reports[first]["valid"] != reports[first]["valid"]:
+        return ranked
+    err = {n: meas["errors"].get(n, math.nan) for n in ranked}
+    for n in ranked:
+        reports[n] = {**reports[n], "measured_error_dB": err[n]}
+
+    def angles_ok(n):  # no angle-specific failure (one worse than the roughness checks')
+        r = reports[n]
+        a = r.get("angle_valid")
+        if a is None or bool(np.all(a)):
+            return True
+        worst = float(np.max(r.get("angle_excess", math.inf)))
+        return worst <= r.get("roughness_excess", 0.0) + 1e-9
+
+    good = [n for n in methods if n in err and err[n] <= TOL_DB and angles_ok(n)]
+    picked_by = "criteria"
+    if good and not err[first] <= TOL_DB:
+        ranked = [good[0]] + [n for n in ranked if n != good[0]]
+        picked_by = "measured"
+    elif not good and not reports[first]["valid"]:
+        finite = [n for n in ranked if math.isfinite(err[n]) and angles_ok(n)]
+        finite.sort(key=lambda n: err[n])
+        if finite and finite[0] != first:
+            ranked = finite + [n for n in ranked if n not in finite]
+            picked_by = "measured"
+    reports[ranked[0]] = {
+        **reports[ranked[0]],
+        "measured": {"map": meas["map"], "cell": meas["cell"]},
+        "picked_by": picked_by,
+    }
+    return ranked
 
 
 def select_method(

@@ -60,7 +60,11 @@ def _segment_nodes(a: float, b: float, n: int, log: bool = False):
 def _spectral_scales(rough: Roughness) -> tuple[float, tuple[float, ...]]:
     """(support radius, interior breakpoints), both in units of 1/ℓ: beyond the support
     ``w`` is negligible (Gaussian: e^(−q²/4) < 1e-18; algebraic tails: relative mass
-    ≲ 1e-4 left out); the breakpoints resolve the peak of ``w`` at k_i⊥."""
+    ≲ 1e-4 left out); the breakpoints resolve the peak of ``w`` at k_i⊥. A roughness with a
+    ``spectral_support`` attribute (a band-limited spectrum) gives its own."""
+    own = getattr(rough, "spectral_support", None)
+    if own is not None:
+        return own
     if isinstance(rough, GaussianCorrelation):
         return 13.0, (1.5, 4.0)
     return 2.0e4, (1.0, 8.0, 64.0, 512.0)

@@ -208,9 +208,9 @@ def _isotropic_closed(rough: Roughness, k_max: float) -> tuple[float, float] | N
 
     s2, ell = rough.sigma**2, rough.length
     u = k_max * ell
-    if isinstance(rough, ExponentialCorrelation):
+    if type(rough) is ExponentialCorrelation:  # exact types: subclasses may change the spectrum
         h = 0.5
-    elif isinstance(rough, PowerLawCorrelation):
+    elif type(rough) is PowerLawCorrelation:
         h = float(rough.hurst)
     else:
         return None

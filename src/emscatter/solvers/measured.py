@@ -1,0 +1,117 @@
+"""Measured accuracy of auto's candidates: the validity maps as a lookup for ``method="auto"``.
+
+The validity criteria of each solver (``check_validity``) are limits from the literature and
+from the maps; near their edges, and where no method is valid, they cannot say which model is
+closest to the exact answer. The validity maps (validation/validity_maps: 1-D method of
+moments, θi = 20°, kσ ∈ [0.05, 3] × kℓ ∈ [0.5, 20], Gaussian and exponential correlation,
+perfect conductor and ε = 3) measure it. :func:`measured_errors` returns, for a roughness in
+that box, the measured σ⁰ error [dB] (larger of h and v; rms over 10° bins of θs ∈ [−60°, 60°])
+of every candidate at the nearest map cell, from the map of the same correlation and medium
+class (``"conductor"``: PEC, Re ε < 0 or ``|ε| ≥ 100``; ``"dielectric"`` otherwise).
+:func:`emscatter.solvers.select.rank_methods` uses it to correct the criteria's ranking
+(its docstring says how).
+
+The table is ``emscatter/solvers/data/measured_errors.json``, written from the maps by
+:func:`emscatter.validation.measured_table.write_measured` (the command is in
+validation/validity_maps/README.md). Outside the box, for other spectra (power law, band-limited,
+anisotropic) or media of unknown class the lookup returns ``None`` and the criteria decide.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "TABLE_PATH",
+    "TOL_DB",
+    "measured_errors",
+    "medium_class",
+    "load_table",
+    "cell_roughness",
+]
+
+TABLE_PATH = Path(__file__).with_name("data") / "measured_errors.json"
+#: A candidate is "within tolerance" where its measured error is at most this [dB].
+TOL_DB = 1.0
+
+
+@lru_cache(maxsize=1)
+def load_table(path: str | None = None) -> dict:
+    """The measured table (``{"maps": [...]}``); empty when the file is missing."""
+    p = Path(path) if path else TABLE_PATH
+    if not p.exists():
+        return {"maps": []}
+    return json.loads(p.read_text())
+
+
+def medium_class(eps) -> str | None:
+    """``"conductor"`` (PEC, Re ε < 0 or ``|ε| ≥ 100``), ``"dielectric"``, or None when
+    ``eps`` is not given or is an array of several media."""
+    if eps is None:
+        return None
+    if isinstance(eps, str):
+        return "conductor" if eps.strip().lower() == "pec" else None
+    e = np.unique(np.asarray(eps, dtype=complex))
+    if e.size != 1:
+        return None
+    e = complex(e[0])
+    return "conductor" if (e.real < 0 or abs(e) >= 100.0) else "dielectric"
+
+
+def _family(roughness) -> str | None:
+    from ..spectra import ExponentialCorrelation, GaussianCorrelation
+
+    kind = type(roughness)
+    if kind is GaussianCorrelation:
+        name = "gaussian"
+    elif kind is ExponentialCorrelation:
+        name = "exponential"
+    else:
+        return None
+    if roughness.dimension == 2 and not math.isclose(roughness.length, roughness.length_y):
+        return None  # anisotropic: not mapped
+    return name
+
+
+def _nearest(grid: np.ndarray, value: float) -> int | None:
+    """Index of the nearest grid value in log scale, None beyond half a step outside."""
+    lg, lv = np.log(grid), math.log(value)
+    step = float(np.min(np.diff(lg))) if grid.size > 1 else 0.3
+    if lv < lg[0] - step / 2 or lv > lg[-1] + step / 2:
+        return None
+    return int(np.argmin(np.abs(lg - lv)))
+
+
+def measured_errors(roughness, k: float, eps) -> dict | None:
+    """``{"errors": {method: dB or nan}, "cell": (kσ, kℓ), "map": tag}`` of the map cell
+    nearest to ``(kσ, kℓ)`` for this correlation and medium class; None where not mapped
+    (module docstring). ``k`` [rad/m]."""
+    family, medium = _family(roughness), medium_class(eps)
+    if family is None or medium is None:
+        return None
+    ks, kl = k * roughness.sigma, k * roughness.length
+    for m in load_table()["maps"]:
+        if m["correlation"] != family or m["medium"] != medium:
+            continue
+        i = _nearest(np.asarray(m["k_sigma"], dtype=float), ks)
+        j = _nearest(np.asarray(m["k_l"], dtype=float), kl)
+        if i is None or j is None:
+            return None
+        errors = {
+            name: (math.nan if v[i][j] is None else float(v[i][j]))
+            for name, v in m["errors"].items()
+        }
+        return {"errors": errors, "cell": (m["k_sigma"][i], m["k_l"][j]), "map": m["tag"]}
+    return None
+
+
+def cell_roughness(roughness, k: float, cell: tuple[float, float]):
+    """The roughness of a map cell's centre ``(kσ, kℓ)``, of ``roughness``'s class and
+    dimension (isotropic)."""
+    ks, kl = cell
+    return type(roughness)(ks / k, kl / k, dimension=roughness.dimension)
