@@ -281,7 +281,7 @@ def _choice(name, value, allowed):
 
 def _spectral_args(rough, k, loc, n):
     """Scaled spectral argument K and log normalization of the series (module docstring)."""
-    qx, qy = np.broadcast_to(loc.qx, (n,)), np.broadcast_to(loc.qy, (n,))
+    qx, qy = _as_n(loc.qx, n), _as_n(loc.qy, n)
     if rough.dimension == 2:
         K = np.sqrt((qx * (k * rough.length)) ** 2 + (qy * (k * rough.length_y)) ** 2)
         return K, math.log(math.pi * (k * rough.length) * (k * rough.length_y))
@@ -321,23 +321,22 @@ def _as_n(v, n: int) -> np.ndarray:
     return a if a.shape == (n,) else np.broadcast_to(a, (n,))
 
 
-def _back_shadowing(mode, loc, slope) -> np.ndarray:
-    """:func:`_shadowing` (same values, as an array of length n) on a backscatter chunk:
-    one Smith Λ when the incident and scattered directions are the same arrays."""
+def _back_shadow_args(mode, loc, slope):
+    """Shadowing of a backscatter chunk for the compiled kernel: ``(code, s, ψ)`` — code 0
+    none, 1 direction-correlated, 2 height-correlated, evaluated in the kernel (the formulas
+    of :func:`_shadowing` with one Smith Λ, isotropic slope ``s``, same directions in and out);
+    code -1: anything else (the caller folds :func:`_shadowing` into the prefactor)."""
+    none = np.zeros(1)
     if mode is None:
-        return np.ones(loc.n)
+        return 0, 0.0, none
     if not (
         slope[0] == slope[1] and np.array_equal(loc.ci, loc.cs) and np.array_equal(loc.si, loc.ss)
     ):
-        return _as_n(_shadowing(mode, loc, slope), loc.n)
-    den = loc.si * math.sqrt(2.0 * slope[0] * slope[0])
-    a = np.where(den > loc.ci * 1e-300, loc.ci / np.where(den > 0, den, 1.0), 1e300)
-    lam = _as_n(smith_lambda(a), loc.n)  # (a ≤ 1e300 already)
+        return -1, 0.0, none
     if mode == "height-correlated":
-        return 1.0 / (1.0 + lam + lam)
+        return 2, float(slope[0]), none
     psi = np.abs(np.mod(loc.phi_s - loc.phi_i - math.pi + math.pi, 2 * math.pi) - math.pi)
-    corr = 4.41 * psi / (4.41 * psi + 1.0)
-    return _as_n(1.0 / (1.0 + lam + corr * lam), loc.n)
+    return 1, float(slope[0]), _as_n(psi, loc.n)
 
 
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
@@ -353,10 +352,14 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
     if spec is not None and (pec or np.ndim(eps) == 0):  # compiled, end to end
         K, pref = _spectral_args(rough, k, loc, n)
-        pref = pref + np.log(_back_shadowing(shadow_mode, loc, slope))  # shadowing > 0
+        shadow = _back_shadow_args(shadow_mode, loc, slope)
+        if shadow[0] < 0:
+            pref = pref + np.log(_as_n(_shadowing(shadow_mode, loc, slope), n))  # > 0
+            shadow = (0, 0.0, shadow[2])
         s_hh, s_vv, lp, status = iem_jit.backscatter(
             _as_n(loc.si, n), _as_n(loc.ci, n), eps, ks, K, pref, spec, rough.dimension,
             transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
+            shadow=shadow,
         )  # fmt: skip
         if status:
             raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))

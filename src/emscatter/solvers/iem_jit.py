@@ -94,13 +94,30 @@ def poisson_sums(logq, K, spec, dim, *, rtol):
 
 
 def backscatter(
-    si, cs, eps, ks, K, pref, spec, dim, *, transition, rtol, max_terms, fast=True, report=False
+    si,
+    cs,
+    eps,
+    ks,
+    K,
+    pref,
+    spec,
+    dim,
+    *,
+    transition,
+    rtol,
+    max_terms,
+    fast=True,
+    report=False,
+    shadow=(0, 0.0, None),
 ):
     """Exact-backscatter ``(σ⁰_hh, σ⁰_vv, log precision ratio, status)`` (the closed forms of
     :func:`emscatter.solvers.iem_kernels.backscatter_terms`, end to end).
 
     ``fast``: the linear-space walk where it is safe (else, and with ``fast=False``, the
-    log-space walk); ``report=True`` appends a boolean array: the fast path was taken."""
+    log-space walk); ``report=True`` appends a boolean array: the fast path was taken.
+    ``shadow = (code, s, ψ)``: the monostatic shadowing evaluated in the kernel (code 1
+    direction-correlated with azimuths ψ (n,), 2 height-correlated, isotropic rms slope s;
+    0: none, or already in ``pref``)."""
     _, _, back_kernel = _build()
     n = si.size
     pec = isinstance(eps, str)
@@ -110,8 +127,9 @@ def backscatter(
         np.ascontiguousarray(si, float), np.ascontiguousarray(cs, float),
         complex(1.0 if pec else eps), pec, float(ks), np.ascontiguousarray(K, float),
         np.ascontiguousarray(np.broadcast_to(pref, (n,)), float), int(spec), int(dim),
-        bool(transition), math.log(rtol), int(max_terms), bool(fast), out_hh, out_vv, out_e,
-        out_fast,
+        bool(transition), math.log(rtol), int(max_terms), bool(fast), int(shadow[0]),
+        float(shadow[1]), np.zeros(1) if shadow[2] is None else shadow[2], out_hh, out_vv,
+        out_e, out_fast,
     )  # fmt: skip
     log_e = np.log(out_e)  # out_e ≥ 1
     if report:

@@ -515,6 +515,26 @@ def fast_pair(amp, x, att, e_log, dd, J, ks2, K2, spec, dim, rtol, max_terms, wb
 
 
 @inline
+def back_shadowing(s, c, den1, code, psi):
+    """:func:`emscatter.solvers.iem._shadowing` at backscatter, one direction: Smith's Λ
+    (:func:`emscatter.solvers.kirchhoff_common.smith_lambda`) at ``a = cosθ/(sinθ √2 s)``
+    (``den1 = √2 s``), then ``1/(1 + Λ + λ(ψ) Λ)`` (code 1) or ``1/(1 + 2Λ)`` (code 2)."""
+    den = s * den1
+    a = c / (den if den > 0 else 1.0) if den > c * 1e-300 else 1e300
+    lam = 0.0
+    if a < 6.0:
+        an = max(a, 1e-300)
+        lam = max(0.5 * (math.exp(-an * an) / (an * SQRT_PI) - math.erfc(an)), 0.0)
+    if code == 2:
+        return 1.0 / (1.0 + lam + lam)
+    corr = 4.41 * psi / (4.41 * psi + 1.0)
+    return 1.0 / (1.0 + lam + corr * lam)
+
+
+SQRT_PI = math.sqrt(math.pi)
+
+
+@inline
 def lower_co(C, rh, rv, iq, eps, ieps):
     """(hh, 0, 0, vv) of :func:`.iem_kernels._combine` for the lower medium, co-pol only,
     with ``iq = 1/q₂``, ``ieps = 1/ε`` (multiplications instead of its divisions)."""
@@ -528,7 +548,8 @@ def lower_co(C, rh, rv, iq, eps, ieps):
 
 @jit
 def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
-                max_terms, use_fast, out_hh, out_vv, out_e, out_fast):  # fmt: skip
+                max_terms, use_fast, sh_code, sh_slope, psi, out_hh, out_vv, out_e,
+                out_fast):  # fmt: skip
     """Exact-backscatter hh, vv per geometry: the linear-space walk (:func:`fast_pair`,
     :func:`transition_lin`) where it is safe and ``use_fast``, else the log-space
     :func:`row_series` / :func:`transition_sums`. Outputs σ⁰_hh, σ⁰_vv, the precision ratio
@@ -552,10 +573,14 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     fx, fatt, felog, fz, fmsk = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     fdd = np.empty(2, dtype=np.complex128)
     fco, fxx = np.empty((8, 3)), np.empty(3)
+    sh_den = math.sqrt(2.0 * sh_slope * sh_slope)
     for r in range(si.shape[0]):
         s, c = si[r], cs[r]
         s2 = s * s
         K2 = K[r] * K[r]
+        shf = 1.0
+        if sh_code != 0:
+            shf = back_shadowing(s, c, sh_den, sh_code, psi[r] if sh_code == 1 else 0.0)
         q2 = 0j
         p1, p2, mm = zero, zero, zero
         e_g = 0.0
@@ -630,7 +655,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 fz, fmsk, fco, fxx,
             )  # fmt: skip
             if fast:
-                ep = math.exp(pref[r])
+                ep = math.exp(pref[r]) * shf
                 out_hh[r] = shh * ep
                 out_vv[r] = svv * ep
                 out_e[r] = prec
@@ -666,7 +691,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 ph[:J],
                 sx[:J],
                 d,
-                pref[r],
+                pref[r] + math.log(shf),
                 K[r],
                 log_ks2,
                 spec,
