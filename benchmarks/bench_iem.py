@@ -42,7 +42,7 @@ from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 HERE = Path(__file__).resolve().parent
 C = 299792458.0
 FREQ, SIGMA, ELL, EPS = 5.3e9, 0.004, 0.03, 15 + 2j
-SIZES = (1, 10, 100, 1000)
+SIZES = (1, 10, 90, 100, 1000)
 FUNG92 = dict(fresnel="incident", complementary="fung92", first_order="model", shadowing=False,
               crosspol=False)  # fmt: skip
 

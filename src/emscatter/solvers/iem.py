@@ -286,7 +286,7 @@ def _choice(name, value, allowed):
 
 def _spectral_args(rough, k, loc, n):
     """Scaled spectral argument K and log normalization of the series (module docstring)."""
-    qx, qy = np.broadcast_to(loc.qx, (n,)), np.broadcast_to(loc.qy, (n,))
+    qx, qy = _as_n(loc.qx, n), _as_n(loc.qy, n)
     if rough.dimension == 2:
         K = np.sqrt((qx * (k * rough.length)) ** 2 + (qy * (k * rough.length_y)) ** 2)
         return K, math.log(math.pi * (k * rough.length) * (k * rough.length_y))
@@ -320,33 +320,63 @@ def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
                       max_terms=opt.max_terms)  # fmt: skip
 
 
+def _as_n(v, n: int) -> np.ndarray:
+    """``v`` as a flat float array of length n (no copy when it already is one)."""
+    a = np.asarray(v, dtype=float)
+    return a if a.shape == (n,) else np.broadcast_to(a, (n,))
+
+
+def _back_shadow_args(mode, loc, slope):
+    """Shadowing of a backscatter chunk for the compiled kernel: ``(code, s, ψ)`` — code 0
+    none, 1 direction-correlated, 2 height-correlated, evaluated in the kernel (the formulas
+    of :func:`_shadowing` with one Smith Λ, isotropic slope ``s``, same directions in and out);
+    code -1: anything else (the caller folds :func:`_shadowing` into the prefactor)."""
+    none = np.zeros(1)
+    if mode is None:
+        return 0, 0.0, none
+    if not (
+        slope[0] == slope[1] and np.array_equal(loc.ci, loc.cs) and np.array_equal(loc.si, loc.ss)
+    ):
+        return -1, 0.0, none
+    if mode == "height-correlated":
+        return 2, float(slope[0]), none
+    psi = np.abs(np.mod(loc.phi_s - loc.phi_i - math.pi + math.pi, 2 * math.pi) - math.pi)
+    return 1, float(slope[0]), _as_n(psi, loc.n)
+
+
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     """Exact-backscatter σ⁰ (2, 2, n): the closed-form terms of
     :func:`.iem_kernels.backscatter_terms`, two components (Kirchhoff, lower medium) plus the
     n = 1 terms; hh and vv only (single-scattering cross-pol vanishes in the plane)."""
+    if opt.complementary != "aiem":  # the 1992 model: general terms
+        return None
     n = loc.n
     ks = k * rough.sigma
     ks2 = ks * ks
+    pec = is_pec(eps)
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is not None and (pec or np.ndim(eps) == 0):  # compiled, end to end
+        K, pref = _spectral_args(rough, k, loc, n)
+        shadow = _back_shadow_args(shadow_mode, loc, slope)
+        if shadow[0] < 0:
+            pref = pref + np.log(_as_n(_shadowing(shadow_mode, loc, slope), n))  # > 0
+            shadow = (0, 0.0, shadow[2])
+        s_hh, s_vv, lp, status = iem_jit.backscatter(
+            _as_n(loc.si, n), _as_n(loc.ci, n), eps, ks, K, pref, spec, rough.dimension,
+            transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
+            shadow=shadow,
+        )  # fmt: skip
+        if status:
+            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
+        sig = np.zeros((2, 2, n))
+        sig[0, 0], sig[1, 1] = s_hh, s_vv
+        return sig, 0.0, float(np.max(lp)) if n else -np.inf
     K, pref = _spectral_args(rough, k, loc, n)
     shadow = _shadowing(shadow_mode, loc, slope)
     with np.errstate(divide="ignore"):
         pref = pref + np.log(np.broadcast_to(shadow, (n,)))
     si, cs = np.broadcast_to(loc.si, (n,)), np.broadcast_to(loc.ci, (n,))
-    eps_f = eps if (is_pec(eps) or np.ndim(eps) == 0) else np.broadcast_to(eps, (n,))
-    pec = is_pec(eps_f)
-    if opt.complementary != "aiem":  # the 1992 model: general terms
-        return None
-    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
-    if spec is not None and (pec or np.ndim(eps_f) == 0):
-        l_hh, l_vv, lp, status = iem_jit.backscatter(
-            si, cs, eps_f, ks, K, pref, spec, rough.dimension,
-            transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
-        )  # fmt: skip
-        if status:
-            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
-        sig = np.zeros((2, 2, n))
-        sig[0, 0], sig[1, 1] = np.exp(l_hh), np.exp(l_vv)
-        return sig, 0.0, float(np.max(lp)) if n else -np.inf
+    eps_f = eps if (pec or np.ndim(eps) == 0) else np.broadcast_to(eps, (n,))
     rh, rv = fresnel_cos(eps_f, cs)
     (u_h, u_v), lower = kern.backscatter_terms(si, cs, eps_f, rh, rv)
     # components: Kirchhoff (base 2 kz), the lower-medium α⁺, α⁻ terms, (and d at n = 1)
