@@ -167,6 +167,20 @@ def rows() -> list[tuple]:
                     "scaling",
                 )
             )
+    ra = _load("radio")
+    if ra:
+        for name, c in ra["configs"].items():
+            med = c["median_seconds"]
+            out.append(
+                (
+                    f"Sionna RT {name}: emscatter / built-in material",
+                    f"≤ {c['target']}×",
+                    f"{c['ratio']:.2f}× ({med['builtin']:.3g} s → {med['emscatter']:.3g} s)",
+                    _met(c["meets_target"]),
+                    ra["command"],
+                    "radio",
+                )
+            )
     pa = _load("pareto")
     if pa:
         for st in pa["studies"].values():

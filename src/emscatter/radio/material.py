@@ -416,22 +416,14 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         v = sl.lobe.eval(pos, active)
         return [dr.maximum(x, 0.0) for x in v]
 
-    def _diffuse_matrix(self, to_world, ki, ko, sl: _Slice, solid_angle, active) -> mi.Matrix4f:
-        """Jones matrix (world implicit frame) of a diffuse reflection into ``ko``."""
+    def _local_diffuse_matrix(self, ki, ko, sl: _Slice, solid_angle, active) -> mi.Matrix2f:
+        """Real Jones matrix of a diffuse reflection into ``ko`` in the local ``(h, v)`` bases
+        of the incident and scattered planes: ``√(lobe_qp · Ω)``, co-pol on the diagonal,
+        cross-pol with the sign pattern of Sionna's XPD matrix ``[[a, −b], [b, a]]``
+        (norm-preserving when hv = vh, hh = vv)."""
         hh, hv, vh, vv = self._lobe(ki, ko, sl, active)
-        n = mi.Vector3f(0.0, 0.0, 1.0)
-        h_in = to_world @ transverse_basis_from_normal(ki, n)
-        h_out = to_world @ transverse_basis_from_normal(ko, n)
-        ki_w = to_world @ ki
-        ko_w = to_world @ ko
-        w_in = jones_matrix_rotator(ki_w, implicit_basis_vector(ki_w), h_in)
-        w_out = jones_matrix_rotator(ko_w, h_out, implicit_basis_vector(ko_w))
-        # Local (h, v) Jones matrix: co-pol on the diagonal, cross-pol with the sign pattern of
-        # Sionna's XPD matrix [[a, −b], [b, a]] (norm-preserving when hv = vh, hh = vv).
-        m = mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv))
-        m = w_out @ m @ w_in
-        m = m * dr.sqrt(dr.maximum(solid_angle, 0.0))
-        return jones_matrix_from_real_imag(m, mi.Matrix2f(0.0))  # real: no phase
+        root_omega = dr.sqrt(dr.maximum(solid_angle, 0.0))
+        return mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv)) * root_omega
 
     def _event_probabilities(self, coefs, enabled):
         """Probabilities of specular reflection, diffuse reflection and transmission, in
@@ -461,19 +453,43 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         r_te, r_tm, t_te, t_tm, _ = coefs
         reflection, diffuse, diffraction = events
         ko_spec = dr.select(reflection, mi.reflect(-ki), ki)
-        jones = jones_matrix_to_world_implicit(
-            dr.select(reflection, r_te, t_te), dr.select(reflection, r_tm, t_tm), to_world, ki,
-            ko_spec,
-        )  # fmt: skip
-        if sl is not None:
-            jd = self._diffuse_matrix(to_world, ki, ko_diff, sl, si.t, mi.Bool(active) & diffuse)
-            jones = dr.select(diffuse, jd, jones)
+        c_te = dr.select(reflection, r_te, t_te)
+        c_tm = dr.select(reflection, r_tm, t_tm)
+        if sl is None:  # flat: exactly Sionna's specular matrix
+            jones = jones_matrix_to_world_implicit(c_te, c_tm, to_world, ki, ko_spec)
+        else:
+            jones = self._specular_or_diffuse_matrix(
+                to_world, ki, ko_spec, c_te, c_tm, sl, diffuse, ko_diff, si.t, active
+            )
         if diffraction_on:
             jf = RadioMaterial._diffraction_matrix(
                 self, to_world, ki, ko_diffr, si, self._eta, self._k
             )
             jones = dr.select(diffraction, jf, jones)
         return jones
+
+    def _specular_or_diffuse_matrix(
+        self, to_world, ki, ko_spec, c_te, c_tm, sl, diffuse, ko_diff, solid_angle, active
+    ) -> mi.Matrix4f:
+        """Jones matrix (world implicit frame): ``R_out · D · R_in`` with ``D`` = diag(c_te,
+        c_tm) for a specular lane and the local diffuse matrix for a diffuse lane, as
+        :func:`sionna.rt.utils.jones_matrix_to_world_implicit` builds it — but with one
+        incident rotator for both events and one scattered rotator for the lane's direction
+        (each rotator needs the implicit basis of a world direction: two atan2, two sincos)."""
+        n = mi.Vector3f(0.0, 0.0, 1.0)
+        h_in = transverse_basis_from_normal(ki, n)  # TE direction, local frame
+        ki_w = to_world @ ki
+        r_in = jones_matrix_rotator(ki, to_world.T @ implicit_basis_vector(ki_w), h_in)
+        # The specular scattered plane shares the incident TE direction (Sionna's convention).
+        ko = dr.select(diffuse, ko_diff, ko_spec)
+        h_out = dr.select(diffuse, transverse_basis_from_normal(ko_diff, n), h_in)
+        ko_w = to_world @ ko
+        r_out = jones_matrix_rotator(ko_w, to_world @ h_out, implicit_basis_vector(ko_w))
+        d = self._local_diffuse_matrix(ki, ko_diff, sl, solid_angle, mi.Bool(active) & diffuse)
+        zero = mi.Float(0.0)
+        d_re = dr.select(diffuse, d, mi.Matrix2f(c_te.real, zero, zero, c_tm.real))
+        d_im = dr.select(diffuse, mi.Matrix2f(0.0), mi.Matrix2f(c_te.imag, zero, zero, c_tm.imag))
+        return jones_matrix_from_real_imag(r_out @ d_re @ r_in, r_out @ d_im @ r_in)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         sl = self._slice()
