@@ -252,3 +252,30 @@ def test_lazy_coherent_follows_an_array_permittivity():
             rough, e, frequency=1e9, theta_i=0.3, theta_s=0.1, phi_s=0.0, method="spm"
         )
         np.testing.assert_allclose(s.coherent[:, j], one.coherent, rtol=1e-13)
+
+
+def test_the_warnings_and_errors_a_caller_filters_are_public():
+    """The classes the API raises are importable from the package itself (to filter or catch)."""
+    rough = em.GaussianCorrelation(0.01, 0.1)
+    with pytest.warns(em.PlausibilityWarning, match="did you mean"):
+        em.backscatter(rough, 3.0, frequency=5.4, theta_i=0.3, method="go", out_of_range="ignore")
+    with pytest.warns(em.ValidityWarning):
+        em.backscatter(rough, 3.0, frequency=1e9, theta_i=0.3, method="go")
+    with pytest.raises(em.ValidityError):
+        em.backscatter(rough, 3.0, frequency=1e9, theta_i=0.3, method="go", out_of_range="raise")
+    with pytest.raises(em.OutOfBandError):
+        em.emissivity(rough, "Au", frequency=1e9, theta_i=0.2)
+    assert em.ValidityWarning is ValidityWarning and em.ValidityError is ValidityError
+    assert em.OutOfBandError is materials.OutOfBandError
+
+
+@pytest.mark.parametrize("method", ["spm", "go", "po", "iem", "auto"])
+def test_backscatter_at_one_scalar_angle_equals_the_array_call(method):
+    """A plain float θi (0-d) gives the same σ⁰ as a one-element array (GO's closed-form
+    backscatter path once raised a TypeError on 0-d input)."""
+    rough = em.GaussianCorrelation(0.03, 0.3)
+    kw = dict(frequency=3e9, method=method, out_of_range="ignore")
+    one = em.backscatter(rough, 5 + 1j, theta_i=0.3, **kw)
+    arr = em.backscatter(rough, 5 + 1j, theta_i=np.array([0.3]), **kw)
+    assert np.shape(one.vv) == () and np.shape(arr.vv) == (1,)
+    np.testing.assert_allclose(one.sigma0[..., None], arr.sigma0, rtol=1e-12)

@@ -20,9 +20,10 @@ from __future__ import annotations
 
 from . import constants, fresnel
 from .api import backscatter, bistatic, emissivity
-from .conventions import ConventionError
+from .conventions import ConventionError, PlausibilityWarning
 from .fresnel import PEC
 from .scattering import Scattering
+from .solvers.select import ValidityError, ValidityWarning
 from .spectra import (
     ExponentialCorrelation,
     FractionalBrownian,
@@ -49,6 +50,10 @@ __all__ = [
     "constants",
     "PEC",
     "ConventionError",
+    "PlausibilityWarning",
+    "ValidityWarning",
+    "ValidityError",
+    "OutOfBandError",
     "__version__",
 ]
 
@@ -58,6 +63,10 @@ def __getattr__(name):  # lazy: keep `import emscatter` light
         import importlib
 
         return importlib.import_module(".materials", __name__)
+    if name == "OutOfBandError":
+        from .materials import OutOfBandError
+
+        return OutOfBandError
     if name == "generate_surface":
         from .surfaces.generate import generate_surface
 

@@ -35,7 +35,7 @@ def backscatter_sigma0(theta: np.ndarray, eps, slope_variance: float, shadowing)
     [0, π/2]; ``eps`` "pec" or one complex permittivity; ``slope_variance`` ⟨ζx²⟩ = ⟨ζy²⟩
     [-]; ``shadowing`` None, "smith", "separable" or "correlated"."""
     s2 = float(slope_variance)
-    si = np.sin(theta)
+    si = np.sin(np.atleast_1d(np.asarray(theta, dtype=float)))  # in-place steps need arrays
     c2 = (1.0 - si) * (1.0 + si)  # cos²θ (as kirchhoff_common._trig, before its root)
     # cos²θ is 0 (θ = π/2: σ⁰ = 0) or ≥ 1e-16: the floor only keeps 0·∞ away
     r = 1.0 / np.maximum(c2, 1e-300)
