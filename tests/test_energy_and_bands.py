@@ -197,6 +197,16 @@ def test_a_caller_may_ask_for_the_coherent_part_eagerly():
     lazy = em.backscatter(rough, 17 + 2j, frequency=1e9, theta_i=th, method="spm")
     assert eager.coherent_computed and not lazy.coherent_computed
     np.testing.assert_allclose(eager.coherent, lazy.coherent, rtol=1e-14)
+    band = em.backscatter(  # a band takes the option at every frequency
+        rough,
+        17 + 2j,
+        frequency=np.array([0.5e9, 1e9, 1e9]),
+        theta_i=0.4,
+        method="spm",
+        coherent=True,
+    )
+    one = em.backscatter(rough, 17 + 2j, frequency=1e9, theta_i=0.4, method="spm")
+    np.testing.assert_allclose(band.coherent[:, 2], one.coherent, rtol=1e-13)
 
 
 def test_validity_reports_are_cached_per_roughness(monkeypatch):

@@ -67,7 +67,8 @@ def _map_options(name: str, options: dict, auto: bool) -> dict:
     if not options:  # nothing to map (check_options would return {} too)
         return {}
     mapper = getattr(select, "check_options", None)
-    return dict(mapper(name, options, picked_by_auto=auto)) if mapper else options
+    # always a new dict: _bistatic_one pops from it, the caller's options stay whole (bands)
+    return dict(mapper(name, options, picked_by_auto=auto) if mapper else options)
 
 
 def resolve_method(

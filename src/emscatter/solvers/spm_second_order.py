@@ -100,7 +100,7 @@ def _branch_points(k, eps):
     pts = [k]
     if not is_pec(eps):
         pts.append(float(np.sqrt(eps).real * k))
-        e = complex(eps) if np.ndim(eps) == 0 else 0j
+        e = complex(eps)  # one medium per call (spm groups the permittivities)
         if e.real < -1.0:
             ksp = k * np.sqrt(e / (e + 1.0))
             width = max(abs(ksp.imag), 1e-6 * k)
