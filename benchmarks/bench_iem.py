@@ -1,13 +1,16 @@
 """Integral-equation model: backscatter against SMRT 1.7 on the same inputs, bistatic throughput.
 
     PYTHONPATH=src .venv/bin/python benchmarks/bench_iem.py [--smrt /tmp/smrtvenv/bin/python]
+        [--reps 15 --rounds 9]
         → benchmarks/results/iem.json (and a table on stdout)
 
 SMRT (a peer, never a dependency) runs in its scratch venv
-(``python3 -m venv /tmp/smrtvenv && /tmp/smrtvenv/bin/pip install smrt``) through a subprocess
-that times its own calls with the same repeat/median scheme, launched from this script between
-our own timings (one run: the ratios share the machine's state). Without that interpreter the
-SMRT rows are skipped and said so.
+(``python3 -m venv /tmp/smrtvenv && /tmp/smrtvenv/bin/pip install smrt``) as a timing server
+kept running beside this script: per size, ``--rounds`` alternations of our ``--reps`` calls
+and SMRT's ``--reps`` calls (each timed in its own process, median per round); the ratio is
+the median over rounds of SMRT's time over ours, each round's two timings taken back to back
+(the same machine state: this shared 2-core machine's speed drifts ×1.5–2 within minutes),
+with its range over rounds. Without that interpreter the SMRT rows are skipped and said so.
 
 Backscatter case (SMRT's own test case scaled to C band): exponential correlation,
 σ = 0.4 cm, ℓ = 3 cm, 5.3 GHz (kσ = 0.44, kℓ = 3.3), ε = 15 + 2i, N incidence angles in
@@ -36,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from emscatter.io import write_json
-from emscatter.solvers import iem
+from emscatter.solvers import iem, iem_jit
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 HERE = Path(__file__).resolve().parent
@@ -46,79 +49,127 @@ SIZES = (1, 10, 90, 100, 1000)
 FUNG92 = dict(fresnel="incident", complementary="fung92", first_order="model", shadowing=False,
               crosspol=False)  # fmt: skip
 
-SMRT_SCRIPT = r"""
-import json, statistics, sys, time, warnings
+SMRT_SERVER = r"""
+import json, sys, time, warnings
 import numpy as np
 from smrt.interface.iem_fung92 import IEM_Fung92
 from smrt.interface.iiem_fung02 import IIEM_Fung02
-f, s, l, er, ei, reps = (float(a) for a in sys.argv[1:7])
-sizes = [int(a) for a in sys.argv[7].split(",")]
-out = {}
+f, s, l, er, ei = (float(a) for a in sys.argv[1:6])
 warnings.simplefilter("ignore")
-for name, model, npol, top in (
-    ("smrt_iem_fung92", IEM_Fung92(roughness_rms=s, corr_length=l,
-        autocorrelation_function="exponential", warning_handling="nothing"), 2, 10**9),
-    ("smrt_iiem_fung02", IIEM_Fung02(roughness_rms=s, corr_length=l,
-        autocorrelation_function="exponential", warning_handling="nothing"), 3, 100),
-):
-    for n in sizes:
-        if n > top:
-            continue
-        mu = np.cos(np.radians(np.linspace(0.5, 70.0, n)))
+models = {
+    "smrt_iem_fung92": (IEM_Fung92(roughness_rms=s, corr_length=l,
+        autocorrelation_function="exponential", warning_handling="nothing"), 2),
+    "smrt_iiem_fung02": (IIEM_Fung02(roughness_rms=s, corr_length=l,
+        autocorrelation_function="exponential", warning_handling="nothing"), 3),
+}
+print("ready", flush=True)
+for line in sys.stdin:  # "<model> <n angles> <reps>" -> the reps' wall times [s], as JSON
+    name, n, reps = line.split()
+    model, npol = models[name]
+    mu = np.cos(np.radians(np.linspace(0.5, 70.0, int(n))))
+    model.diffuse_reflection_matrix(f, 1, complex(er, ei), mu, mu, np.pi, npol)
+    t = []
+    for _ in range(int(reps)):
+        t0 = time.perf_counter()
         model.diffuse_reflection_matrix(f, 1, complex(er, ei), mu, mu, np.pi, npol)
-        t = []
-        for _ in range(int(reps)):
-            t0 = time.perf_counter()
-            model.diffuse_reflection_matrix(f, 1, complex(er, ei), mu, mu, np.pi, npol)
-            t.append(time.perf_counter() - t0)
-        out[f"{name}/{n}"] = statistics.median(t)
-print(json.dumps(out))
+        t.append(time.perf_counter() - t0)
+    print(json.dumps(t), flush=True)
 """
 
 
-def _median_time(fn, reps: int) -> float:
+def _times(fn, reps: int) -> list[float]:
     fn()
     t = []
     for _ in range(reps):
         t0 = time.perf_counter()
         fn()
         t.append(time.perf_counter() - t0)
-    return statistics.median(t)
+    return t
 
 
-def _smrt(python: str, reps: int) -> dict:
-    if not Path(python).exists():
-        return {"skipped": f"no SMRT interpreter at {python}"}
-    args = [python, "-c", SMRT_SCRIPT, str(FREQ), str(SIGMA), str(ELL), str(EPS.real),
-            str(EPS.imag), str(reps), ",".join(map(str, SIZES))]  # fmt: skip
-    res = subprocess.run(args, capture_output=True, text=True, check=True, timeout=1800)
-    return json.loads(res.stdout.strip().splitlines()[-1])
+def _median_time(fn, reps: int) -> float:
+    return statistics.median(_times(fn, reps))
+
+
+class _Smrt:
+    """SMRT in its own interpreter, kept running: each request times one model at one size
+    there, so our timings and SMRT's alternate within seconds (the same machine state)."""
+
+    def __init__(self, python: str):
+        args = [python, "-c", SMRT_SERVER, str(FREQ), str(SIGMA), str(ELL), str(EPS.real),
+                str(EPS.imag)]  # fmt: skip
+        # one BLAS thread: SMRT's work is elementwise numpy, and idle OpenBLAS workers would
+        # spin on the cores our timings share between rounds
+        env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+        self.proc = subprocess.Popen(args, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                     text=True, env=env)  # fmt: skip
+        if self.proc.stdout.readline().strip() != "ready":
+            raise RuntimeError("the SMRT timing server did not start")
+
+    def times(self, model: str, n: int, reps: int) -> list[float]:
+        self.proc.stdin.write(f"{model} {n} {reps}\n")
+        self.proc.stdin.flush()
+        return json.loads(self.proc.stdout.readline())
+
+    def close(self) -> None:
+        self.proc.stdin.close()
+        self.proc.wait(timeout=60)
 
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smrt", default="/tmp/smrtvenv/bin/python")
-    ap.add_argument("--reps", type=int, default=7)
+    ap.add_argument("--reps", type=int, default=7, help="calls per timing (median)")
+    ap.add_argument(
+        "--rounds",
+        type=int,
+        default=9,
+        help="alternations of our timing and SMRT's per size (ratio: their median)",
+    )
     ap.add_argument("--out", type=Path, default=HERE / "results" / "iem.json")
     args = ap.parse_args(argv)
     k = 2 * math.pi * FREQ / C
     rough = ExponentialCorrelation(SIGMA, ELL)
     times: dict[str, float] = {}
-    smrt_first = _smrt(args.smrt, args.reps)
+    smrt: dict = {}
+    rounds: dict[str, list[float]] = {}
+    server = _Smrt(args.smrt) if Path(args.smrt).exists() else None
+    if server is None:
+        smrt = {"skipped": f"no SMRT interpreter at {args.smrt}"}
     for n in SIZES:
         th = np.radians(np.linspace(0.5, 70.0, n))
 
         def run(th=th, **kw):
             return lambda: iem.bistatic(rough, EPS, k, th, th, math.pi, coherent=False, **kw)
 
-        times[f"iem_copol/{n}"] = _median_time(run(crosspol=False), args.reps)
+        # co-pol against SMRT iem_fung92: `--rounds` alternations of `--reps` calls each
+        # (and, where the kernel splits over threads, ours on one thread too)
+        ours_r, one_r, theirs_r = [], [], []
+        chunk = getattr(iem_jit, "BACK_MIN_CHUNK", None)  # None: a version without threads
+        split = chunk is not None and n >= 2 * chunk
+        for _ in range(args.rounds):
+            ours_r.append(statistics.median(_times(run(crosspol=False), args.reps)))
+            if split:
+                one_r.append(statistics.median(_times(run(crosspol=False, threads=1), args.reps)))
+            if server is not None:
+                theirs_r.append(statistics.median(server.times("smrt_iem_fung92", n, args.reps)))
+        times[f"iem_copol/{n}"] = statistics.median(ours_r)
+        if split:
+            times[f"iem_copol_one_thread/{n}"] = statistics.median(one_r)
+        if server is not None:
+            smrt[f"smrt_iem_fung92/{n}"] = statistics.median(theirs_r)
+            rounds[str(n)] = [b / a for a, b in zip(ours_r, theirs_r, strict=True)]
+            if split:
+                rounds[f"{n}/one_thread"] = [b / a for a, b in zip(one_r, theirs_r, strict=True)]
         times[f"iem_fung92/{n}"] = _median_time(run(**FUNG92), args.reps)
         if n <= 100:
             times[f"iem_with_hv/{n}"] = _median_time(run(), max(3, args.reps // 2))
-    smrt_second = _smrt(args.smrt, args.reps)  # again after ours: the load may drift
-    smrt = {key: min(smrt_first[key], smrt_second[key]) for key in smrt_first if key != "skipped"}
-    if "skipped" in smrt_first:
-        smrt = {"skipped": smrt_first["skipped"]}
+            if server is not None:
+                smrt[f"smrt_iiem_fung02/{n}"] = statistics.median(
+                    server.times("smrt_iiem_fung02", n, max(3, args.reps // 2))
+                )
+    if server is not None:
+        server.close()
     # bistatic throughput
     rng = np.random.default_rng(0)
     m = 20000
@@ -184,14 +235,27 @@ def main(argv=None) -> dict:
         "bistatic_geometries_per_second": throughput,
     }
     if "skipped" not in smrt:
+        # per size: the median over rounds of (SMRT median / our median), each round's two
+        # timings taken back to back; and the range over rounds
         out["ratio_smrt_fung92_over_iem_copol"] = {
-            n: smrt[f"smrt_iem_fung92/{n}"] / times[f"iem_copol/{n}"] for n in SIZES
+            n: statistics.median(rounds[str(n)]) for n in SIZES
+        }
+        out["ratio_smrt_fung92_over_iem_copol_range"] = {
+            n: [min(rounds[str(n)]), max(rounds[str(n)])] for n in SIZES
+        }
+        out["ratio_smrt_fung92_over_iem_copol_one_thread"] = {
+            key.split("/")[0]: [statistics.median(v), min(v), max(v)]
+            for key, v in rounds.items()
+            if key.endswith("/one_thread")
         }
         out["ratio_smrt_iiem_over_iem_with_hv"] = {
             n: smrt[f"smrt_iiem_fung02/{n}"] / times[f"iem_with_hv/{n}"]
             for n in SIZES
             if f"smrt_iiem_fung02/{n}" in smrt
         }
+    out["command"] = (
+        f"PYTHONPATH=src python benchmarks/bench_iem.py --reps {args.reps} --rounds {args.rounds}"
+    )
     write_json(args.out, out)
     print(json.dumps({k_: v for k_, v in out.items() if k_ != "machine"}, indent=1))
     return out

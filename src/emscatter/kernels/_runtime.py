@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import contextlib
 import os
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 
 import numba
 import numpy as np
 
-__all__ = ["jit", "inline", "run_chunked", "run_fused", "cache_dir", "NUMBA_VERSION"]
+__all__ = ["jit", "inline", "run_chunked", "run_fused", "run_split", "cache_dir", "NUMBA_VERSION"]
 
 NUMBA_VERSION = numba.__version__
 FASTMATH = {"contract"}  # FMA contraction only (see jit)
@@ -113,6 +113,47 @@ def run_chunked(part, n: int, threads: int | None = None) -> None:
         ]
         for f in futs:
             f.result()
+
+
+_POOL: ThreadPoolExecutor | None = None  # persistent workers of run_split (created on demand)
+
+
+def _forget_pool() -> None:  # a forked child has the pool object but not its threads
+    global _POOL
+    _POOL = None
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
+
+
+def _pool() -> ThreadPoolExecutor:
+    global _POOL
+    if _POOL is None:
+        _POOL = ThreadPoolExecutor(max_workers=min(_CPUS, 8), thread_name_prefix="emscatter")
+    return _POOL
+
+
+def run_split(part, n: int, threads: int, min_chunk: int) -> None:
+    """``part(start, stop)`` over ``[0, n)`` in at most ``threads`` contiguous chunks of at
+    least ``min_chunk`` items, for kernels whose calls are short (≈ 0.1–1 ms): the workers are
+    a persistent pool (no thread start per call) and the calling thread runs the last chunk
+    itself. One chunk: a plain call. ``part`` must call a ``nogil`` kernel on disjoint output
+    slices; an exception of a chunk is re-raised once every chunk has finished."""
+    parts = int(max(1, min(threads, n // max(min_chunk, 1))))
+    if parts == 1:
+        part(0, n)
+        return
+    edges = np.linspace(0, n, parts + 1).astype(np.int64)
+    pool = _pool()
+    futs = [pool.submit(part, int(edges[i]), int(edges[i + 1])) for i in range(parts - 1)]
+    try:
+        part(int(edges[-2]), int(edges[-1]))
+    except BaseException:
+        wait(futs)  # the workers write into the caller's arrays: let them finish first
+        raise
+    for f in futs:
+        f.result()
 
 
 def run_fused(kernel, inputs: tuple, consts: tuple, outputs: tuple, threads: int | None = None):

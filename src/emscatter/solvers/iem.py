@@ -131,6 +131,7 @@ from .kirchhoff_common import (
     coherent_local,
     geometry,
     smith_lambda,
+    workers_for,
 )
 from .kirchhoff_po import log_nfold
 from .validity import angle_upper, build_report, check_solver_options, upper
@@ -140,7 +141,7 @@ __all__ = ["bistatic", "check_validity", "VALIDITY", "OPTIONS", "nominal_rms_slo
 #: Options :func:`bistatic` takes (for :func:`check_validity` and ``select.check_options``).
 OPTIONS = (
     "coherent", "rtol", "max_terms", "fresnel", "complementary", "first_order", "reciprocal",
-    "shadowing", "rms_slope", "crosspol", "crosspol_order",
+    "shadowing", "rms_slope", "crosspol", "crosspol_order", "threads",
 )  # fmt: skip
 _SRC_KS = "Fung, Li & Chen 1992; Wu & Chen 2004 (AIEM vs 3-D MoM up to kσ ≈ 3)"
 _SRC_SLOPE = "single scattering; Ulaby & Long 2014 I2EM codes (σ/ℓ ≤ 0.25)"
@@ -175,7 +176,7 @@ def nominal_rms_slope(roughness) -> tuple[float, float]:
 
 # ----------------------------------------------------------------------------- amplitudes
 class _Options:
-    __slots__ = ("fresnel", "complementary", "first_order", "rtol", "max_terms")
+    __slots__ = ("fresnel", "complementary", "first_order", "rtol", "max_terms", "threads")
 
 
 def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options):
@@ -323,7 +324,9 @@ def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
 def _as_n(v, n: int) -> np.ndarray:
     """``v`` as a flat float array of length n (no copy when it already is one)."""
     a = np.asarray(v, dtype=float)
-    return a if a.shape == (n,) else np.broadcast_to(a, (n,))
+    if a.shape == (n,):
+        return a
+    return np.full(n, float(a)) if a.ndim == 0 else np.broadcast_to(a, (n,))
 
 
 def _back_shadow_args(mode, loc, slope):
@@ -334,9 +337,10 @@ def _back_shadow_args(mode, loc, slope):
     none = np.zeros(1)
     if mode is None:
         return 0, 0.0, none
-    if not (
-        slope[0] == slope[1] and np.array_equal(loc.ci, loc.cs) and np.array_equal(loc.si, loc.ss)
-    ):
+    same = (loc.ci is loc.cs and loc.si is loc.ss) or (
+        np.array_equal(loc.ci, loc.cs) and np.array_equal(loc.si, loc.ss)
+    )
+    if not (slope[0] == slope[1] and same):
         return -1, 0.0, none
     if mode == "height-correlated":
         return 2, float(slope[0]), none
@@ -364,7 +368,7 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
         s_hh, s_vv, lp, status = iem_jit.backscatter(
             _as_n(loc.si, n), _as_n(loc.ci, n), eps, ks, K, pref, spec, rough.dimension,
             transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
-            shadow=shadow,
+            shadow=shadow, threads=opt.threads,
         )  # fmt: skip
         if status:
             raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
@@ -552,6 +556,7 @@ def bistatic(
     rms_slope=None,
     crosspol: bool = True,
     crosspol_order: int = 8,
+    threads: int | None = None,
 ) -> Scattering:
     """Integral-equation (AIEM) bistatic scattering coefficients σ⁰, all four polarizations.
 
@@ -580,6 +585,8 @@ def bistatic(
     crosspol : add the multiple-scattering ``hv``, ``vh`` at every geometry (2-D surfaces).
     crosspol_order : Gauss–Legendre nodes per graded segment of its 2-D integral (8: ≲ 1e-2
         relative, 12: ≲ 1e-3).
+    threads : worker threads of the compiled exact-backscatter kernel (default: the CPU count,
+        at most 8; used from 512 backscatter angles on; results do not depend on it).
 
     Returns
     -------
@@ -598,6 +605,7 @@ def bistatic(
     opt.complementary = _choice("complementary", complementary, ("aiem", "fung92"))
     opt.first_order = _choice("first_order", first_order, ("spm", "model"))
     opt.rtol, opt.max_terms = rtol, int(max_terms)
+    opt.threads = workers_for(threads, 8)
     if shadowing not in _SHADOW_MODES or (isinstance(shadowing, str) is False and
                                           not isinstance(shadowing, bool | None)):  # fmt: skip
         raise ValueError(
@@ -621,11 +629,12 @@ def bistatic(
     sig = np.empty((2, 2, g.size))
     nonrec, prec = 0.0, -np.inf
     block = 1 << 14
+    back = g.backscatter_chunk(_BACK_TOL) if g.size <= block else None  # the common case, lean
     for st in range(0, g.size, block):
         sl = slice(st, st + block)
-        loc = g.chunk(sl, signed_azimuth=True)
+        loc = back if back is not None else g.chunk(sl, signed_azimuth=True)
         res = None
-        if _all_backscatter(loc):
+        if back is not None or _all_backscatter(loc):
             res = _backscatter(rough, loc.eps, k, loc, opt, slope, shadow_mode, log_w)
         if res is None:
             res = _single(rough, loc.eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w)

@@ -11,16 +11,19 @@ Walks go order by order (the tail test every fourth order), from the peak of the
 component (golden-section search on log n, skipped when the terms already fall from n = 2).
 
 Exact backscatter (:func:`backscatter`) first tries a linear-space walk
-(``iem_numba.fast_pair``, ``transition_lin``): hh and vv in one walk from n = 2 (they share
-the bases and the order weights), each order by multiplications (``x_j √((kσ)²/n)``) and one
-``Ŵₙ`` (one ``exp`` for the Gaussian, a square root for the exponential), the transition sums'
-``Ŵₙ`` reused, the same rigorous geometric tail bound at ``rtol`` (term ratios are
+(``iem_numba.lane_start``, ``walk_lanes``, ``transition_lin``): hh and vv in one walk from
+n = 2 (they share the bases and the order weights), each order by multiplications
+(``x_j √((kσ)²/n)``) and one ``Ŵₙ`` (one ``exp`` for the Gaussian, a square root for the
+exponential), the same rigorous geometric tail bound at ``rtol`` (term ratios are
 non-increasing from n = 3 for both closed forms), tested every fourth order (the transition
-sums: every odd order). It is used only where every term stays in the range of doubles —
-checked per geometry from the start magnitudes, the components' whole-series bounds and the
-final sums — and falls back to the log-space walk otherwise (kσ ≳ 5, very lossy high-ε
-media at kσ ≳ 2.5): same σ⁰ to ~1e-11 at rtol = 1e-12 (``tests/test_iem_fast.py``), ≈ 10×
-faster.
+sums: every odd order). Blocks of ``iem_numba.LANES`` geometries walk in lockstep, so each
+order's arithmetic is vectorized across geometries (a geometry that has met its stopping
+rule is frozen: the same sums as walking it alone). It is used only where every term stays in
+the range of doubles — checked per geometry from the start magnitudes, the components'
+whole-series bounds and the final sums — and falls back to the log-space walk otherwise
+(kσ ≳ 5, very lossy high-ε media at kσ ≳ 2.5): same σ⁰ to ~1e-11 at rtol = 1e-12
+(``tests/test_iem_fast.py``), ≈ 15× faster. Large calls split into contiguous chunks on
+threads (``threads``; :func:`emscatter.kernels._runtime.run_split`).
 
 Kernels compile on first use (tens of seconds on a loaded 2-core machine) and are cached on
 disk by the package runtime (:mod:`emscatter.kernels._runtime`: ``EMSCATTER_NUMBA_CACHE_DIR``,
@@ -93,6 +96,19 @@ def poisson_sums(logq, K, spec, dim, *, rtol):
     return out
 
 
+def _flat_n(v, n: int) -> np.ndarray:
+    """``v`` as a C-contiguous float array of length n (no copy when it already is one)."""
+    a = np.asarray(v, dtype=float)
+    if a.shape == (n,) and a.flags.c_contiguous:
+        return a
+    return np.full(n, float(a)) if a.ndim == 0 else np.ascontiguousarray(np.broadcast_to(a, (n,)))
+
+
+#: Fewest geometries per thread of the exact-backscatter kernel (~0.3–0.6 µs each: below
+#: this a second thread costs more than it saves).
+BACK_MIN_CHUNK = 256
+
+
 def backscatter(
     si,
     cs,
@@ -109,6 +125,7 @@ def backscatter(
     fast=True,
     report=False,
     shadow=(0, 0.0, None),
+    threads=1,
 ):
     """Exact-backscatter ``(σ⁰_hh, σ⁰_vv, log precision ratio, status)`` (the closed forms of
     :func:`emscatter.solvers.iem_kernels.backscatter_terms`, end to end).
@@ -117,21 +134,32 @@ def backscatter(
     log-space walk); ``report=True`` appends a boolean array: the fast path was taken.
     ``shadow = (code, s, ψ)``: the monostatic shadowing evaluated in the kernel (code 1
     direction-correlated with azimuths ψ (n,), 2 height-correlated, isotropic rms slope s;
-    0: none, or already in ``pref``)."""
+    0: none, or already in ``pref``). ``threads``: at most this many threads over contiguous
+    chunks of at least :data:`BACK_MIN_CHUNK` geometries (each geometry is independent: the
+    result does not depend on the split)."""
+    from ..kernels._runtime import run_split
+
     _, _, back_kernel = _build()
     n = si.size
     pec = isinstance(eps, str)
+    si, cs, K, pref = _flat_n(si, n), _flat_n(cs, n), _flat_n(K, n), _flat_n(pref, n)
+    psi = _flat_n(shadow[2], n) if shadow[0] == 1 else np.zeros(1)
     out_hh, out_vv, out_e = np.empty(n), np.empty(n), np.ones(n)
     out_fast = np.empty(n, dtype=np.bool_)
-    st = back_kernel(
-        np.ascontiguousarray(si, float), np.ascontiguousarray(cs, float),
-        complex(1.0 if pec else eps), pec, float(ks), np.ascontiguousarray(K, float),
-        np.ascontiguousarray(np.broadcast_to(pref, (n,)), float), int(spec), int(dim),
-        bool(transition), math.log(rtol), int(max_terms), bool(fast), int(shadow[0]),
-        float(shadow[1]), np.zeros(1) if shadow[2] is None else shadow[2], out_hh, out_vv,
-        out_e, out_fast,
-    )  # fmt: skip
+    e = complex(1.0 if pec else eps)
+    code, slope, log_rtol = int(shadow[0]), float(shadow[1]), math.log(rtol)
+    status = [0]
+
+    def part(a: int, b: int) -> None:
+        st = back_kernel(
+            si[a:b], cs[a:b], e, pec, float(ks), K[a:b], pref[a:b], int(spec), int(dim),
+            bool(transition), log_rtol, int(max_terms), bool(fast), code, slope,
+            psi[a:b] if code == 1 else psi, out_hh[a:b], out_vv[a:b], out_e[a:b], out_fast[a:b],
+        )  # fmt: skip
+        status.append(st)
+
+    run_split(part, n, threads, BACK_MIN_CHUNK)
     log_e = np.log(out_e)  # out_e ≥ 1
     if report:
-        return out_hh, out_vv, log_e, st, out_fast
-    return out_hh, out_vv, log_e, st
+        return out_hh, out_vv, log_e, max(status), out_fast
+    return out_hh, out_vv, log_e, max(status)

@@ -126,6 +126,39 @@ class Geometry:
             loc.sd = np.sqrt(np.maximum((1.0 - loc.cd) * (1.0 + loc.cd), 0.0))
         loc.eps = self.eps if isinstance(self.eps, str) else take(self.eps_flat)
         loc.phi_i, loc.phi_s = take(self.phi_i_flat), take(self.phi_s_flat)
+        self._lateral_q(loc)
+        loc.qz = loc.cs + loc.ci
+        # |q|²/k² = 2 (1 − k̂i·k̂s) = 2 (1 + cosθi cosθs − sinθi sinθs cosΔφ)
+        loc.q2 = np.maximum(2.0 * (1.0 + loc.ci * loc.cs - loc.si * loc.ss * loc.cd), 0.0)
+        loc.cos_l = np.minimum(0.5 * np.sqrt(loc.q2), 1.0)  # cosθl = |q|/(2k)
+        return loc
+
+    def backscatter_chunk(self, tol: float) -> Local | None:
+        """The whole geometry as one :class:`Local` when every geometry is exact backscatter
+        — θs is θi (the same checked array) and φs − φi ≡ π to ``tol`` rad — else None.
+
+        Computes only what backscatter needs (``si, ci, ss = si, cs = ci, cd, sd, qx, qy, eps,
+        phi_i, phi_s``, with :meth:`chunk`'s formulas and ``signed_azimuth=True``, so the
+        values are the same); ``qz, q2, cos_l`` are left unset."""
+        ti, ts, dphi = self.compact[0], self.compact[1], self.compact[2]
+        if ts is not ti or isinstance(ti, str):
+            return None
+        if not np.all(np.abs(np.mod(dphi, 2 * math.pi) - math.pi) <= tol):
+            return None
+        loc = Local()
+        loc.n = self.size
+        loc.si, loc.ci = _trig(self.ti_flat)
+        loc.ss, loc.cs = loc.si, loc.ci
+        dphi = self.dphi
+        loc.cd, loc.sd = np.cos(dphi), np.sin(dphi)
+        loc.eps = self.eps if isinstance(self.eps, str) else self.eps_flat
+        loc.phi_i, loc.phi_s = self.phi_i_flat, self.phi_s_flat
+        self._lateral_q(loc)
+        return loc
+
+    def _lateral_q(self, loc: Local) -> None:
+        """``loc.qx, loc.qy`` (units of k) from the trigonometry in ``loc``: the scattering
+        plane's components, rotated by φi unless φi = 0 or the profile is 1-D."""
         qxp = loc.ss * loc.cd - loc.si
         qyp = loc.ss * loc.sd
         if self.phi_i_zero or self.dimension == 1:
@@ -134,11 +167,6 @@ class Geometry:
             cpi, spi = np.cos(loc.phi_i), np.sin(loc.phi_i)
             loc.qx = qxp * cpi - qyp * spi
             loc.qy = qxp * spi + qyp * cpi
-        loc.qz = loc.cs + loc.ci
-        # |q|²/k² = 2 (1 − k̂i·k̂s) = 2 (1 + cosθi cosθs − sinθi sinθs cosΔφ)
-        loc.q2 = np.maximum(2.0 * (1.0 + loc.ci * loc.cs - loc.si * loc.ss * loc.cd), 0.0)
-        loc.cos_l = np.minimum(0.5 * np.sqrt(loc.q2), 1.0)  # cosθl = |q|/(2k)
-        return loc
 
 
 class Local:
@@ -195,7 +223,7 @@ def geometry(
         eps = PEC if is_pec(eps) else np.asarray(eps, dtype=complex)
     else:
         ti = check_angle("theta_i", theta_i)
-        ts = check_angle("theta_s", theta_s)
+        ts = ti if theta_s is theta_i else check_angle("theta_s", theta_s)  # backscatter: once
         ps = check_finite("phi_s", phi_s)
         pi_ = check_finite("phi_i", phi_i)
         for name, arr in (("phi_s", ps), ("phi_i", pi_)):
