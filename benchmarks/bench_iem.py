@@ -1,13 +1,14 @@
 """Integral-equation model: backscatter against SMRT 1.7 on the same inputs, bistatic throughput.
 
     PYTHONPATH=src .venv/bin/python benchmarks/bench_iem.py [--smrt /tmp/smrtvenv/bin/python]
-        [--reps 15 --rounds 9]
+        [--reps 15 --rounds 27 --round-seconds 0.2]
         → benchmarks/results/iem.json (and a table on stdout)
 
 SMRT (a peer, never a dependency) runs in its scratch venv
 (``python3 -m venv /tmp/smrtvenv && /tmp/smrtvenv/bin/pip install smrt``) as a timing server
-kept running beside this script: per size, ``--rounds`` alternations of our ``--reps`` calls
-and SMRT's ``--reps`` calls (each timed in its own process, median per round); the ratio is
+kept running beside this script: per size, ``--rounds`` alternations of our calls and SMRT's
+(each timed in its own process: at least ``--reps`` calls and ``--round-seconds`` of them, so
+both run warm; median per round); the ratio is
 the median over rounds of SMRT's time over ours, each round's two timings taken back to back
 (the same machine state: this shared 2-core machine's speed drifts ×1.5–2 within minutes),
 with its range over rounds. Without that interpreter the SMRT rows are skipped and said so.
@@ -63,13 +64,15 @@ models = {
         autocorrelation_function="exponential", warning_handling="nothing"), 3),
 }
 print("ready", flush=True)
-for line in sys.stdin:  # "<model> <n angles> <reps>" -> the reps' wall times [s], as JSON
-    name, n, reps = line.split()
+for line in sys.stdin:  # "<model> <n angles> <reps> <seconds>" -> wall times [s], as JSON
+    name, n, reps, seconds = line.split()
     model, npol = models[name]
     mu = np.cos(np.radians(np.linspace(0.5, 70.0, int(n))))
+    t0 = time.perf_counter()
     model.diffuse_reflection_matrix(f, 1, complex(er, ei), mu, mu, np.pi, npol)
+    reps = max(int(reps), int(float(seconds) / max(time.perf_counter() - t0, 1e-6)))
     t = []
-    for _ in range(int(reps)):
+    for _ in range(reps):
         t0 = time.perf_counter()
         model.diffuse_reflection_matrix(f, 1, complex(er, ei), mu, mu, np.pi, npol)
         t.append(time.perf_counter() - t0)
@@ -77,8 +80,11 @@ for line in sys.stdin:  # "<model> <n angles> <reps>" -> the reps' wall times [s
 """
 
 
-def _times(fn, reps: int) -> list[float]:
+def _times(fn, reps: int, seconds: float = 0.0) -> list[float]:
+    """Wall times of ``max(reps, seconds / one call)`` calls after a warm-up call."""
+    t0 = time.perf_counter()
     fn()
+    reps = max(reps, int(seconds / max(time.perf_counter() - t0, 1e-6)))
     t = []
     for _ in range(reps):
         t0 = time.perf_counter()
@@ -106,8 +112,8 @@ class _Smrt:
         if self.proc.stdout.readline().strip() != "ready":
             raise RuntimeError("the SMRT timing server did not start")
 
-    def times(self, model: str, n: int, reps: int) -> list[float]:
-        self.proc.stdin.write(f"{model} {n} {reps}\n")
+    def times(self, model: str, n: int, reps: int, seconds: float = 0.0) -> list[float]:
+        self.proc.stdin.write(f"{model} {n} {reps} {seconds}\n")
         self.proc.stdin.flush()
         return json.loads(self.proc.stdout.readline())
 
@@ -119,11 +125,17 @@ class _Smrt:
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smrt", default="/tmp/smrtvenv/bin/python")
-    ap.add_argument("--reps", type=int, default=7, help="calls per timing (median)")
+    ap.add_argument("--reps", type=int, default=7, help="fewest calls per timing (median)")
+    ap.add_argument(
+        "--round-seconds",
+        type=float,
+        default=0.2,
+        help="each contender's share of a round: as many calls as fit (warm caches)",
+    )
     ap.add_argument(
         "--rounds",
         type=int,
-        default=9,
+        default=27,
         help="alternations of our timing and SMRT's per size (ratio: their median)",
     )
     ap.add_argument("--out", type=Path, default=HERE / "results" / "iem.json")
@@ -148,11 +160,16 @@ def main(argv=None) -> dict:
         chunk = getattr(iem_jit, "BACK_MIN_CHUNK", None)  # None: a version without threads
         split = chunk is not None and n >= 2 * chunk
         for _ in range(args.rounds):
-            ours_r.append(statistics.median(_times(run(crosspol=False), args.reps)))
+            sec = args.round_seconds
+            ours_r.append(statistics.median(_times(run(crosspol=False), args.reps, sec)))
             if split:
-                one_r.append(statistics.median(_times(run(crosspol=False, threads=1), args.reps)))
+                one_r.append(
+                    statistics.median(_times(run(crosspol=False, threads=1), args.reps, sec))
+                )
             if server is not None:
-                theirs_r.append(statistics.median(server.times("smrt_iem_fung92", n, args.reps)))
+                theirs_r.append(
+                    statistics.median(server.times("smrt_iem_fung92", n, args.reps, sec))
+                )
         times[f"iem_copol/{n}"] = statistics.median(ours_r)
         if split:
             times[f"iem_copol_one_thread/{n}"] = statistics.median(one_r)
@@ -255,6 +272,7 @@ def main(argv=None) -> dict:
         }
     out["command"] = (
         f"PYTHONPATH=src python benchmarks/bench_iem.py --reps {args.reps} --rounds {args.rounds}"
+        f" --round-seconds {args.round_seconds}"
     )
     write_json(args.out, out)
     print(json.dumps({k_: v for k_, v in out.items() if k_ != "machine"}, indent=1))

@@ -113,6 +113,8 @@ def check_positive(name: str, value, *, unit: str = "") -> float:
 
 
 def check_real_scalar(name: str, value) -> float:
+    if type(value) in _FLOATS and math.isfinite(value):  # the common scalar: no array round trip
+        return float(value)
     if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real | np.ndarray):
         raise TypeError(f"{name} must be a real number, got {value!r}")
     arr = np.asarray(value)

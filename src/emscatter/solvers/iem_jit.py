@@ -63,15 +63,16 @@ def spectrum_code(rough) -> int | None:
 
 @functools.cache
 def _build():
+    from ..kernels._runtime import run_split
     from . import iem_numba
 
-    return iem_numba.series_kernel, iem_numba.poisson_kernel, iem_numba.back_kernel
+    return iem_numba.series_kernel, iem_numba.poisson_kernel, iem_numba.back_kernel, run_split
 
 
 def series_rows(la, lx, ph, sx, d, log_ks2, spec, dim, K, pref, *, rtol, max_terms):
     """Compiled :func:`emscatter.solvers.iem_series.iem_series` (same arguments, ``spec``,
     ``dim`` the spectrum code and dimension): ``(log σ⁰, log precision ratio)``."""
-    series_kernel, _, _ = _build()
+    series_kernel, _, _, _ = _build()
     n = la.shape[0]
     out_s, out_e = np.empty(n), np.empty(n)
     st = series_kernel(
@@ -88,7 +89,7 @@ def series_rows(la, lx, ph, sx, d, log_ks2, spec, dim, K, pref, *, rtol, max_ter
 
 def poisson_sums(logq, K, spec, dim, *, rtol):
     """``log Σ_{n≥1} qⁿ/n! Ŵₙ(K)`` per element (``logq = log q``)."""
-    _, poisson_kernel, _ = _build()
+    _, poisson_kernel, _, _ = _build()
     logq = np.ascontiguousarray(logq, float).ravel()
     out = np.empty(logq.size)
     poisson_kernel(logq, np.ascontiguousarray(np.broadcast_to(K, logq.shape), float).ravel(),
@@ -137,9 +138,7 @@ def backscatter(
     0: none, or already in ``pref``). ``threads``: at most this many threads over contiguous
     chunks of at least :data:`BACK_MIN_CHUNK` geometries (each geometry is independent: the
     result does not depend on the split)."""
-    from ..kernels._runtime import run_split
-
-    _, _, back_kernel = _build()
+    _, _, back_kernel, run_split = _build()
     n = si.size
     pec = isinstance(eps, str)
     si, cs, K, pref = _flat_n(si, n), _flat_n(cs, n), _flat_n(K, n), _flat_n(pref, n)

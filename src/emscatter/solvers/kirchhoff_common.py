@@ -143,7 +143,10 @@ class Geometry:
         ti, ts, dphi = self.compact[0], self.compact[1], self.compact[2]
         if ts is not ti or isinstance(ti, str):
             return None
-        if not np.all(np.abs(np.mod(dphi, 2 * math.pi) - math.pi) <= tol):
+        if dphi.ndim == 0:  # one azimuth difference (the usual call): no ufunc round trips
+            if not abs(float(dphi) % (2 * math.pi) - math.pi) <= tol:
+                return None
+        elif not np.all(np.abs(np.mod(dphi, 2 * math.pi) - math.pi) <= tol):
             return None
         loc = Local()
         loc.n = self.size
@@ -151,7 +154,8 @@ class Geometry:
         loc.ss, loc.cs = loc.si, loc.ci
         dphi = self.dphi
         loc.cd, loc.sd = np.cos(dphi), np.sin(dphi)
-        loc.eps = self.eps if isinstance(self.eps, str) else self.eps_flat
+        e = self.compact[5]  # (not self.eps: that broadcasts a scalar ε to the full shape)
+        loc.eps = e if isinstance(e, str) else self.eps_flat
         loc.phi_i, loc.phi_s = self.phi_i_flat, self.phi_s_flat
         self._lateral_q(loc)
         return loc
