@@ -125,7 +125,9 @@ def test_band_equals_separate_calls_and_runs_the_solver_once_per_frequency(monke
         rough, concrete, frequency=f[:, None], theta_i=th, theta_s=0.2, phi_s=0.0, method="spm"
     )
     assert len(calls) == 3 and band.k.shape == (4, 3)
-    assert not band.coherent_computed
+    # the spy hides spm's `coherent` option, so each frequency's coherent part came with σ⁰:
+    # the band keeps it (no lazy wrapper around values already computed)
+    assert band.coherent_computed
     for j, fj in enumerate(f):
         one = em.bistatic(
             rough,
@@ -205,8 +207,13 @@ def test_a_caller_may_ask_for_the_coherent_part_eagerly():
         method="spm",
         coherent=True,
     )
+    assert band.coherent_computed  # eager at every frequency: the band result is eager too
+    lazy_band = em.backscatter(rough, 17 + 2j, frequency=np.array([0.5e9, 1e9]), theta_i=0.4,
+                               method="spm")  # fmt: skip
+    assert not lazy_band.coherent_computed
     one = em.backscatter(rough, 17 + 2j, frequency=1e9, theta_i=0.4, method="spm")
     np.testing.assert_allclose(band.coherent[:, 2], one.coherent, rtol=1e-13)
+    np.testing.assert_allclose(lazy_band.coherent[:, 1], one.coherent, rtol=1e-13)
 
 
 def test_validity_reports_are_cached_per_roughness(monkeypatch):
@@ -289,3 +296,26 @@ def test_backscatter_at_one_scalar_angle_equals_the_array_call(method):
     arr = em.backscatter(rough, 5 + 1j, theta_i=np.array([0.3]), **kw)
     assert np.shape(one.vv) == () and np.shape(arr.vv) == (1,)
     np.testing.assert_allclose(one.sigma0[..., None], arr.sigma0, rtol=1e-12)
+
+
+def test_validity_warnings_of_a_band_point_at_the_callers_line():
+    """A ValidityWarning names the user's line (not a library frame) for one frequency and for
+    a band, in bistatic, backscatter and emissivity."""
+    rough = em.GaussianCorrelation(0.05, 0.1)  # kσ ≈ 1–2 at 1–2 GHz: SPM out of its range
+    f = np.array([1e9, 2e9])
+    calls = (
+        lambda: em.bistatic(rough, 5 + 1j, frequency=1e9, theta_i=0.3, theta_s=0.3, phi_s=0.0,
+                            method="spm"),
+        lambda: em.bistatic(rough, 5 + 1j, frequency=f, theta_i=0.3, theta_s=0.3, phi_s=0.0,
+                            method="spm"),
+        lambda: em.backscatter(rough, 5 + 1j, frequency=f, theta_i=0.3, method="spm"),
+        lambda: em.emissivity(rough, 5 + 1j, frequency=f, theta_i=0.3, method="spm"),
+    )  # fmt: skip
+    for call in calls:
+        with warnings.catch_warnings(record=True) as rec:
+            warnings.simplefilter("always")
+            call()
+        found = [w for w in rec if issubclass(w.category, ValidityWarning)]
+        assert found and all(w.filename == __file__ for w in found), [
+            (w.filename, w.lineno) for w in found
+        ]

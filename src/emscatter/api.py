@@ -128,15 +128,17 @@ def _solver_entry(module):
 
 # ----------------------------------------------------------------------------- bistatic
 def _bistatic_one(
-    rough, eps, k, angles, method, out_of_range, options, monostatic=False
+    rough, eps, k, angles, method, out_of_range, options, monostatic=False, depth=0
 ) -> Scattering:
     """One frequency: resolve the method, run the solver, apply the validity policies
-    (``monostatic``: the angles are the backscatter ones, told to a solver entry that asks)."""
+    (``monostatic``: the angles are the backscatter ones, told to a solver entry that asks;
+    ``depth``: frames between the public function's caller and the usual call path, so that
+    warnings point at the user's line — 1 from a band's :func:`_bistatic_groups`)."""
     ti, ts, ps, pi_ = angles
     name = rank_methods(rough, k, eps=eps)[0][0] if method == "auto" else method
     opts = _map_options(name, options, method == "auto")  # before any warning
     name, module, report, make_nan = resolve_method(
-        rough, k, name, out_of_range, eps, theta_i=ti, stacklevel=6
+        rough, k, name, out_of_range, eps, theta_i=ti, stacklevel=6 + depth
     )  # warnings point at the caller of bistatic/backscatter
     # BOARD interface 3: the coherent part is computed on first read, unless asked for eagerly
     lazy = _takes(module.bistatic, "coherent") and not opts.pop("coherent", False)
@@ -168,7 +170,7 @@ def _bistatic_one(
     if valid is not None and out_of_range != "ignore" and not np.all(valid):
         bad = ~_angle_mask(report, shape)
         reasons = report.get("angle_reasons", [])
-        blank = angle_policy(name, bad, result.theta_i, out_of_range, reasons, stacklevel=5)
+        blank = angle_policy(name, bad, result.theta_i, out_of_range, reasons, stacklevel=5 + depth)
         blank = blank if blank.any() else None
     if make_nan or blank is not None:
         mask = np.ones(shape, dtype=bool) if make_nan else blank
@@ -217,10 +219,10 @@ def _merged_validity(parts) -> dict:
 
 def _bistatic_groups(rough, groups: list[Group], shape, k_b, angles, method, out_of_range, opts):
     """Several frequencies: one solver run per group, results placed back element-wise."""
-    parts = [
-        (g, _bistatic_one(rough, g.eps, g.k, g.take(angles), method, out_of_range, opts))
-        for g in groups
-    ]
+    parts = []
+    for g in groups:  # (a loop, not a comprehension: its frame count differs across Pythons)
+        res = _bistatic_one(rough, g.eps, g.k, g.take(angles), method, out_of_range, opts, depth=1)
+        parts.append((g, res))
     sigma0 = np.empty((2, 2, *shape))
     methods = np.empty(shape, dtype=object)
     for g, res in parts:
@@ -233,6 +235,8 @@ def _bistatic_groups(rough, groups: list[Group], shape, k_b, angles, method, out
             out[:, g.mask] = res.coherent
         return out
 
+    if all(res.coherent_computed for _, res in parts):  # eager at every frequency: stay eager
+        coherent = coherent()
     ti, ts, ps, pi_ = (np.broadcast_to(a, shape) for a in angles)
     info = {**parts[0][1].info, "validity": _merged_validity(parts), "methods": methods}
     info.pop("out_of_range", None)
