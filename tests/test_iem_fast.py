@@ -1,5 +1,5 @@
-"""The linear-space backscatter walk of the compiled IEM kernel (iem_numba.fast_walk,
-transition_lin) against the log-space walk it replaces where safe, and against numpy."""
+"""The linear-space backscatter walk of the compiled IEM kernel (iem_numba.walk_lanes,
+walk_transition) against the log-space walk it replaces where safe, and against numpy."""
 
 from __future__ import annotations
 

@@ -229,14 +229,14 @@ def _bistatic_groups(rough, groups: list[Group], shape, k_b, angles, method, out
         sigma0[:, :, g.mask] = res.sigma0
         methods[g.mask] = res.method
 
-    def coherent():
+    def gather_coherent():
         out = np.empty((2, *shape))
         for g, res in parts:
             out[:, g.mask] = res.coherent
         return out
 
-    if all(res.coherent_computed for _, res in parts):  # eager at every frequency: stay eager
-        coherent = coherent()
+    eager = all(res.coherent_computed for _, res in parts)  # then the band stays eager too
+    coherent = gather_coherent() if eager else gather_coherent
     ti, ts, ps, pi_ = (np.broadcast_to(a, shape) for a in angles)
     info = {**parts[0][1].info, "validity": _merged_validity(parts), "methods": methods}
     info.pop("out_of_range", None)

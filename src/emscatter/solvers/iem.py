@@ -287,7 +287,7 @@ def _choice(name, value, allowed):
 
 def _spectral_args(rough, k, loc, n):
     """Scaled spectral argument K and log normalization of the series (module docstring)."""
-    qx, qy = _as_n(loc.qx, n), _as_n(loc.qy, n)
+    qx, qy = iem_jit.flat_n(loc.qx, n), iem_jit.flat_n(loc.qy, n)
     if rough.dimension == 2:
         K = np.sqrt((qx * (k * rough.length)) ** 2 + (qy * (k * rough.length_y)) ** 2)
         return K, math.log(math.pi * (k * rough.length) * (k * rough.length_y))
@@ -321,14 +321,6 @@ def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
                       max_terms=opt.max_terms)  # fmt: skip
 
 
-def _as_n(v, n: int) -> np.ndarray:
-    """``v`` as a flat float array of length n (no copy when it already is one)."""
-    a = np.asarray(v, dtype=float)
-    if a.shape == (n,):
-        return a
-    return np.full(n, float(a)) if a.ndim == 0 else np.broadcast_to(a, (n,))
-
-
 def _back_shadow_args(mode, loc, slope):
     """Shadowing of a backscatter chunk for the compiled kernel: ``(code, s, ψ)`` — code 0
     none, 1 direction-correlated, 2 height-correlated, evaluated in the kernel (the formulas
@@ -345,7 +337,7 @@ def _back_shadow_args(mode, loc, slope):
     if mode == "height-correlated":
         return 2, float(slope[0]), none
     psi = np.abs(np.mod(loc.phi_s - loc.phi_i - math.pi + math.pi, 2 * math.pi) - math.pi)
-    return 1, float(slope[0]), _as_n(psi, loc.n)
+    return 1, float(slope[0]), iem_jit.flat_n(psi, loc.n)
 
 
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
@@ -363,10 +355,11 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
         K, pref = _spectral_args(rough, k, loc, n)
         shadow = _back_shadow_args(shadow_mode, loc, slope)
         if shadow[0] < 0:
-            pref = pref + np.log(_as_n(_shadowing(shadow_mode, loc, slope), n))  # > 0
+            pref = pref + np.log(iem_jit.flat_n(_shadowing(shadow_mode, loc, slope), n))  # > 0
             shadow = (0, 0.0, shadow[2])
         s_hh, s_vv, lp, status = iem_jit.backscatter(
-            _as_n(loc.si, n), _as_n(loc.ci, n), eps, ks, K, pref, spec, rough.dimension,
+            iem_jit.flat_n(loc.si, n), iem_jit.flat_n(loc.ci, n), eps, ks, K, pref, spec,
+            rough.dimension,
             transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
             shadow=shadow, threads=opt.threads,
         )  # fmt: skip

@@ -11,7 +11,7 @@ Walks go order by order (the tail test every fourth order), from the peak of the
 component (golden-section search on log n, skipped when the terms already fall from n = 2).
 
 Exact backscatter (:func:`backscatter`) first tries a linear-space walk
-(``iem_numba.lane_start``, ``walk_lanes``, ``transition_lin``): hh and vv in one walk from
+(``iem_numba.lane_start``, ``walk_lanes``, ``walk_transition``): hh and vv in one walk from
 n = 2 (they share the bases and the order weights), each order by multiplications
 (``x_j √((kσ)²/n)``) and one ``Ŵₙ`` (one ``exp`` for the Gaussian, a square root for the
 exponential), the same rigorous geometric tail bound at ``rtol`` (term ratios are
@@ -97,8 +97,9 @@ def poisson_sums(logq, K, spec, dim, *, rtol):
     return out
 
 
-def _flat_n(v, n: int) -> np.ndarray:
-    """``v`` as a C-contiguous float array of length n (no copy when it already is one)."""
+def flat_n(v, n: int) -> np.ndarray:
+    """``v`` as a C-contiguous float array of length n (no copy when it already is one; a
+    number is spread with ``np.full``)."""
     a = np.asarray(v, dtype=float)
     if a.shape == (n,) and a.flags.c_contiguous:
         return a
@@ -141,8 +142,8 @@ def backscatter(
     _, _, back_kernel, run_split = _build()
     n = si.size
     pec = isinstance(eps, str)
-    si, cs, K, pref = _flat_n(si, n), _flat_n(cs, n), _flat_n(K, n), _flat_n(pref, n)
-    psi = _flat_n(shadow[2], n) if shadow[0] == 1 else np.zeros(1)
+    si, cs, K, pref = flat_n(si, n), flat_n(cs, n), flat_n(K, n), flat_n(pref, n)
+    psi = flat_n(shadow[2], n) if shadow[0] == 1 else np.zeros(1)
     out_hh, out_vv, out_e = np.empty(n), np.empty(n), np.ones(n)
     out_fast = np.empty(n, dtype=np.bool_)
     e = complex(1.0 if pec else eps)

@@ -399,46 +399,6 @@ def isqrt(n):
 
 
 @inline
-def transition_lin(Q, K2, spec, dim, rtol_t):
-    """Linear-space :func:`transition_sums`: ``(ok, S(2Q)/S(Q) e^{−Q}, S(4Q)/S(Q) e^{−2Q})``
-    with ``S(βQ) = Σ_{n≥1} (βQ)ⁿ/n! Ŵₙ`` (one geometry; :func:`walk_transition` runs it on
-    lanes). Stops
-    when the geometric tail of each of the three series (term ratios non-increasing from n = 3
-    on for these spectra) is below ``rtol_t`` of its sum; ``ok`` False when the sums leave the
-    safe range (the caller then takes the log-space path)."""
-    s1 = s2 = s4 = 0.0
-    qn, p2, p4, prev = 1.0, 1.0, 1.0, 0.0
-    n = 1.0
-    while True:
-        qn *= Q / n
-        p2 *= 2.0
-        p4 *= 4.0
-        w = w_lin(n, K2, spec, dim)
-        i = int(n)
-        t1 = qn * w
-        s1 += t1
-        s2 += t1 * p2
-        s4 += t1 * p4
-        if n >= 3.0 and i & 1 and prev > 0.0:  # tail test at odd orders
-            r1 = t1 / prev
-            r4 = 4.0 * r1
-            if r4 < 1.0:
-                r2 = 2.0 * r1
-                if (t1 * r1 / (1.0 - r1) <= rtol_t * s1
-                        and t1 * p2 * r2 / (1.0 - r2) <= rtol_t * s2
-                        and t1 * p4 * r4 / (1.0 - r4) <= rtol_t * s4):  # fmt: skip
-                    break
-        prev = t1
-        n += 1.0
-        if n > FAST_MAX_ORDER:
-            return False, 0.0, 0.0
-    if not (TINY <= s1 < HUGE and s4 < HUGE):
-        return False, 0.0, 0.0
-    eq = math.exp(-Q)
-    return True, s2 / s1 * eq, s4 / s1 * eq * eq
-
-
-@inline
 def back_shadowing(s, c, den1, code, psi):
     """:func:`emscatter.solvers.iem._shadowing` at backscatter, one direction: Smith's Λ
     (:func:`emscatter.solvers.kirchhoff_common.smith_lambda`) at ``a = cosθ/(sinθ √2 s)``
@@ -506,14 +466,13 @@ def _drop_or_walk(S, l, ph, pv, zrow, e, xx, inv2, ks2):
 
 @inline
 def lane_start(S, l, a0h, a0v, a1h, a1v, a2h, a2v, x0, x1, x2, att0, att1, e0, e1, dh, dv,
-               three, ks2, K2, spec, dim):  # fmt: skip
+               ks2, K2, spec, dim):  # fmt: skip
     """Set up lane ``l`` for :func:`walk_lanes` (its docstring: the terms, the scaling, the
-    range checks) at n = 1 and 2; False (lane inactive): the linear-space walk is not safe."""
+    range checks) at n = 1 and 2; a PEC passes zero lower-medium amplitudes and ``att1 = 0``.
+    False (lane inactive): the linear-space walk is not safe."""
     S[ACT + l] = 0.0
     sks = math.sqrt(ks2)
     w1 = w_lin(1.0, K2, spec, dim)
-    if not three:
-        a1h = a1v = a2h = a2v = 0j
     S[H0R + l], S[H0I + l], S[V0R + l], S[V0I + l] = a0h.real, a0h.imag, a0v.real, a0v.imag
     S[H1R + l], S[H1I + l], S[V1R + l], S[V1I + l] = a1h.real, a1h.imag, a1v.real, a1v.imag
     S[H2R + l], S[H2I + l], S[V2R + l], S[V2I + l] = a2h.real, a2h.imag, a2v.real, a2v.imag
@@ -629,18 +588,8 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
             live += 1
     n = 2.0
     while live > 0:
-        # Ŵₙ per lane (vectorized closed forms)
-        if spec == 1:
-            if dim == 2:
-                for l in range(m):
-                    t = n * n + S[K2F + l]
-                    w[l] = n / (2.0 * math.pi * t * math.sqrt(t))
-            else:
-                for l in range(m):
-                    w[l] = n / (math.pi * (n * n + S[K2F + l]))
-        else:
-            for l in range(m):
-                w[l] = w_lin(n, S[K2F + l], spec, dim)
+        for l in range(m):  # Ŵₙ per lane
+            w[l] = w_lin(n, S[K2F + l], spec, dim)
         for l in range(m):  # one order for every lane (frozen lanes add nothing)
             z0, z1, z2 = S[Z0 + l], S[Z1 + l], S[Z2 + l]
             hr = S[H0R + l] * z0 + S[H1R + l] * z1 + S[H2R + l] * z2
@@ -705,10 +654,13 @@ T_ROWS = 9
 
 @jit
 def walk_transition(T, m, spec, dim, rtol_t, out_ok):
-    """:func:`transition_lin` for lanes ``0 … m−1`` of ``T`` in lockstep (rows ``TQ`` = Q,
-    ``TK2`` = K², ``TACT`` = 1 where wanted; the same operations per lane, so the same sums):
-    ``S(βQ)`` end in rows ``TS1, TS2, TS4``; ``out_ok[l]`` False where the sums left the safe
-    range (the caller then takes the log-space path)."""
+    """Linear-space :func:`transition_sums` for lanes ``0 … m−1`` of ``T`` in lockstep (rows
+    ``TQ`` = Q, ``TK2`` = K², ``TACT`` = 1 where wanted): ``S(βQ) = Σ_{n≥1} (βQ)ⁿ/n! Ŵₙ`` for
+    β = 1, 2, 4 end in rows ``TS1, TS2, TS4`` (:func:`transition_ratios` reads them). A lane
+    stops when the geometric tail of each of the three series (term ratios non-increasing from
+    n = 3 on for these spectra, tested at odd orders) is below ``rtol_t`` of its sum;
+    ``out_ok[l]`` False when the sums leave the safe range (the caller then takes the
+    log-space path). One lane (m = 1) is the one-geometry form the log-space path uses."""
     w = np.empty(m)
     live = 0
     for l in range(m):
@@ -722,13 +674,8 @@ def walk_transition(T, m, spec, dim, rtol_t, out_ok):
     while live > 0:
         p2 *= 2.0
         p4 *= 4.0
-        if spec == 1 and dim == 2:
-            for l in range(m):
-                t = n * n + T[TK2 + l]
-                w[l] = n / (2.0 * math.pi * t * math.sqrt(t))
-        else:
-            for l in range(m):
-                w[l] = w_lin(n, T[TK2 + l], spec, dim)
+        for l in range(m):
+            w[l] = w_lin(n, T[TK2 + l], spec, dim)
         for l in range(m):
             qn = T[TQN + l] * (T[TQ + l] / n)
             T[TQN + l] = qn
@@ -766,6 +713,14 @@ def walk_transition(T, m, spec, dim, rtol_t, out_ok):
         s1, s4 = T[TS1 + l], T[TS4 + l]
         if not (TINY <= s1 < HUGE and s4 < HUGE):
             out_ok[l] = False
+
+
+@inline
+def transition_ratios(T, l):
+    """``(S(2Q)/S(Q) e^{−Q}, S(4Q)/S(Q) e^{−2Q})`` of lane ``l`` after :func:`walk_transition`."""
+    s1 = T[TS1 + l]
+    eq = math.exp(-T[TQ + l])
+    return T[TS2 + l] / s1 * eq, T[TS4 + l] / s1 * eq * eq
 
 
 @inline
@@ -816,12 +771,13 @@ def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2):
 
 @inline
 def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_rtol, r0, r08,
-                r08sq, a0, ieps):  # fmt: skip
+                r08sq, a0, ieps, T, tr_ok):  # fmt: skip
     """Per-geometry coefficients of exact backscatter, one geometry at a time (the
     log-space path): ``(fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J)`` — Fresnel
     coefficients at θ and with the transition, ``a = Re q₂``, the height exponents, the
     lower-medium combinations (zero for a PEC: ``J = 1``); ``fast`` False where the linear
-    transition sums left the safe range (the log-space sums were used)."""
+    transition sums left the safe range (the log-space sums were used). ``T, tr_ok``: lane
+    state for a one-lane :func:`walk_transition` (lane 0 is overwritten)."""
     s2 = s * s
     zero = (0j, 0j, 0j, 0j)
     q2, iq, rh, rv = fresnel_setup(s, c, eps, pec)
@@ -831,7 +787,11 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
         e2, e4 = 2.0, 4.0
         if c > 0:
             if fast:
-                fast, e2, e4 = transition_lin(Q, Kr * Kr, spec, dim, rtol * 1e-2)
+                T[TQ], T[TK2], T[TACT] = Q, Kr * Kr, 1.0
+                walk_transition(T, 1, spec, dim, rtol * 1e-2, tr_ok)
+                fast = tr_ok[0]
+                if fast:
+                    e2, e4 = transition_ratios(T, 0)
             if not fast:
                 lq = math.log(Q)
                 l1, l2, l4 = transition_sums(lq, Kr, spec, dim, log_rtol - 4.6)
@@ -917,10 +877,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 if c > 0:
                     if not tr_ok[l]:
                         continue  # log-space path
-                    s1 = T[TS1 + l]
-                    eq = math.exp(-T[TQ + l])
-                    e2 = T[TS2 + l] / s1 * eq
-                    e4 = T[TS4 + l] / s1 * eq * eq
+                    e2, e4 = transition_ratios(T, l)
                 rh_t, rv_t = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
             e_k = -2.0 * ks2 * c * c
             ek_lin = math.exp(e_k)
@@ -935,7 +892,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             started[l] = lane_start(
                 S, l, -4.0 * rh_t, 4.0 * rv_t, g1h, g1v, g2h, g2v, 2.0 * c, c + a, c - a, ek_lin,
                 att1, e_k, e_g, -4.0 * s2 * rh * rh * ek_lin, 4.0 * s2 * rv * rv * ek_lin,
-                not pec, ks2, K[r] * K[r], spec, dim,
+                ks2, K[r] * K[r], spec, dim,
             )  # fmt: skip
             any_started = any_started or started[l]
         if any_started:
@@ -956,7 +913,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             s2 = s * s
             fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J = angle_setup(
                 s, c, K[r], eps, pec, ks2, spec, dim, transition, use_fast, rtol, log_rtol, r0,
-                r08, r08sq, a0, ieps,
+                r08, r08sq, a0, ieps, T, tr_ok,
             )  # fmt: skip
             lx[0] = math.log(2.0 * c) if c > 0 else -np.inf
             if not pec:

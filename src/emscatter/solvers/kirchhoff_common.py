@@ -141,7 +141,7 @@ class Geometry:
         phi_i, phi_s``, with :meth:`chunk`'s formulas and ``signed_azimuth=True``, so the
         values are the same); ``qz, q2, cos_l`` are left unset."""
         ti, ts, dphi = self.compact[0], self.compact[1], self.compact[2]
-        if ts is not ti or isinstance(ti, str):
+        if ts is not ti:
             return None
         if dphi.ndim == 0:  # one azimuth difference (the usual call): no ufunc round trips
             if not abs(float(dphi) % (2 * math.pi) - math.pi) <= tol:
