@@ -11,6 +11,13 @@ import pytest
 
 import emscatter as em
 from emscatter import materials
+from emscatter.coherent import (
+    ament_factor,
+    boithias_factor,
+    coherent_amplitude,
+    kirchhoff_transmission_factor,
+    rayleigh_parameter,
+)
 from emscatter.conventions import ConventionError, wavenumber
 from emscatter.fresnel import fresnel
 from emscatter.radio import (
@@ -34,15 +41,9 @@ from emscatter.radio.tables import (
     lobe_coordinates,
     lobe_directions,
 )
-from emscatter.solvers import kirchhoff_common, spm
-from emscatter.solvers.coherent import (
-    ament_factor,
-    boithias_factor,
-    coherent_amplitude,
-    kirchhoff_transmission_factor,
-    rayleigh_parameter,
-)
+from emscatter.solvers.kirchhoff import common as kirchhoff_common
 from emscatter.solvers.select import ValidityError
+from emscatter.solvers.spm import model as spm
 
 SMALL = TableOptions(n_cos=33, n_cos_spm=9, n_theta=12, n_alpha=13, n_s=32)
 EPS = 5.24 + 0.6j

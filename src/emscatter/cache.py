@@ -137,7 +137,7 @@ def _source_fingerprint() -> str:
     """Hash of (path, size, mtime) of every module of the package, once per process."""
     global _FINGERPRINT
     if _FINGERPRINT is None:
-        from . import __version__
+        from ._version import __version__
 
         root = Path(__file__).resolve().parent
         h = hashlib.sha256(__version__.encode())

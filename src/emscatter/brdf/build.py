@@ -11,7 +11,7 @@ quadrature).
 
 Geometric optics: its σ⁰ is the stationary-phase limit of the *whole* Kirchhoff intensity,
 so adding the Kirchhoff coherent term would count the specular energy twice
-(:mod:`emscatter.solvers.kirchhoff_go`); GO tables have ``coherent = 0`` and say so in
+(:mod:`emscatter.solvers.kirchhoff.go`); GO tables have ``coherent = 0`` and say so in
 ``metadata["coherent"]``.
 """
 
@@ -383,7 +383,7 @@ def _surface_params(rough) -> dict:
 
 
 def _version() -> str:
-    from .. import __version__
+    from .._version import __version__
 
     return __version__
 

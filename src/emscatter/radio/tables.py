@@ -3,7 +3,7 @@
 For one surface, one medium and one frequency:
 
 * **coherent** — the front face's complex coherent reflection ``r_coh,p`` (h, v) on a grid
-  uniform in ``cosθi`` (:func:`emscatter.solvers.coherent.coherent_amplitude`), stored with
+  uniform in ``cosθi`` (:func:`emscatter.coherent.coherent_amplitude`), stored with
   the flat Fresnel coefficient beside it: the material evaluates Fresnel (and the slab) exactly
   per ray and interpolates only the smooth roughness correction ``r_coh − r_Fresnel``;
 * **lobe** — ``σ⁰_qp(θi, θs, φs) / (4π cosθi)`` [1/sr] for the four pairs ``hh, hv, vh, vv``
@@ -254,7 +254,7 @@ def _coherent_on_grid(rough, eps, k, method, cos_nodes, fres, n_spm):
     and the correction ``r_coh − r_Fresnel`` is carried to the grid by a cubic spline."""
     from scipy.interpolate import CubicSpline
 
-    from ..solvers.coherent import coherent_amplitude
+    from ..coherent import coherent_amplitude
 
     def amp(c):
         th = np.arccos(np.clip(c, 1e-4, 1.0))
