@@ -103,20 +103,23 @@ def check_xml_plugin():
     import emscatter.radio.material as m
     from emscatter.radio import scenes
 
-    d = Path(tempfile.mkdtemp(prefix="radio-xml-"))
-    scenes.write_ply(d / "floor.ply", scenes.quad([-5, -5, 0], [10, 0, 0], [0, 10, 0]))
-    (d / "scene.xml").write_text(
-        '<scene version="2.1.0">\n'
-        f'<bsdf type="{m.PLUGIN_NAME}" id="rough-floor">'
-        '<string name="medium" value="concrete"/>'
-        '<float name="rms_height" value="0.0004"/>'
-        '<float name="correlation_length" value="0.004"/>'
-        '<float name="thickness" value="0.2"/></bsdf>\n'
-        '<shape type="ply" id="floor"><string name="filename" value="floor.ply"/>'
-        '<ref id="rough-floor" name="bsdf"/></shape>\n</scene>\n'
-    )
-    scene = rt.load_scene(str(d / "scene.xml"), merge_shapes=False)
-    scene.frequency = 28e9
+    # The files live only until Sionna has read them (load_scene returns): nothing is left in
+    # the temp dir, also when loading fails.
+    with tempfile.TemporaryDirectory(prefix="radio-xml-") as tmp:
+        d = Path(tmp)
+        scenes.write_ply(d / "floor.ply", scenes.quad([-5, -5, 0], [10, 0, 0], [0, 10, 0]))
+        (d / "scene.xml").write_text(
+            '<scene version="2.1.0">\n'
+            f'<bsdf type="{m.PLUGIN_NAME}" id="rough-floor">'
+            '<string name="medium" value="concrete"/>'
+            '<float name="rms_height" value="0.0004"/>'
+            '<float name="correlation_length" value="0.004"/>'
+            '<float name="thickness" value="0.2"/></bsdf>\n'
+            '<shape type="ply" id="floor"><string name="filename" value="floor.ply"/>'
+            '<ref id="rough-floor" name="bsdf"/></shape>\n</scene>\n'
+        )
+        # a user's XML file through emscatter's loader: its own materials kept
+        scene = scenes.load(d / "scene.xml", 28e9)
     mat = scene.get("rough-floor")
     _add_devices(scene, (0, 0, 2.0), [(2.0, 0.5, 1.5)])
     paths = rt.PathSolver()(scene, max_depth=2, samples_per_src=50_000, diffuse_reflection=True)
