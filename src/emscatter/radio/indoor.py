@@ -21,11 +21,14 @@ the bands, raised by :func:`check_bands` before anything is computed — unless
 in all three sets and records each extrapolated medium in the results (``"extrapolated"``).
 
 Path buffer: Sionna keeps at most ``max_num_paths_per_src`` candidate paths per source and
-drops the rest in thread order, so a full buffer makes a run irreproducible (rough materials:
-20 k rays gave ≈ 46 k candidates at depth 2). :func:`run_scene` sizes it at
-:data:`PATHS_PER_RAY` candidates per ray, enlarges it (×4, up to :data:`MAX_PATHS_PER_RAY`) and
-reruns when it was filled, and warns (:class:`PathBufferWarning`) if it is still full. Path
-powers are summed in float64 in a fixed order (sorted), so the same seed gives the same numbers.
+drops the rest — in thread order with its default candidate generator, so a full buffer made a
+run irreproducible (rough materials: 20 k rays give ≈ 46 k candidates at depth 2).
+:func:`run_scene` sizes it at :data:`PATHS_PER_RAY` candidates per ray, enlarges it (×4, up to
+:data:`MAX_PATHS_PER_RAY`) and reruns when it was filled, and warns
+(:class:`PathBufferWarning`) if it is still full. It uses Sionna's deterministic candidate
+generator (``PathSolver(deterministic=True)``: candidates kept and de-duplicated in ray order)
+and sums path powers in float64 in a fixed (sorted) order, so the same seed gives the same
+numbers, bit for bit.
 """
 
 from __future__ import annotations
@@ -63,7 +66,8 @@ MAX_PATHS_PER_RAY = 160
 
 
 class PathBufferWarning(UserWarning):
-    """Sionna's path buffer was full: paths were dropped, which ones depends on thread order."""
+    """Sionna's path buffer was full: candidate paths were dropped, so path gains and delay
+    spreads miss part of the power."""
 
 
 #: Sionna's constant scattering coefficient for the "sionna" set (Degli-Esposti et al. 2007
@@ -285,7 +289,7 @@ def run_scene(
             refraction=True,
             seed=seed,
         )
-        stored = _stored(counter)
+        stored = counter.get("stored")
         full = stored is not None and stored >= cap * counter["sources"]
         if not full or per_ray >= MAX_PATHS_PER_RAY:
             break
@@ -293,9 +297,10 @@ def run_scene(
     if full:
         warnings.warn(
             f"{setup.name} at {frequency / 1e9:g} GHz ({kind}): Sionna's path buffer was full "
-            f"({cap} candidate paths per source for {samples} rays, depth {max_depth}); paths "
-            "were dropped and which ones depends on thread order, so the result is not "
-            "reproducible. Use fewer rays (samples) or a smaller max_depth.",
+            f"({cap} candidate paths per source for {samples} rays, depth {max_depth}): the "
+            "candidates beyond it were dropped, so path gains and delay spreads miss part of "
+            "the power. Use fewer rays (samples), a smaller max_depth, or paths_per_ray > "
+            f"{per_ray}.",
             PathBufferWarning,
             stacklevel=2,
         )
@@ -341,9 +346,9 @@ def run_scene(
 
 def _count_candidates(solver) -> dict:
     """Wraps this solver's candidate generator (Sionna RT 2.x, ``PathSolver._candidate_generator``)
-    to keep its path buffer and the number of sources; :func:`_stored` reads after the call how
-    many candidate paths the buffer kept (``{}``: this Sionna has no such generator, and the
-    buffer cannot be checked)."""
+    to record how many candidate paths its buffer kept (``"stored"``, all sources, read before
+    the image method drops invalid ones) and the number of ``"sources"``; ``{}`` after the call
+    if this Sionna has no such generator (the buffer cannot be checked)."""
     rec: dict = {}
     gen = getattr(solver, "_candidate_generator", None)
     if gen is None or not callable(gen):
@@ -353,22 +358,17 @@ def _count_candidates(solver) -> dict:
         import drjit as dr
 
         buf = gen(*args, **kwargs)
-        rec["buffer"] = buf
-        rec["sources"] = int(dr.width(kwargs["src_positions"]))
+        counter = getattr(buf, "paths_counter", None)
+        if counter is not None:
+            if hasattr(counter, "numpy"):  # a Dr.Jit UInt: evaluates the candidate kernels
+                dr.eval(counter)
+                counter = np.asarray(counter.numpy()).max()
+            rec["stored"] = int(counter)
+            rec["sources"] = int(dr.width(kwargs["src_positions"]))
         return buf
 
     solver._candidate_generator = counting
     return rec
-
-
-def _stored(rec: dict) -> int | None:
-    """Candidate paths the buffer of :func:`_count_candidates` kept (all sources)."""
-    counter = getattr(rec.get("buffer"), "paths_counter", None)
-    if counter is None:
-        return None
-    if hasattr(counter, "numpy"):  # a Dr.Jit UInt before the buffer is shrunk
-        counter = np.asarray(counter.numpy()).max()
-    return int(counter)
 
 
 def mi_point(p):
