@@ -18,9 +18,10 @@ so ``R_h`` and ``R_v`` act on one polarization each, no mixing; Ulaby, Moore & F
   backscatter the form of Ulaby & Long 2014 code 10.1 and SMRT's ``iiem_fung02``). Why it
   belongs to the Kirchhoff regimes: it is the second bounce of the same tangent-plane field
   (Kirchhoff field at an arbitrary intermediate direction, then re-radiated), and its spectral
-  weights are the physical-optics series ``T(Q, K) = e^{−Q} Σ Qⁿ⁻¹/n! wₙ(K)`` that :mod:`.kirchhoff_po`
-  sums — at large kσ that series tends to the slope density of geometric optics (stationary
-  phase), so the term becomes a double-bounce facet model, with the intermediate wave's
+  weights are the physical-optics series ``T(Q, K) = e^{−Q} Σ Qⁿ⁻¹/n! wₙ(K)`` that
+  :mod:`.kirchhoff_po` sums — at large kσ that series tends to the slope density of
+  geometric optics (stationary phase), so the term becomes a double-bounce facet model,
+  with the intermediate wave's
   shadowing ``S_m``. Beyond the IEM's own ``kσ ≤ 3`` it is that extrapolation (stated in
   ``info["crosspol"]``). It is 4–5 dB below exact 3-D solutions on published comparisons
   (issue 20: emscatter IEM −4.4 dB bias, SMRT −5.1, pyi2em −4.6): a lower bound.

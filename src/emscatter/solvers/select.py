@@ -278,9 +278,10 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     is on has raw weight 1, each other method met within the band ``s((1 − dₘ/δ))`` (``dₘ``
     the distance to its region along the kσ or kℓ axis in log units, ``δ = ln BLEND_FACTOR``,
     ``s`` a C¹ step), normalized: ``½ : ½`` at a switch, pure a factor ``BLEND_FACTOR`` away
-    (three regions at a corner share likewise). Linear (not dB) because σ⁰ integrates linearly: the blend's hemispherical
-    reflectivity is the same convex combination of the methods' ones, so a blend of two
-    energy-conserving answers conserves energy. The switches are found numerically (the pick at
+    (three regions at a corner share likewise). Linear (not dB) because σ⁰ integrates
+    linearly: the blend's hemispherical reflectivity is the same convex combination of the
+    methods' ones, so a blend of two energy-conserving answers conserves energy. The
+    switches are found numerically (the pick at
     ``± ln BLEND_FACTOR`` on each axis, bisection to the switch), so they need no list kept in
     step with the criteria: a new limit or map blends like the others.
 
@@ -300,7 +301,7 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     d = math.log(BLEND_FACTOR)
     nearest: dict[str, tuple[float, str, float]] = {}  # other method -> (distance, axis, at)
     for axis in (0, 1):
-        at = (lambda t, a=axis: pick(t, 0.0) if a == 0 else pick(0.0, t))  # noqa: E731
+        at = lambda t, a=axis: pick(t, 0.0) if a == 0 else pick(0.0, t)  # noqa: E731
         for sign in (1.0, -1.0):
             lo, m_lo, end = 0.0, p0, at(sign * d)
             for _ in range(len(methods)):  # each region met along the ray, nearest first
