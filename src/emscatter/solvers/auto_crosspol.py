@@ -21,9 +21,10 @@ so ``R_h`` and ``R_v`` act on one polarization each, no mixing; Ulaby, Moore & F
   weights are the physical-optics series ``T(Q, K) = e^{−Q} Σ Qⁿ⁻¹/n! wₙ(K)`` that
   :mod:`.kirchhoff_po` sums — at large kσ that series tends to the slope density of
   geometric optics (stationary phase), so the term becomes a double-bounce facet model,
-  with the intermediate wave's
-  shadowing ``S_m``. Beyond the IEM's own ``kσ ≤ 3`` it is that extrapolation (stated in
-  ``info["crosspol"]``). It is 4–5 dB below exact 3-D solutions on published comparisons
+  with the intermediate wave's shadowing ``S_m``. Beyond the IEM's own ``kσ ≤ 3`` it is that
+  extrapolation (the term used is named in ``info["crosspol_added"]``); at kσ ≳ 10 it
+  grows to within ~3 dB of the co-pol (ε = 15 + 2i) and above it for a PEC (kσ = 10,
+  kℓ = 50): not checked against exact solutions there. It is 4–5 dB below exact 3-D solutions on published comparisons
   (issue 20: emscatter IEM −4.4 dB bias, SMRT −5.1, pyi2em −4.6): a lower bound.
 
 What stays zero, by physics: a 1-D profile (a 2-D problem has no cross-polarization), a flat
