@@ -243,6 +243,7 @@ def enforce(name: str, report: dict, out_of_range: str, *, stacklevel: int = 3) 
 #: Half-width of auto's transition band, as a factor on the deciding parameter (kσ or kℓ):
 #: within a factor :data:`BLEND_FACTOR` of a switch the two methods are blended.
 BLEND_FACTOR = 1.25
+_PROBES = 4  # probes per ray (a region narrower than δ/4 between them can be missed)
 _BISECT = 12  # bisection steps locating a switch (its position to δ/4096)
 
 
@@ -303,20 +304,22 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     for axis in (0, 1):
         at = lambda t, a=axis: pick(t, 0.0) if a == 0 else pick(0.0, t)  # noqa: E731
         for sign in (1.0, -1.0):
-            lo, m_lo, end = 0.0, p0, at(sign * d)
-            for _ in range(len(methods)):  # each region met along the ray, nearest first
-                if end == m_lo:
-                    break
-                hi = sign * d  # m_lo at lo, another at hi: bisect to the first change
-                for _ in range(_BISECT):
+            lo, m_lo = 0.0, p0
+            for j in range(1, _PROBES + 1):  # probes along the ray catch narrow regions too
+                hi = sign * d * j / _PROBES
+                if at(hi) == m_lo:
+                    lo = hi
+                    continue
+                for _ in range(_BISECT):  # m_lo at lo, another at hi: to the first change
                     mid = 0.5 * (lo + hi)
                     if at(mid) == m_lo:
                         lo = mid
                     else:
                         hi = mid
-                m_lo, lo = at(hi), hi
+                m_lo, lo = at(hi), sign * d * j / _PROBES
                 if m_lo != p0 and (m_lo not in nearest or abs(hi) < nearest[m_lo][0]):
                     nearest[m_lo] = (abs(hi), ("k_sigma", "k_l")[axis], hi)
+                m_lo = at(lo)
     raw = {p0: 1.0}
     switches = []
     for other, (dist, name, pos) in nearest.items():
