@@ -14,3 +14,7 @@ module                  what it holds
                         (series, lanes, crosspol)
 ======================  ===============================================================
 """
+
+from emscatter.solvers.iem.model import OPTIONS, VALIDITY, bistatic, check_validity
+
+__all__ = ["OPTIONS", "VALIDITY", "bistatic", "check_validity"]

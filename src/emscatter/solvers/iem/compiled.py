@@ -129,6 +129,7 @@ def backscatter(
     report=False,
     shadow=(0, 0.0, None),
     threads=1,
+    lower_q2=True,
 ):
     """Exact-backscatter ``(σ⁰_hh, σ⁰_vv, log precision ratio, status)`` (the closed forms of
     :func:`emscatter.solvers.iem.terms.backscatter_terms`, end to end).
@@ -139,7 +140,9 @@ def backscatter(
     direction-correlated with azimuths ψ (n,), 2 height-correlated, isotropic rms slope s;
     0: none, or already in ``pref``). ``threads``: at most this many threads over contiguous
     chunks of at least :data:`BACK_MIN_CHUNK` geometries (each geometry is independent: the
-    result does not depend on the split)."""
+    result does not depend on the split). ``lower_q2``: the lower-medium terms with the
+    height phase ``Re q₂`` (AIEM, default) or, False, the upper medium's
+    (``complementary="aiem-upper"``)."""
     _, _, back_kernel, run_split = _build()
     n = si.size
     pec = isinstance(eps, str)
@@ -156,6 +159,7 @@ def backscatter(
             si[a:b], cs[a:b], e, pec, float(ks), K[a:b], pref[a:b], int(spec), int(dim),
             bool(transition), log_rtol, int(max_terms), bool(fast), code, slope,
             psi[a:b] if code == 1 else psi, out_hh[a:b], out_vv[a:b], out_e[a:b], out_fast[a:b],
+            bool(lower_q2),
         )  # fmt: skip
         status.append(st)
 

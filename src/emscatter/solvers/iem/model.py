@@ -62,6 +62,19 @@ Choices made here, where the papers are silent or inconsistent (each tested):
   phase of the lower-medium terms uses ``Re q₂`` (their coefficients keep the complex ``q₂``):
   identical for lossless media, a relative change ``O((Im q₂ σ)²)`` (< 2 % for a wet soil,
   ε = 15 + 2i, kσ = 0.5) otherwise, and every term stays bounded (tested up to ε = 1e7i).
+* **Co-pol ratio (issue 20).** In backscatter at kσ ≳ 0.5 this model puts σhh above σvv
+  (kσ 0.79–1.32, 40°, exponential, ε 3–30: HH − VV = +0.9 dB on average, up to +2.4), where
+  exact 3-D solutions give −1.2 dB (NMM3D) and measured soils σhh ≤ σvv (Oh et al. 1992).
+  Why: the Kirchhoff term with ``R(θi)`` (or a partial transition) has ``|R_h| > |R_v|``, and
+  the complementary terms that restore ``|α_vv| > |α_hh|`` (SPM) are, in backscatter, the
+  lower-medium ones: the upper-medium "i"/"s" terms cancel or act at n = 1 only. With the
+  lower-medium phase they carry ``e^{−σ²(Re q₂)²}`` (an average of ``e^{±i q₂ (z − z')}``
+  over all heights; the true ``e^{i q₂|z−z'|}`` decays only algebraically in σ q₂), so they
+  vanish once ``kσ √ε ≳ 1``. ``complementary="aiem-upper"`` gives them the upper-medium
+  phase (as I2EM, Fung et al. 2002, and SMRT's ``iiem_fung02``): HH < VV by 1.7–5.0 dB there,
+  HH RMSE 0.95 dB against NMM3D (0.49 is the 1992 model's), VV +1.1 dB biased — but those
+  terms then never fade, and the physical-optics limit at kσ = 3 is missed by up to 2.5 dB,
+  so it is not the default. validation/iem/copol_ratio.md has the table.
 * **Reciprocity.** The transition and the complementary coefficients use ``R(θi)``, so the
   published bistatic σ⁰ is not reciprocal. ``reciprocal=True`` (default) returns
   ``½[σ⁰_qp(i→s) + σ⁰_pq(−s→−i)]`` (exactly reciprocal; a single evaluation in backscatter and
@@ -151,6 +164,11 @@ from emscatter.solvers.kirchhoff.po import log_nfold
 __all__ = ["bistatic", "check_validity", "VALIDITY", "OPTIONS", "nominal_rms_slope"]
 
 _BACK_TOL = 1e-9
+_MODEL_NAMES = {
+    "aiem": "AIEM",
+    "aiem-upper": "AIEM, lower-medium terms with the upper-medium phase (I2EM)",
+    "fung92": "IEM (Fung et al. 1992)",
+}
 _SPM_SIGN = (-1.0, 1.0, -1.0, 1.0)  # I₁(AIEM) ≈ s · 4 f_SPM (hh, hv, vh, vv): basis signs
 
 
@@ -187,7 +205,7 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
     amps = [list(xf)]
     xs = [x0]
     es = [-ks2 * cs * css]
-    merged = ("dn_i", "up_s") if opt.complementary == "aiem" else ()
+    merged = ("dn_i", "up_s") if opt.complementary != "fung92" else ()
     comp_sum = [0.0, 0.0, 0.0, 0.0]
     for name, F, qph, side in terms:
         comp_sum = [c + 0.25 * f for c, f in zip(comp_sum, F, strict=True)]
@@ -326,7 +344,7 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     :func:`emscatter.solvers.iem.terms.backscatter_terms`, two components (Kirchhoff, lower medium)
     plus the
     n = 1 terms; hh and vv only (single-scattering cross-pol vanishes in the plane)."""
-    if opt.complementary != "aiem":  # the 1992 model: general terms
+    if opt.complementary == "fung92":  # the 1992 model: general terms
         return None
     n = loc.n
     ks = k * rough.sigma
@@ -343,7 +361,7 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
             iem_jit.flat_n(loc.si, n), iem_jit.flat_n(loc.ci, n), eps, ks, K, pref, spec,
             rough.dimension,
             transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
-            shadow=shadow, threads=opt.threads,
+            shadow=shadow, threads=opt.threads, lower_q2=opt.complementary == "aiem",
         )  # fmt: skip
         if status:
             raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
@@ -357,14 +375,14 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     si, cs = np.broadcast_to(loc.si, (n,)), np.broadcast_to(loc.ci, (n,))
     eps_f = eps if (pec or np.ndim(eps) == 0) else np.broadcast_to(eps, (n,))
     rh, rv = fresnel_cos(eps_f, cs)
-    (u_h, u_v), lower = kern.backscatter_terms(si, cs, eps_f, rh, rv)
+    (u_h, u_v), lower = kern.backscatter_terms(si, cs, eps_f, rh, rv, phase=opt.complementary)
     # components: Kirchhoff (base 2 kz), the lower-medium α⁺, α⁻ terms, (and d at n = 1)
     e_k = -2.0 * ks2 * cs * cs
     bases = [2.0 * cs]
     e_list = [e_k]
     if lower is not None:
         gp_h, gp_v, a_p, gm_h, gm_v, a_m = lower
-        e_g = -ks2 * ((a_p - cs) ** 2 + cs * cs)  # a_p − cs = Re q₂
+        e_g = -ks2 * ((a_p - cs) ** 2 + cs * cs)  # a_p − cs: the lower-medium phase
         bases += [a_p, a_m]
         e_list += [e_g, e_g]
     J = len(bases)
@@ -548,8 +566,10 @@ def bistatic(
     max_terms : safety cap on series terms per geometry.
     fresnel : ``"transition"`` (Wu et al. 2001, default) or ``"incident"`` (``R(θi)``, as the
         1992 IEM) in the Kirchhoff coefficient.
-    complementary : ``"aiem"`` (Green's-function phase kept, Chen et al. 2003) or ``"fung92"``
-        (phase dropped, Fung et al. 1992).
+    complementary : ``"aiem"`` (Green's-function phase kept, Chen et al. 2003),
+        ``"aiem-upper"`` (the lower-medium terms with the upper-medium phase, as I2EM: the
+        physical co-pol ratio at kσ ≈ 1, module docstring) or ``"fung92"`` (phase dropped,
+        Fung et al. 1992).
     first_order : ``"spm"`` (exact first-order amplitude, module docstring) or ``"model"``
         (the published coefficients as they are).
     reciprocal : symmetrize σ⁰ by reciprocity (module docstring).
@@ -577,7 +597,7 @@ def bistatic(
         raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
     opt = _Options()
     opt.fresnel = _choice("fresnel", fresnel, ("transition", "incident"))
-    opt.complementary = _choice("complementary", complementary, ("aiem", "fung92"))
+    opt.complementary = _choice("complementary", complementary, ("aiem", "aiem-upper", "fung92"))
     opt.first_order = _choice("first_order", first_order, ("spm", "model"))
     opt.rtol, opt.max_terms = rtol, int(max_terms)
     opt.threads = workers_for(threads, 8)
@@ -626,7 +646,7 @@ def bistatic(
     else:
         coh = np.full((2, *g.shape), np.nan)
     info = {
-        "model": "AIEM" if opt.complementary == "aiem" else "IEM (Fung et al. 1992)",
+        "model": _MODEL_NAMES[opt.complementary],
         "rtol": rtol,
         "fresnel": opt.fresnel,
         "complementary": opt.complementary,

@@ -191,13 +191,21 @@ def complementary_terms(si, cs, ss, css, sf, cf, eps, rh, rv, *, lower=True, pha
     """The eight complementary terms as a list of ``(name, F̃ (hh, hv, vh, vv), q_phase, side)``.
 
     ``q_phase`` is the (real) vertical wavenumber in the term's height phase: ``±kz``,
-    ``±ksz`` (upper medium) or ``±Re q₂`` (lower medium, see :mod:`emscatter.solvers.iem.model` for
-    why the real
-    part); the term enters the series as ``¼ F̃ exp(−σ²(q² − q(ksz − kz))) α^(n−1)`` with
+    ``±ksz`` (upper medium; also the lower-medium terms with ``phase="aiem-upper"``) or
+    ``±Re q₂`` (lower medium, see :mod:`emscatter.solvers.iem.model` for why the real part); the term enters the
+    series as ``¼ F̃ exp(−σ²(q² − q(ksz − kz))) α^(n−1)`` with
     ``α = ksz − q`` (side "i") or ``kz + q`` (side "s"). ``eps="pec"`` (or ``lower=False``)
-    drops the lower-medium terms (their coefficients vanish as ``1/√ε``). ``phase="fung92"``
-    drops the Green's-function phase (``q = 0`` in the height phase and in ``α``: Fung et al.
-    1992, whose backscatter closed forms this reproduces; tested)."""
+    drops the lower-medium terms (their coefficients vanish as ``1/√ε``). ``phase``:
+
+    * ``"aiem"`` (default of :mod:`emscatter.solvers.iem.model`): every term keeps its Green's-function phase, the
+      lower-medium terms ``±Re q₂`` (Chen et al. 2003, with the real part, :mod:`emscatter.solvers.iem.model`);
+    * ``"aiem-upper"``: the lower-medium terms keep their coefficients (complex ``q₂``) but
+      take the upper-medium height phase of the same side and direction (``±kz``, ``±ksz``),
+      as the improved IEM of Fung et al. 2002 / Fung & Chen 2004 and its codes do
+      (:mod:`emscatter.solvers.iem.model`: the lower-medium phase removes these terms, and with them the co-pol
+      ratio, once ``σ Re q₂ ≳ 1``);
+    * ``"fung92"``: no Green's-function phase (``q = 0`` in the height phase and in ``α``:
+      Fung et al. 1992, whose backscatter closed forms this reproduces; tested)."""
     R = (rh, rv)
     Rx = 0.5 * (rv - rh)
     terms = []
@@ -207,7 +215,7 @@ def complementary_terms(si, cs, ss, css, sf, cf, eps, rh, rv, *, lower=True, pha
         ("up_s", css, "s"),
         ("dn_s", -css, "s"),
     ):
-        qph = q if phase == "aiem" else 0.0 * q
+        qph = 0.0 * q if phase == "fung92" else q
         alpha = css - qph if side == "i" else cs + qph
         fn = _reduced_i if side == "i" else _reduced_s
         C, B = fn(si, cs, ss, css, sf, cf, q, alpha)
@@ -217,13 +225,18 @@ def complementary_terms(si, cs, ss, css, sf, cf, eps, rh, rv, *, lower=True, pha
         return terms
     q2i = branch_root(eps - si * si)
     q2s = branch_root(eps - ss * ss)
-    for name, q, side in (
-        ("Gup_i", q2i, "i"),
-        ("Gdn_i", -q2i, "i"),
-        ("Gup_s", q2s, "s"),
-        ("Gdn_s", -q2s, "s"),
+    for name, q, qup, side in (
+        ("Gup_i", q2i, cs, "i"),
+        ("Gdn_i", -q2i, -cs, "i"),
+        ("Gup_s", q2s, css, "s"),
+        ("Gdn_s", -q2s, -css, "s"),
     ):
-        qph = q.real if phase == "aiem" else 0.0 * q.real
+        if phase == "aiem":
+            qph = q.real
+        elif phase == "aiem-upper":
+            qph = qup + 0.0 * q.real
+        else:
+            qph = 0.0 * q.real
         alpha = css - qph if side == "i" else cs + qph
         fn = _reduced_i if side == "i" else _reduced_s
         C, B = fn(si, cs, ss, css, sf, cf, q, alpha)
@@ -233,17 +246,19 @@ def complementary_terms(si, cs, ss, css, sf, cf, eps, rh, rv, *, lower=True, pha
 
 
 # ----------------------------------------------------------------------------- backscatter
-def backscatter_terms(si, cs, eps, rh, rv):
+def backscatter_terms(si, cs, eps, rh, rv, *, phase="aiem"):
     """Complementary terms in exact backscatter (``θs = θi``, ``φ = π``), co-polarized.
 
     Returns ``(U_h, U_v)`` — the ``q = kz`` "i" and ``q = −ksz`` "s" terms, which have
     ``α = 0`` (n = 1 only) and the closed form ``¼ F̃ = ±4 sin²θ R²`` each (hh with ``−R_h²``) —
     and, unless ``eps`` is ``"pec"``, ``(G⁺_h, G⁺_v, α⁺, G⁻_h, G⁻_v, α⁻)``: the lower-medium
-    ``q = −q₂`` "i" plus ``q = +q₂`` "s" terms (base ``α⁺ = kz + Re q₂``) and the ``q = −q₂`` "s"
-    term (base ``α⁻ = kz − Re q₂``), each times ¼, both with the height exponent
-    ``−σ² (Re q₂)²``. The remaining terms cancel (``q = −kz`` "i" against ``q = +ksz`` "s") or
-    vanish (``q = +q₂`` "i", co-pol). Checked against :func:`complementary_terms` in the
-    tests."""
+    ``q = −q₂`` "i" plus ``q = +q₂`` "s" terms (base ``α⁺ = kz + a``) and the ``q = −q₂`` "s"
+    term (base ``α⁻ = kz − a``), each times ¼, both with the height exponent ``−σ² a²``
+    (besides the common ``−σ² kz²``), where ``a`` is the lower-medium height phase of
+    :func:`complementary_terms`: ``a = Re q₂`` (``phase="aiem"``) or ``kz`` (``"aiem-upper"``:
+    ``α⁺ = 2kz``, the Kirchhoff base and exponent; ``α⁻ = 0``, n = 1 only). The remaining
+    terms cancel (``q = −kz`` "i" against ``q = +ksz`` "s") or vanish (``q = +q₂`` "i",
+    co-pol). Checked against :func:`complementary_terms` in the tests."""
     s2 = si * si
     u = (-2.0 * s2 * rh * rh, 2.0 * s2 * rv * rv)  # per term; the two are equal
     u = (2.0 * u[0], 2.0 * u[1])
@@ -251,7 +266,7 @@ def backscatter_terms(si, cs, eps, rh, rv):
         return u, None
     zero, minus = 0.0 * si, -1.0 + 0.0 * si
     q2 = branch_root(eps - s2)
-    a = q2.real
+    a = cs + 0.0 * q2.real if phase == "aiem-upper" else q2.real
     R, Rx = (rh, rv), 0.5 * (rv - rh)
     plus = []
     for fn, q, alpha in ((_reduced_i, -q2, cs + a), (_reduced_s, q2, cs + a)):

@@ -10,3 +10,23 @@ module              what it holds
 :mod:`.operators`   the Green's-function matrix entries and the dense / forward-backward solves
 ==================  ====================================================================
 """
+
+from emscatter.solvers.mom.model import (
+    MomResult,
+    MomWarning,
+    bistatic,
+    check_validity,
+    reflectivity,
+    solve_realization,
+    tapered_wave,
+)
+
+__all__ = [
+    "MomResult",
+    "MomWarning",
+    "bistatic",
+    "check_validity",
+    "reflectivity",
+    "solve_realization",
+    "tapered_wave",
+]

@@ -354,10 +354,12 @@ def transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0):
 
 
 @inline
-def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2):
-    """Lower-medium terms of exact backscatter: ``(a = Re q₂, e_g, p1, p2, mm)`` (the
-    ``q = −q₂`` "i", ``q = +q₂`` "s" and ``q = −q₂`` "s" combinations, co-pol)."""
-    a = q2.real
+def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2):
+    """Lower-medium terms of exact backscatter: ``(a, e_g, p1, p2, mm)`` (the ``q = −q₂`` "i",
+    ``q = +q₂`` "s" and ``q = −q₂`` "s" combinations, co-pol), ``a`` their height phase:
+    ``Re q₂`` (``lower_q2``, AIEM) or ``cosθ`` (the upper medium's, ``"aiem-upper"``;
+    :func:`.iem_kernels.backscatter_terms`)."""
+    a = q2.real if lower_q2 else c
     Ci, _ = reduced_i(s, c, s, c, 0.0, -1.0, -q2, c + a)
     Cs, _ = reduced_s(s, c, s, c, 0.0, -1.0, q2, c + a)
     Cm, _ = reduced_s(s, c, s, c, 0.0, -1.0, -q2, c - a)
@@ -369,7 +371,7 @@ def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2):
 
 @inline
 def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_rtol, r0, r08,
-                r08sq, a0, ieps, T, tr_ok):  # fmt: skip
+                r08sq, a0, ieps, T, tr_ok, lower_q2):  # fmt: skip
     """Per-geometry coefficients of exact backscatter, one geometry at a time (the
     log-space path): ``(fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J)`` — Fresnel
     coefficients at θ and with the transition, ``a = Re q₂``, the height exponents, the
@@ -399,14 +401,14 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
     e_k = -2.0 * ks2 * c * c
     if pec:
         return fast, rh, rv, rh_t, rv_t, 0.0, e_k, 0.0, zero, zero, zero, 1
-    a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2)
+    a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2)
     return fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, 3
 
 
 @jit
 def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 max_terms, use_fast, sh_code, sh_slope, psi, out_hh, out_vv, out_e,
-                out_fast):  # fmt: skip
+                out_fast, lower_q2):  # fmt: skip
     """Exact-backscatter hh, vv per geometry: the linear-space walk where it is safe and
     ``use_fast`` — blocks of :data:`LANES` geometries in lockstep: transition sums
     (:func:`walk_transition`), then both series (:func:`lane_start`, :func:`walk_lanes`) —
@@ -483,7 +485,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 a, e_g, att1 = 0.0, 0.0, 0.0
                 g1h = g1v = g2h = g2v = 0j
             else:
-                a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2)
+                a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2)
                 g1h, g1v = 0.25 * (p1[0] + p2[0]), 0.25 * (p1[3] + p2[3])
                 g2h, g2v = 0.25 * mm[0], 0.25 * mm[3]
                 att1 = math.exp(e_g)
@@ -511,7 +513,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             s2 = s * s
             fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J = angle_setup(
                 s, c, K[r], eps, pec, ks2, spec, dim, transition, use_fast, rtol, log_rtol, r0,
-                r08, r08sq, a0, ieps, T, tr_ok,
+                r08, r08sq, a0, ieps, T, tr_ok, lower_q2,
             )  # fmt: skip
             lx[0] = math.log(2.0 * c) if c > 0 else -np.inf
             if not pec:
