@@ -145,6 +145,7 @@ from emscatter.solvers.iem import compiled as iem_jit
 from emscatter.solvers.iem import terms as kern
 from emscatter.solvers.iem.series import _orders_needed as iem_series_orders
 from emscatter.solvers.iem.series import _too_many, direct_sum, iem_series, orders_table
+from emscatter.solvers.iem.shadowing import _SHADOW_MODES, _back_shadow_args, _shadowing
 from emscatter.solvers.iem.validity import (  # noqa: F401 (re-exported: the solver's contract)
     OPTIONS,
     VALIDITY,
@@ -156,7 +157,6 @@ from emscatter.solvers.kirchhoff.common import (
     check_roughness,
     coherent_local,
     geometry,
-    smith_lambda,
     workers_for,
 )
 from emscatter.solvers.kirchhoff.po import log_nfold
@@ -243,38 +243,7 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
     return la, lx, ph, sx, d
 
 
-# ----------------------------------------------------------------------------- shadowing
-def _shadowing(mode, loc, slope) -> np.ndarray | float:
-    """Bistatic shadowing factor (module docstring) on a checked chunk; 1 for ``mode=None``."""
-    if mode is None:
-        return 1.0
-    sx, sy = slope
-
-    def lam(cos_t, sin_t, phi):
-        s2 = (sx * np.cos(phi)) ** 2 + (sy * np.sin(phi)) ** 2 if sx != sy else sx * sx
-        den = sin_t * np.sqrt(2.0 * s2)
-        a = np.where(den > cos_t * 1e-300, cos_t / np.where(den > 0, den, 1.0), 1e300)
-        return smith_lambda(np.minimum(a, 1e300))
-
-    lam_i = np.broadcast_to(lam(loc.ci, loc.si, loc.phi_i), (loc.n,))
-    lam_s = np.broadcast_to(lam(loc.cs, loc.ss, loc.phi_s), (loc.n,))
-    if mode == "height-correlated":
-        return 1.0 / (1.0 + lam_i + lam_s)
-    # azimuth between −k_i and k_s as seen from the surface: 0 in backscatter, π at specular
-    psi = np.abs(np.mod(loc.phi_s - loc.phi_i - math.pi + math.pi, 2 * math.pi) - math.pi)
-    corr = 4.41 * psi / (4.41 * psi + 1.0)
-    hi, lo = np.maximum(lam_i, lam_s), np.minimum(lam_i, lam_s)
-    return 1.0 / (1.0 + hi + corr * lo)
-
-
 # ----------------------------------------------------------------------------- solver
-_SHADOW_MODES = {
-    True: "direction-correlated",
-    "direction-correlated": "direction-correlated",
-    "height-correlated": "height-correlated",
-    False: None,
-    None: None,
-}
 
 
 def _choice(name, value, allowed):
@@ -318,25 +287,6 @@ def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
         return ls, lp
     return iem_series(la, lx, ph, sx, d, log_ks2, log_w, K, pref, rtol=opt.rtol,
                       max_terms=opt.max_terms)  # fmt: skip
-
-
-def _back_shadow_args(mode, loc, slope):
-    """Shadowing of a backscatter chunk for the compiled kernel: ``(code, s, ψ)`` — code 0
-    none, 1 direction-correlated, 2 height-correlated, evaluated in the kernel (the formulas
-    of :func:`_shadowing` with one Smith Λ, isotropic slope ``s``, same directions in and out);
-    code -1: anything else (the caller folds :func:`_shadowing` into the prefactor)."""
-    none = np.zeros(1)
-    if mode is None:
-        return 0, 0.0, none
-    same = (loc.ci is loc.cs and loc.si is loc.ss) or (
-        np.array_equal(loc.ci, loc.cs) and np.array_equal(loc.si, loc.ss)
-    )
-    if not (slope[0] == slope[1] and same):
-        return -1, 0.0, none
-    if mode == "height-correlated":
-        return 2, float(slope[0]), none
-    psi = np.abs(np.mod(loc.phi_s - loc.phi_i - math.pi + math.pi, 2 * math.pi) - math.pi)
-    return 1, float(slope[0]), iem_jit.flat_n(psi, loc.n)
 
 
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):

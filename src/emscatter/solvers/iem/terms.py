@@ -192,17 +192,21 @@ def complementary_terms(si, cs, ss, css, sf, cf, eps, rh, rv, *, lower=True, pha
 
     ``q_phase`` is the (real) vertical wavenumber in the term's height phase: ``±kz``,
     ``±ksz`` (upper medium; also the lower-medium terms with ``phase="aiem-upper"``) or
-    ``±Re q₂`` (lower medium, see :mod:`emscatter.solvers.iem.model` for why the real part); the term enters the
+    ``±Re q₂`` (lower medium, see :mod:`emscatter.solvers.iem.model` for why the real part); the
+    term enters the
     series as ``¼ F̃ exp(−σ²(q² − q(ksz − kz))) α^(n−1)`` with
     ``α = ksz − q`` (side "i") or ``kz + q`` (side "s"). ``eps="pec"`` (or ``lower=False``)
     drops the lower-medium terms (their coefficients vanish as ``1/√ε``). ``phase``:
 
-    * ``"aiem"`` (default of :mod:`emscatter.solvers.iem.model`): every term keeps its Green's-function phase, the
-      lower-medium terms ``±Re q₂`` (Chen et al. 2003, with the real part, :mod:`emscatter.solvers.iem.model`);
+    * ``"aiem"`` (default of :mod:`emscatter.solvers.iem.model`): every term keeps its
+      Green's-function phase, the
+      lower-medium terms ``±Re q₂`` (Chen et al. 2003, with the real part,
+      :mod:`emscatter.solvers.iem.model`);
     * ``"aiem-upper"``: the lower-medium terms keep their coefficients (complex ``q₂``) but
       take the upper-medium height phase of the same side and direction (``±kz``, ``±ksz``),
       as the improved IEM of Fung et al. 2002 / Fung & Chen 2004 and its codes do
-      (:mod:`emscatter.solvers.iem.model`: the lower-medium phase removes these terms, and with them the co-pol
+      (:mod:`emscatter.solvers.iem.model`: the lower-medium phase removes these terms, and with
+      them the co-pol
       ratio, once ``σ Re q₂ ≳ 1``);
     * ``"fung92"``: no Green's-function phase (``q = 0`` in the height phase and in ``α``:
       Fung et al. 1992, whose backscatter closed forms this reproduces; tested)."""
