@@ -194,7 +194,10 @@ def parse_eps(text: str):
     if t == "pec":
         return "pec"
     try:
-        value = complex(t.replace("i", "j"))
+        try:  # "inf", "nan" first: "i" → "j" would turn them into names
+            value = complex(t)
+        except ValueError:
+            value = complex(t.replace("i", "j"))
     except ValueError:
         if t[:1].isalpha():
             from ..materials import as_material
