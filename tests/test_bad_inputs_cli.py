@@ -80,7 +80,10 @@ CASES = [
     ),
     (["brdf", "x.npz", "--material", "17-2j"], ["--material", "'17-2j'", "give 17+2j"]),
     (["brdf", "x.npz", "--method", "ipm"], ["--method", "'ipm'", "'go'", "'auto'"]),
-    (["brdf", "x.npz", "--wavelengths-nm", "0.55"], ["'0.55'", "10 nm – 1 m", "the unit here is nm"]),
+    (
+        ["brdf", "x.npz", "--wavelengths-nm", "0.55"],
+        ["'0.55'", "10 nm – 1 m", "the unit here is nm"],
+    ),
     (["brdf", "x.npz", "--wavelengths-nm", "650,550"], ["'650,550'", "must increase"]),
     (["brdf", "x.npz", "--n-theta", "1"], ["--n-theta", "got 1", "[2, 2000]"]),
     (["brdf", "x.npz", "--sigma", "0"], ["--sigma", "got 0", "> 0 m"]),
