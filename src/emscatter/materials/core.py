@@ -337,7 +337,7 @@ class Drude(Material):
             if v <= 0:
                 raise ValueError(f"{name} must be > 0 [{unit}], got {float(v):g}")
         wp = math.sqrt(float(conductivity) * float(collision_rate) / EPSILON_0)
-        return cls(wp, collision_rate, eps_inf, **kw)
+        return cls(wp, float(collision_rate), eps_inf, **kw)
 
     def _eps(self, f):
         w = _omega(f)
