@@ -61,7 +61,7 @@ def test_an_unknown_material_without_close_names_says_what_is_allowed():
     msg = _message(
         ValueError, em.bistatic, ROUGH, "gold", wavelength=1.0, theta_i=0.2, theta_s=0.2, phi_s=0.0
     )
-    _has(msg, "unknown material 'gold'", "complex permittivity", "available_itu()", "'Au'")
+    _has(msg, "unknown material 'gold'", "complex number", "available_itu()", "'Au'")
     assert "did you mean" not in msg
 
 

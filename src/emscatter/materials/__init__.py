@@ -135,16 +135,16 @@ def _unknown_material(value, metals: list[str]) -> str:
     every = ["pec", *itu_names, *metals]
     lower = {n.lower(): n for n in every}
     close = difflib.get_close_matches(str(value).strip().lower(), list(lower), n=3, cutoff=0.6)
-    hint = f" (did you mean {', '.join(repr(lower[c]) for c in close)}?)" if close else ""
+    hint = f"; did you mean {', '.join(repr(lower[c]) for c in close)}?" if close else ""
     where = (
         f"{len(metals)} Mitsuba metals (materials.available_metals())"
         if metals
-        else "Mitsuba metals (Mitsuba not installed)"
+        else "the Mitsuba metals (Mitsuba not installed)"
     )
     return (
-        f"unknown material {value!r}{hint}: eps takes a complex permittivity (a number, not a "
-        f"string), 'pec', one of {len(itu_names)} ITU-R P.2040 names "
-        f"(materials.available_itu(), e.g. 'concrete') or one of {where}, e.g. 'Au'"
+        f"unknown material {value!r}: use 'pec', one of {len(itu_names)} ITU-R P.2040 names "
+        f"(materials.available_itu(), e.g. 'concrete') or one of {where}, e.g. 'Au'; a "
+        f"permittivity is a complex number (eps=17+2j), not a string{hint}"
     )
 
 
