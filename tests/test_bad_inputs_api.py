@@ -285,3 +285,11 @@ def test_build_table_ignore_is_silent_but_records():
     assert not [w for w in caught if issubclass(w.category, ValidityWarning)]
     assert t.metadata["per_wavelength"][0]["reasons"]
     assert not t.metadata["per_wavelength"][0]["valid"]
+
+
+def test_output_path_error_survives_pickling():
+    """Raised in a worker process, it must reach the parent with its message intact."""
+    import pickle
+
+    err = pickle.loads(pickle.dumps(io.OutputPathError("/x/y.csv", "it is a folder")))
+    assert str(err) == "cannot write '/x/y.csv': it is a folder" and isinstance(err, ValueError)

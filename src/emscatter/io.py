@@ -39,9 +39,11 @@ class OutputPathError(OSError, ValueError):
     Both an :class:`OSError` (what a failed write is) and a :class:`ValueError` (a bad
     argument), so either ``except`` catches it."""
 
-    def __init__(self, path, problem: str):
-        super().__init__(f"cannot write {str(path)!r}: {problem}")
-        self.path = Path(path)
+    def __init__(self, path, problem: str | None = None):
+        # one argument: the whole message (how pickle rebuilds the error in another process)
+        message = str(path) if problem is None else f"cannot write {str(path)!r}: {problem}"
+        super().__init__(message)
+        self.path = None if problem is None else Path(path)
         self.problem = problem
 
     def __str__(self) -> str:  # OSError's two-argument form would print a tuple
