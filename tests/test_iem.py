@@ -14,7 +14,9 @@ import pytest
 
 from emscatter import api
 from emscatter.fresnel import reflectivity
-from emscatter.solvers import iem, kirchhoff_po, spm
+from emscatter.solvers.iem import model as iem
+from emscatter.solvers.kirchhoff import po as kirchhoff_po
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 from laws import assert_flat_limit, assert_physical, assert_reciprocal, random_geometry
 
@@ -50,7 +52,7 @@ def _case(r):
 def test_reduces_to_first_order_spm_in_every_geometry(cls, dimension, eps):
     """kσ = 1e-4: σ⁰ = SPM1 (all four polarizations, bistatic, 2-D and 1-D) to 1e-5 — the
     published AIEM does not (off by up to ~30 % in amplitude out of the plane); the first-order
-    correction of :mod:`emscatter.solvers.iem` makes it exact."""
+    correction of :mod:`emscatter.solvers.iem.model` makes it exact."""
     rough = cls(1e-4 / K, 0.4, dimension=dimension)
     ti, ts, ps, pi_ = random_geometry(np.random.default_rng(3), 300, dimension=dimension)
     a = iem.bistatic(rough, eps, K, ti, ts, ps, pi_, crosspol=False).sigma0
@@ -88,7 +90,7 @@ def test_tends_to_physical_optics_at_large_k_sigma_and_k_ell(dimension):
     """kσ = 3, kℓ = 19 (Gaussian, rms slope 0.23): the transition sends R to the local
     specular angle where kσ cosθ is large and the complementary terms die out (Fung & Chen
     2004), so σ⁰ → the
-    physical-optics series (:mod:`emscatter.solvers.kirchhoff_po`) wherever PO is within 20 dB
+    physical-optics series (:mod:`emscatter.solvers.kirchhoff.po`) wherever PO is within 20 dB
     of its peak; shadowing off (PO has none). 0.15 dB: the residual complementary field."""
     rough = GaussianCorrelation(3.0 / K, 3.0, dimension=dimension)
     ti = np.radians([10.0, 30.0, 45.0])[:, None]

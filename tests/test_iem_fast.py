@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from emscatter.solvers import iem, iem_jit
+from emscatter.solvers.iem import compiled as iem_jit
+from emscatter.solvers.iem import model as iem
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 pytestmark = pytest.mark.skipif(

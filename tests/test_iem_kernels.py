@@ -12,10 +12,12 @@ import pytest
 from scipy import special
 
 from emscatter.fresnel import fresnel_cos
-from emscatter.solvers import iem, iem_jit, iem_series
-from emscatter.solvers import iem_kernels as kern
-from emscatter.solvers import kirchhoff_common as kc
-from emscatter.solvers.kirchhoff_po import log_nfold
+from emscatter.solvers.iem import compiled as iem_jit
+from emscatter.solvers.iem import model as iem
+from emscatter.solvers.iem import series as iem_series
+from emscatter.solvers.iem import terms as kern
+from emscatter.solvers.kirchhoff import common as kc
+from emscatter.solvers.kirchhoff.po import log_nfold
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 K = 2 * math.pi

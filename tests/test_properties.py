@@ -34,7 +34,7 @@ from hypothesis import HealthCheck, assume, given, note, settings
 from hypothesis import strategies as st
 
 import emscatter as em
-from emscatter import dispatch
+from emscatter import method_resolution as dispatch
 from emscatter.emissivity import ENERGY_ATOL
 from emscatter.solvers.select import ValidityWarning
 

@@ -24,6 +24,14 @@ import math
 
 import numpy as np
 
+from emscatter.method_resolution import (
+    angle_policy,
+    angles_deg,
+    call_report,
+    rank_methods,
+    validity_report,
+)
+
 from . import cache, solvers
 from .conventions import (
     broadcast_angles,
@@ -32,13 +40,6 @@ from .conventions import (
     check_broadcast,
     check_finite,
     wavenumber,
-)
-from .dispatch import (
-    angle_policy,
-    angles_deg,
-    call_report,
-    rank_methods,
-    validity_report,
 )
 from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
 from .frequency import Group, as_eps_or_material, eps_at, frequency_groups

@@ -17,7 +17,7 @@ other warning raised inside is passed on once per distinct message, also at the 
 
 Geometric optics: its σ⁰ is the stationary-phase limit of the *whole* Kirchhoff intensity,
 so adding the Kirchhoff coherent term would count the specular energy twice
-(:mod:`emscatter.solvers.kirchhoff_go`); GO tables have ``coherent = 0`` and say so in
+(:mod:`emscatter.solvers.kirchhoff.go`); GO tables have ``coherent = 0`` and say so in
 ``metadata["coherent"]``.
 """
 
@@ -542,7 +542,7 @@ def _surface_params(rough) -> dict:
 
 
 def _version() -> str:
-    from .. import __version__
+    from .._version import __version__
 
     return __version__
 

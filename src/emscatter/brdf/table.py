@@ -1,7 +1,7 @@
 """Tabulated BRDFs in the renderer frame: :class:`BrdfTable`.
 
 Layout (the interface the Mitsuba plugin, the exporters and the radio bridge rely on; changes
-are announced in ``/work/notes/brdf.md``). All angles [rad] in the *renderer frame*
+are announced in ``docs/brdf.md``). All angles [rad] in the *renderer frame*
 (:mod:`emscatter.brdf.frames`: ``wi``, ``wo`` point away from the surface, normal ``+z``,
 tangent ``+x``, mirror direction at ``φo = φi + π``); wavelengths [m]; BRDF values [1/sr].
 

@@ -58,7 +58,7 @@ def command_modules() -> tuple[list, dict[str, str]]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser with every command found by :func:`command_modules`."""
-    from .. import __version__
+    from .._version import __version__
     from .args import HelpFormatter
 
     p = Parser(

@@ -231,7 +231,8 @@ def export(table, path, fmt_name: str, *, rgl_channels: str = "spectral"):
 def _fit(table, distribution: str, json_path) -> None:
     import json
 
-    from ..brdf.fit import fit_microfacet
+    from emscatter.brdf.analytic.fit import fit_microfacet
+
     from ..io import write_json
 
     fit = fit_microfacet(table, distribution=distribution)

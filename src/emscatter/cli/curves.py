@@ -350,7 +350,7 @@ def _summary(report: dict) -> dict:
 
 
 def run(a) -> int:
-    from .. import __version__
+    from .._version import __version__
     from ..io import jsonable, save_figure, write_csv, write_json
 
     if a.from_file:
