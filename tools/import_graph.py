@@ -33,13 +33,13 @@ MAX_FOLDER_LINES = 3000
 #: matches a module's dotted name (without ``emscatter.``) gives its floor.
 FLOORS: list[tuple[str, ...]] = [
     ("_version", "constants", "conventions", "io"),
-    ("spectra", "fresnel", "materials", "montecarlo", "plots", "cache"),
+    ("spectra", "fresnel", "materials", "montecarlo", "plots", "cache", "cache_entries"),
     ("frequency", "kernels", "surfaces"),
     ("scattering", "emissivity"),
     ("solvers.validity", "solvers.quadrature", "solvers.__init__"),
     ("solvers.spm", "solvers.kirchhoff", "solvers.mom"),
     ("solvers.iem",),
-    ("solvers.measured", "solvers.select"),
+    ("solvers.measured", "solvers.select", "solvers.auto_crosspol"),
     ("method_resolution", "api", "coherent"),
     ("brdf", "radio", "render"),
     ("validation", "validity_maps", "demo", "cli", "__main__"),

@@ -30,7 +30,7 @@ from emscatter.solvers import select
 
 __all__ = [
     "validity_report", "angle_report", "call_report", "rank_methods", "angle_policy",
-    "angles_deg",
+    "angles_deg", "blend_weights",
 ]  # fmt: skip
 
 _CACHE: OrderedDict = OrderedDict()
@@ -184,6 +184,18 @@ def rank_methods(roughness, k: float, *, eps=None, theta_i=None, methods=None):
         key=lambda n: (not reports[n].get("valid", False), _excess(reports[n]), order[n]),
     )
     return [(n, reports[n]) for n in (first, *rest)]
+
+
+def blend_weights(roughness, k: float, *, eps=None) -> dict:
+    """:func:`emscatter.solvers.select.blend_weights` (``auto``'s methods and weights near a
+    switch), cached on ``(roughness, k, eps)``; a fresh dict each call."""
+    parts = ("blend", roughness, float(k), _key_of(eps))
+    key = None if _UNCACHEABLE in parts else parts
+    hit = _recall(key)
+    if hit is None:
+        hit = select.blend_weights(roughness, k, eps=eps)
+        _remember(key, hit)
+    return {"weights": dict(hit["weights"]), "switches": list(hit["switches"])}
 
 
 def angles_deg(theta_i, mask, *, limit: int = 8) -> str:
