@@ -23,7 +23,7 @@ import warnings
 __all__ = ["main", "build_parser", "command_modules"]
 
 #: Modules of this package that are not commands.
-_NOT_COMMANDS = {"args"}
+_NOT_COMMANDS = {"args", "paths"}
 _NUMBER_LIKE = re.compile(r"^-(\d|\.\d|inf|nan)", re.IGNORECASE)
 
 
