@@ -100,7 +100,9 @@ def read_npz(path: str | os.PathLike) -> BrdfTable:
     missing = {"format_version", "wavelengths", "theta_i", "theta_o", "values",
                "metadata_json"} - set(members)  # fmt: skip
     if missing:
-        raise ValueError(f"{name} lacks the entries {sorted(missing)}")
+        raise ValueError(
+            f"{name} is damaged or not an emscatter table: it lacks the entries {sorted(missing)}"
+        )
     try:
         version = int(members["format_version"])
     except (TypeError, ValueError):
