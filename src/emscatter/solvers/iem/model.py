@@ -167,6 +167,7 @@ _BACK_TOL = 1e-9
 _MODEL_NAMES = {
     "aiem": "AIEM",
     "aiem-upper": "AIEM, lower-medium terms with the upper-medium phase (I2EM)",
+    "aiem-faded": "AIEM, lower-medium terms with the upper-medium phase, faded by 1 − γ",
     "fung92": "IEM (Fung et al. 1992)",
 }
 _SPM_SIGN = (-1.0, 1.0, -1.0, 1.0)  # I₁(AIEM) ≈ s · 4 f_SPM (hh, hv, vh, vv): basis signs
@@ -189,6 +190,7 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
         g_h, g_v = _transition(rough, eps, cs, ks, log_w, K, opt.rtol)
         rh_t, rv_t = rh_i + (rh_l - rh_i) * g_h, rv_i + (rv_l - rv_i) * g_v
     else:
+        g_h = g_v = np.zeros(n)
         rh_t, rv_t = rh_i, rv_i
     kv = kern.kirchhoff_vector(si, cs, ss, css, sf, cf, rh_l, rv_l)
     sh, sv = kern.kirchhoff_scalar(si, cs, ss, css, cf, rh_t - rh_l, rv_t - rv_l)
@@ -197,6 +199,11 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
         si, cs, ss, css, sf, cf, 1.0 if pec else eps, rh_i, rv_i, lower=not pec,
         phase=opt.complementary,
     )  # fmt: skip
+    if opt.complementary == "aiem-faded" and not pec:  # lower-medium terms × (1 − γ_p)
+        fh, fv = 1.0 - g_h, 1.0 - g_v
+        fx = np.sqrt(fh * fv)
+        terms = [(nm, (F[0] * fh, F[1] * fx, F[2] * fx, F[3] * fv) if nm[0] == "G" else F, q, sd)
+                 for nm, F, q, sd in terms]  # fmt: skip
     ks2 = ks * ks
     base = -0.5 * ks2 * (cs * cs + css * css)
     # component 0: Kirchhoff (x = kz + ksz, E = −σ² kz ksz), with the complementary terms of
@@ -312,6 +319,7 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
             rough.dimension,
             transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
             shadow=shadow, threads=opt.threads, lower_q2=opt.complementary == "aiem",
+            fade=opt.complementary == "aiem-faded",
         )  # fmt: skip
         if status:
             raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
@@ -365,10 +373,12 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
         rh0, rv0 = fresnel_cos(eps_f, np.ones(1))
         rh_t, rv_t = rh + (rh0 - rh) * g_h, rv + (rv0 - rv) * g_v
     else:
+        g_h = g_v = 0.0
         rh_t, rv_t = rh, rv
     amps = [(-4.0 * rh_t, 4.0 * rv_t)]
     if lower is not None:
-        amps += [(gp_h, gp_v), (gm_h, gm_v)]
+        fh, fv = (1.0 - g_h, 1.0 - g_v) if opt.complementary == "aiem-faded" else (1.0, 1.0)
+        amps += [(gp_h * fh, gp_v * fv), (gm_h * fh, gm_v * fv)]
     la = np.empty((2, n, J))
     ph = np.empty((2, n, J), dtype=complex)
     for j, amp in enumerate(amps):
@@ -492,7 +502,7 @@ def bistatic(
     rtol: float = 1e-8,
     max_terms: int = 10**6,
     fresnel: str = "transition",
-    complementary: str = "aiem",
+    complementary: str = "aiem-faded",
     first_order: str = "spm",
     reciprocal: bool = True,
     shadowing="direction-correlated",
@@ -547,7 +557,9 @@ def bistatic(
         raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
     opt = _Options()
     opt.fresnel = _choice("fresnel", fresnel, ("transition", "incident"))
-    opt.complementary = _choice("complementary", complementary, ("aiem", "aiem-upper", "fung92"))
+    opt.complementary = _choice(
+        "complementary", complementary, ("aiem-faded", "aiem", "aiem-upper", "fung92")
+    )
     opt.first_order = _choice("first_order", first_order, ("spm", "model"))
     opt.rtol, opt.max_terms = rtol, int(max_terms)
     opt.threads = workers_for(threads, 8)
