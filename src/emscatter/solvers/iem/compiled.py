@@ -144,7 +144,7 @@ def backscatter(
     result does not depend on the split). ``lower_q2``: the lower-medium terms with the
     height phase ``Re q₂`` (AIEM, default) or, False, the upper medium's
     (``complementary="aiem-upper"``, ``"aiem-faded"``). ``fade``: those terms times
-    ``1 − γ_p``, the transition factor of the polarization (``"aiem-faded"``)."""
+    ``1 − γ_v``, one minus the vv transition factor (``"aiem-faded"``)."""
     _, _, back_kernel, run_split = _build()
     n = si.size
     pec = isinstance(eps, str)

@@ -199,10 +199,9 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
         si, cs, ss, css, sf, cf, 1.0 if pec else eps, rh_i, rv_i, lower=not pec,
         phase=opt.complementary,
     )  # fmt: skip
-    if opt.complementary == "aiem-faded" and not pec:  # lower-medium terms × (1 − γ_p)
-        fh, fv = 1.0 - g_h, 1.0 - g_v
-        fx = np.sqrt(fh * fv)
-        terms = [(nm, (F[0] * fh, F[1] * fx, F[2] * fx, F[3] * fv) if nm[0] == "G" else F, q, sd)
+    if opt.complementary == "aiem-faded" and not pec:  # lower-medium terms × (1 − γ_v)
+        fade = 1.0 - g_v
+        terms = [(nm, tuple(f * fade for f in F) if nm[0] == "G" else F, q, sd)
                  for nm, F, q, sd in terms]  # fmt: skip
     ks2 = ks * ks
     base = -0.5 * ks2 * (cs * cs + css * css)
@@ -377,8 +376,8 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
         rh_t, rv_t = rh, rv
     amps = [(-4.0 * rh_t, 4.0 * rv_t)]
     if lower is not None:
-        fh, fv = (1.0 - g_h, 1.0 - g_v) if opt.complementary == "aiem-faded" else (1.0, 1.0)
-        amps += [(gp_h * fh, gp_v * fv), (gm_h * fh, gm_v * fv)]
+        f = 1.0 - g_v if opt.complementary == "aiem-faded" else 1.0
+        amps += [(gp_h * f, gp_v * f), (gm_h * f, gm_v * f)]
     la = np.empty((2, n, J))
     ph = np.empty((2, n, J), dtype=complex)
     for j, amp in enumerate(amps):

@@ -360,7 +360,7 @@ def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2, fh, fv):
     ``q = +q₂`` "s" and ``q = −q₂`` "s" combinations, co-pol), ``a`` their height phase:
     ``Re q₂`` (``lower_q2``, AIEM) or ``cosθ`` (the upper medium's, ``"aiem-upper"``,
     ``"aiem-faded"``; :func:`.iem_kernels.backscatter_terms`); hh amplitudes times ``fh``,
-    vv times ``fv`` (the fade ``1 − γ_p`` of ``"aiem-faded"``, else 1)."""
+    vv times ``fv`` (the fade ``1 − γ_v`` of ``"aiem-faded"`` on both, else 1)."""
     a = q2.real if lower_q2 else c
     Ci, _ = reduced_i(s, c, s, c, 0.0, -1.0, -q2, c + a)
     Cs, _ = reduced_s(s, c, s, c, 0.0, -1.0, q2, c + a)
@@ -407,7 +407,7 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
     e_k = -2.0 * ks2 * c * c
     if pec:
         return fast, rh, rv, rh_t, rv_t, 0.0, e_k, 0.0, zero, zero, zero, 1
-    fh, fv = (1.0 - gh, 1.0 - gv) if fade else (1.0, 1.0)
+    fh = fv = 1.0 - gv if fade else 1.0
     a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2, fh, fv)
     return fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, 3
 
@@ -494,7 +494,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 a, e_g, att1 = 0.0, 0.0, 0.0
                 g1h = g1v = g2h = g2v = 0j
             else:
-                fh, fv = (1.0 - gh, 1.0 - gv) if fade else (1.0, 1.0)
+                fh = fv = 1.0 - gv if fade else 1.0
                 a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2,
                                                  fh, fv)  # fmt: skip
                 g1h, g1v = 0.25 * (p1[0] + p2[0]), 0.25 * (p1[3] + p2[3])
