@@ -9,7 +9,8 @@ equations; exponential correlation, ℓ/σ ∈ {4, 7, 10, 15}, rms height 0.021�
 table (8 columns: θ, ℓ/σ, Re ε, Im ε, σ/λ, VV, HH, HV dB) for the exact columns; without it the
 same grid is built and the exact columns are left empty. ``--smrt``: an interpreter with SMRT
 1.7 (``iiem_fung02`` without cross-pol, ``iem_fung92``; 30 series terms). Models: emscatter
-``iem`` default (AIEM), ``complementary="aiem-upper"`` and the 1992 configuration.
+``iem`` default (``complementary="aiem-faded"``, since issue 20), the published AIEM
+(``"aiem"``, the default before), ``"aiem-upper"`` and the 1992 configuration.
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ THETA = math.radians(40.0)
 EPS = ((3.0, 0.0), (5.5, 2.0), (9.0, 2.5), (15.0, 3.5), (22.0, 4.0), (30.0, 4.5))
 RMS = (0.021, 0.042, 0.063, 0.084, 0.126, 0.168, 0.210)
 MODELS = {
-    "aiem": {},
+    "aiem_faded": {},
+    "aiem": dict(complementary="aiem"),
     "aiem_upper": dict(complementary="aiem-upper"),
     "fung92": dict(fresnel="incident", complementary="fung92", first_order="model",
                    shadowing=False),

@@ -62,19 +62,37 @@ Choices made here, where the papers are silent or inconsistent (each tested):
   phase of the lower-medium terms uses ``Re q₂`` (their coefficients keep the complex ``q₂``):
   identical for lossless media, a relative change ``O((Im q₂ σ)²)`` (< 2 % for a wet soil,
   ε = 15 + 2i, kσ = 0.5) otherwise, and every term stays bounded (tested up to ε = 1e7i).
-* **Co-pol ratio (issue 20).** In backscatter at kσ ≳ 0.5 this model puts σhh above σvv
-  (kσ 0.79–1.32, 40°, exponential, ε 3–30: HH − VV = +0.9 dB on average, up to +2.4), where
-  exact 3-D solutions give −1.2 dB (NMM3D) and measured soils σhh ≤ σvv (Oh et al. 1992).
-  Why: the Kirchhoff term with ``R(θi)`` (or a partial transition) has ``|R_h| > |R_v|``, and
-  the complementary terms that restore ``|α_vv| > |α_hh|`` (SPM) are, in backscatter, the
-  lower-medium ones: the upper-medium "i"/"s" terms cancel or act at n = 1 only. With the
-  lower-medium phase they carry ``e^{−σ²(Re q₂)²}`` (an average of ``e^{±i q₂ (z − z')}``
+* **Co-pol ratio (issue 20): the default ``complementary="aiem-faded"``.** The published AIEM
+  (``"aiem"``) puts σhh above σvv in backscatter at kσ ≳ 0.5 (kσ 0.79–1.32, 40°, exponential,
+  ε 3–30: HH − VV = +0.9 dB on average, up to +2.4), where exact 3-D solutions give −1.2 dB
+  (NMM3D) and measured soils σhh ≤ σvv (Oh et al. 1992). Why: the Kirchhoff term with
+  ``R(θi)`` (or a partial transition) has ``|R_h| > |R_v|``; the complementary terms that
+  restore ``|α_vv| > |α_hh|`` (SPM) are, in backscatter, the lower-medium ones, and with the
+  lower-medium height phase they carry ``e^{−σ²(Re q₂)²}`` (an average of ``e^{±i q₂ (z − z')}``
   over all heights; the true ``e^{i q₂|z−z'|}`` decays only algebraically in σ q₂), so they
-  vanish once ``kσ √ε ≳ 1``. ``complementary="aiem-upper"`` gives them the upper-medium
-  phase (as I2EM, Fung et al. 2002, and SMRT's ``iiem_fung02``): HH < VV by 1.7–5.0 dB there,
-  HH RMSE 0.95 dB against NMM3D (0.49 is the 1992 model's), VV +1.1 dB biased — but those
-  terms then never fade, and the physical-optics limit at kσ = 3 is missed by up to 2.5 dB,
-  so it is not the default. validation/iem/copol_ratio.md has the table.
+  vanish once ``kσ √ε ≳ 1``. Giving them the upper-medium phase (``"aiem-upper"``, as I2EM:
+  Fung et al. 2002, Fung & Chen 2004, SMRT's ``iiem_fung02``) keeps the ratio but never lets
+  them fade: the physical-optics limit is missed by 2.5 dB at kσ = 3. The default does both:
+  upper-medium phase, amplitude times ``1 − γ_v``, the transition factor of Wu et al. (2001).
+  The argument: γ is *defined* (Wu et al. 2001; Fung & Chen 2004) from the ratio of the
+  Kirchhoff-plus-complementary field to the Kirchhoff field with ``R(0)`` — it is the share of
+  the complementary correction that ``R_T`` has already absorbed into the Kirchhoff term
+  (``γ → 1`` where the tangent-plane field with ``R`` at the specular point is the whole
+  field). Keeping the complementary lower-medium field at full strength on top of a Kirchhoff
+  term that has moved to ``R(0)`` counts that correction twice; ``(1 − γ)`` removes it at the
+  rate the transition takes it over, so the model runs from SPM (γ = 0) to PO (γ = 1). One
+  factor for all polarizations (γ_v, whose ``F_t`` form is the one the I2EM codes of Ulaby &
+  Long 2014 use for both ``R_vT`` and ``R_hT``): with γ_h on hh the lower-medium terms of hh
+  would fade faster than those of vv, and hh rise above vv again (measured: +0.8 dB worse at
+  70°). The first-order defect ``D`` is taken with the unfaded terms (the fade, like the
+  transition, is part of the model, not undone at n = 1; ``D = 0`` in backscatter still), and
+  γ → 0 as kσ → 0, so the SPM limit is unchanged. Against the NMM3D 40° table (162 cases,
+  validation/iem/copol_ratio.md): HH RMSE 0.62 dB (published AIEM 1.20), HH − VV −1.54 dB
+  mean at kσ 0.79–1.32 (NMM3D −1.23; max −0.69), PO limit at kσ = 3 within 0.03 dB; VV RMSE
+  1.28 dB (AIEM 1.04: VV +0.9 dB biased at kσ 0.26–0.8, as every IEM with full lower-medium
+  terms — I2EM, SMRT ``iiem_fung02``, the 1992 IEM; AIEM's lower VV there came with the
+  inverted ratio). Left: past the Brewster angle of a low-ε soil (ε ≈ 4, θ ≈ 70°) at
+  kσ 1–4.5, where the transition moves ``R_vT`` through zero, hh stays above vv (≤ +2.1 dB).
 * **Reciprocity.** The transition and the complementary coefficients use ``R(θi)``, so the
   published bistatic σ⁰ is not reciprocal. ``reciprocal=True`` (default) returns
   ``½[σ⁰_qp(i→s) + σ⁰_pq(−s→−i)]`` (exactly reciprocal; a single evaluation in backscatter and
@@ -124,12 +142,12 @@ Compiled kernels (:mod:`emscatter.solvers.iem.compiled`, numba, optional;
 ``EMSCATTER_KERNELS=numpy`` forces the
 reference path) cover Gaussian and exponential correlations.
 
-Known traits (validation/iem/README.md): for high-permittivity soils toward 60–70° AIEM's vv
-falls below the 1992 IEM/I2EM (the lower-medium terms are attenuated by ``e^{−σ² Re q₂²}``,
-which the versions without the lower-medium phase lack); for exponential spectra the model,
-like physical optics, loses energy at kσ ≳ 0.5 (a PEC "emits" 0.1–0.8): emissivities are upper
-bounds there; near grazing (θ > 70°, and > 45° for conductors) it can create energy — the
-validity report flags those angles.
+Known traits (validation/iem/README.md): with ``complementary="aiem"``, for high-permittivity
+soils toward 60–70° vv falls below the 1992 IEM/I2EM (the lower-medium terms are attenuated by
+``e^{−σ² Re q₂²}``, which the versions without the lower-medium phase lack); for
+exponential spectra the model, like physical optics, loses energy at kσ ≳ 0.5 (a PEC "emits"
+0.1–0.8): emissivities are upper bounds there; near grazing (θ > 70°, and > 45° for
+conductors) it can create energy — the validity report flags those angles.
 """
 
 from __future__ import annotations
@@ -167,6 +185,7 @@ _BACK_TOL = 1e-9
 _MODEL_NAMES = {
     "aiem": "AIEM",
     "aiem-upper": "AIEM, lower-medium terms with the upper-medium phase (I2EM)",
+    "aiem-faded": "AIEM, lower-medium terms with the upper-medium phase, faded by 1 − γ",
     "fung92": "IEM (Fung et al. 1992)",
 }
 _SPM_SIGN = (-1.0, 1.0, -1.0, 1.0)  # I₁(AIEM) ≈ s · 4 f_SPM (hh, hv, vh, vv): basis signs
@@ -189,6 +208,7 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
         g_h, g_v = _transition(rough, eps, cs, ks, log_w, K, opt.rtol)
         rh_t, rv_t = rh_i + (rh_l - rh_i) * g_h, rv_i + (rv_l - rv_i) * g_v
     else:
+        g_h = g_v = np.zeros(n)
         rh_t, rv_t = rh_i, rv_i
     kv = kern.kirchhoff_vector(si, cs, ss, css, sf, cf, rh_l, rv_l)
     sh, sv = kern.kirchhoff_scalar(si, cs, ss, css, cf, rh_t - rh_l, rv_t - rv_l)
@@ -197,6 +217,9 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
         si, cs, ss, css, sf, cf, 1.0 if pec else eps, rh_i, rv_i, lower=not pec,
         phase=opt.complementary,
     )  # fmt: skip
+    # "aiem-faded": the lower-medium ("G") terms × (1 − γ_v); the first-order defect below
+    # is taken with the unfaded terms (the fade, like the transition, is not undone at n = 1)
+    fade = 1.0 - g_v if opt.complementary == "aiem-faded" and not pec else None
     ks2 = ks * ks
     base = -0.5 * ks2 * (cs * cs + css * css)
     # component 0: Kirchhoff (x = kz + ksz, E = −σ² kz ksz), with the complementary terms of
@@ -212,7 +235,8 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
         if name in merged:
             amps[0] = [a + 0.25 * f for a, f in zip(amps[0], F, strict=True)]
             continue
-        amps.append([0.25 * f for f in F])
+        w = 0.25 * fade if (fade is not None and name[0] == "G") else 0.25
+        amps.append([w * f for f in F])
         xs.append((css - qph) if side == "i" else (cs + qph))
         es.append(-ks2 * (qph * qph - qph * (css - cs)))
     J = len(xs)
@@ -312,6 +336,7 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
             rough.dimension,
             transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
             shadow=shadow, threads=opt.threads, lower_q2=opt.complementary == "aiem",
+            fade=opt.complementary == "aiem-faded",
         )  # fmt: skip
         if status:
             raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
@@ -365,10 +390,12 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
         rh0, rv0 = fresnel_cos(eps_f, np.ones(1))
         rh_t, rv_t = rh + (rh0 - rh) * g_h, rv + (rv0 - rv) * g_v
     else:
+        g_h = g_v = 0.0
         rh_t, rv_t = rh, rv
     amps = [(-4.0 * rh_t, 4.0 * rv_t)]
     if lower is not None:
-        amps += [(gp_h, gp_v), (gm_h, gm_v)]
+        f = 1.0 - g_v if opt.complementary == "aiem-faded" else 1.0
+        amps += [(gp_h * f, gp_v * f), (gm_h * f, gm_v * f)]
     la = np.empty((2, n, J))
     ph = np.empty((2, n, J), dtype=complex)
     for j, amp in enumerate(amps):
@@ -492,7 +519,7 @@ def bistatic(
     rtol: float = 1e-8,
     max_terms: int = 10**6,
     fresnel: str = "transition",
-    complementary: str = "aiem",
+    complementary: str = "aiem-faded",
     first_order: str = "spm",
     reciprocal: bool = True,
     shadowing="direction-correlated",
@@ -516,10 +543,11 @@ def bistatic(
     max_terms : safety cap on series terms per geometry.
     fresnel : ``"transition"`` (Wu et al. 2001, default) or ``"incident"`` (``R(θi)``, as the
         1992 IEM) in the Kirchhoff coefficient.
-    complementary : ``"aiem"`` (Green's-function phase kept, Chen et al. 2003),
-        ``"aiem-upper"`` (the lower-medium terms with the upper-medium phase, as I2EM: the
-        physical co-pol ratio at kσ ≈ 1, module docstring) or ``"fung92"`` (phase dropped,
-        Fung et al. 1992).
+    complementary : ``"aiem-faded"`` (default: the lower-medium terms with the upper-medium
+        phase, times ``1 − γ_v``: co-pol ratio and physical-optics limit, module docstring),
+        ``"aiem"`` (Green's-function phase kept, Chen et al. 2003: HH above VV at kσ ≳ 0.5),
+        ``"aiem-upper"`` (the lower-medium terms with the upper-medium phase, never faded, as
+        I2EM) or ``"fung92"`` (phase dropped, Fung et al. 1992).
     first_order : ``"spm"`` (exact first-order amplitude, module docstring) or ``"model"``
         (the published coefficients as they are).
     reciprocal : symmetrize σ⁰ by reciprocity (module docstring).
@@ -547,7 +575,9 @@ def bistatic(
         raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
     opt = _Options()
     opt.fresnel = _choice("fresnel", fresnel, ("transition", "incident"))
-    opt.complementary = _choice("complementary", complementary, ("aiem", "aiem-upper", "fung92"))
+    opt.complementary = _choice(
+        "complementary", complementary, ("aiem-faded", "aiem", "aiem-upper", "fung92")
+    )
     opt.first_order = _choice("first_order", first_order, ("spm", "model"))
     opt.rtol, opt.max_terms = rtol, int(max_terms)
     opt.threads = workers_for(threads, 8)

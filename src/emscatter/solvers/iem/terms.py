@@ -237,7 +237,7 @@ def complementary_terms(si, cs, ss, css, sf, cf, eps, rh, rv, *, lower=True, pha
     ):
         if phase == "aiem":
             qph = q.real
-        elif phase == "aiem-upper":
+        elif phase in ("aiem-upper", "aiem-faded"):
             qph = qup + 0.0 * q.real
         else:
             qph = 0.0 * q.real
@@ -270,7 +270,7 @@ def backscatter_terms(si, cs, eps, rh, rv, *, phase="aiem"):
         return u, None
     zero, minus = 0.0 * si, -1.0 + 0.0 * si
     q2 = branch_root(eps - s2)
-    a = cs + 0.0 * q2.real if phase == "aiem-upper" else q2.real
+    a = cs + 0.0 * q2.real if phase in ("aiem-upper", "aiem-faded") else q2.real
     R, Rx = (rh, rv), 0.5 * (rv - rh)
     plus = []
     for fn, q, alpha in ((_reduced_i, -q2, cs + a), (_reduced_s, q2, cs + a)):

@@ -335,9 +335,10 @@ def fresnel_setup(s, c, eps, pec):
 
 @inline
 def transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0):
-    """``(R_h, R_v)`` with Wu et al. 2001's transition, from the sum ratios ``e₂ = S(2Q)/S(Q)
-    e^{−Q}``, ``e₄ = S(4Q)/S(Q) e^{−2Q}``: ``γ_p = 1 − |F + 8R₀|² / (|F|² + 8 Re(F R₀*) e₂ +
-    16|R₀|² e₄)``, ``F_h = −F_v = −8 R₀² sin²θ (cosθ + q₂)/q₂`` (real arithmetic)."""
+    """``(R_h, R_v, γ_h, γ_v)`` with Wu et al. 2001's transition, from the sum ratios
+    ``e₂ = S(2Q)/S(Q) e^{−Q}``, ``e₄ = S(4Q)/S(Q) e^{−2Q}``: ``γ_p = 1 − |F + 8R₀|² / (|F|² +
+    8 Re(F R₀*) e₂ + 16|R₀|² e₄)``, ``F_h = −F_v = −8 R₀² sin²θ (cosθ + q₂)/q₂`` (real
+    arithmetic)."""
     ftc = r08sq * s2 * (c * iq + 1.0)
     ff = ftc.real * ftc.real + ftc.imag * ftc.imag
     cr = 8.0 * (ftc.real * r0.real + ftc.imag * r0.imag) * e2
@@ -350,15 +351,16 @@ def transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0):
     den = base + cr
     ratio = (dv_.real * dv_.real + dv_.imag * dv_.imag) / den if den > 0 else 1.0
     gv = min(max(1.0 - ratio, 0.0), 1.0)
-    return rh + (-r0 - rh) * gh, rv + (r0 - rv) * gv
+    return rh + (-r0 - rh) * gh, rv + (r0 - rv) * gv, gh, gv
 
 
 @inline
-def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2):
+def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2, fh, fv):
     """Lower-medium terms of exact backscatter: ``(a, e_g, p1, p2, mm)`` (the ``q = −q₂`` "i",
     ``q = +q₂`` "s" and ``q = −q₂`` "s" combinations, co-pol), ``a`` their height phase:
-    ``Re q₂`` (``lower_q2``, AIEM) or ``cosθ`` (the upper medium's, ``"aiem-upper"``;
-    :func:`.iem_kernels.backscatter_terms`)."""
+    ``Re q₂`` (``lower_q2``, AIEM) or ``cosθ`` (the upper medium's, ``"aiem-upper"``,
+    ``"aiem-faded"``; :func:`.iem_kernels.backscatter_terms`); hh amplitudes times ``fh``,
+    vv times ``fv`` (the fade ``1 − γ_v`` of ``"aiem-faded"`` on both, else 1)."""
     a = q2.real if lower_q2 else c
     Ci, _ = reduced_i(s, c, s, c, 0.0, -1.0, -q2, c + a)
     Cs, _ = reduced_s(s, c, s, c, 0.0, -1.0, q2, c + a)
@@ -366,12 +368,15 @@ def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2):
     p1 = lower_co(Ci, rh, rv, iq, eps, ieps)
     p2 = lower_co(Cs, rh, rv, iq, eps, ieps)
     mm = lower_co(Cm, rh, rv, iq, eps, ieps)
+    p1 = (p1[0] * fh, p1[1], p1[2], p1[3] * fv)
+    p2 = (p2[0] * fh, p2[1], p2[2], p2[3] * fv)
+    mm = (mm[0] * fh, mm[1], mm[2], mm[3] * fv)
     return a, -ks2 * (a * a + c * c), p1, p2, mm
 
 
 @inline
 def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_rtol, r0, r08,
-                r08sq, a0, ieps, T, tr_ok, lower_q2):  # fmt: skip
+                r08sq, a0, ieps, T, tr_ok, lower_q2, fade):  # fmt: skip
     """Per-geometry coefficients of exact backscatter, one geometry at a time (the
     log-space path): ``(fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J)`` — Fresnel
     coefficients at θ and with the transition, ``a = Re q₂``, the height exponents, the
@@ -382,6 +387,7 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
     zero = (0j, 0j, 0j, 0j)
     q2, iq, rh, rv = fresnel_setup(s, c, eps, pec)
     rh_t, rv_t = rh, rv
+    gh = gv = 0.0
     if transition and not pec:
         Q = ks2 * c * c
         e2, e4 = 2.0, 4.0
@@ -397,18 +403,19 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
                 l1, l2, l4 = transition_sums(lq, Kr, spec, dim, log_rtol - 4.6)
                 e2 = math.exp(min(l2 - l1 - Q, 700.0))
                 e4 = math.exp(min(l4 - l1 - 2.0 * Q, 700.0))
-        rh_t, rv_t = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
+        rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
     e_k = -2.0 * ks2 * c * c
     if pec:
         return fast, rh, rv, rh_t, rv_t, 0.0, e_k, 0.0, zero, zero, zero, 1
-    a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2)
+    fh = fv = 1.0 - gv if fade else 1.0
+    a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2, fh, fv)
     return fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, 3
 
 
 @jit
 def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 max_terms, use_fast, sh_code, sh_slope, psi, out_hh, out_vv, out_e,
-                out_fast, lower_q2):  # fmt: skip
+                out_fast, lower_q2, fade):  # fmt: skip
     """Exact-backscatter hh, vv per geometry: the linear-space walk where it is safe and
     ``use_fast`` — blocks of :data:`LANES` geometries in lockstep: transition sums
     (:func:`walk_transition`), then both series (:func:`lane_start`, :func:`walk_lanes`) —
@@ -472,20 +479,24 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             s2 = s * s
             q2, iq, rh, rv = lq2[l], liq[l], lrh[l], lrv[l]
             rh_t, rv_t = rh, rv
+            gh = gv = 0.0
             if with_tr:
                 e2, e4 = 2.0, 4.0
                 if c > 0:
                     if not tr_ok[l]:
                         continue  # log-space path
                     e2, e4 = transition_ratios(T, l)
-                rh_t, rv_t = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
+                rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq,
+                                                      a0)  # fmt: skip
             e_k = -2.0 * ks2 * c * c
             ek_lin = math.exp(e_k)
             if pec:
                 a, e_g, att1 = 0.0, 0.0, 0.0
                 g1h = g1v = g2h = g2v = 0j
             else:
-                a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2)
+                fh = fv = 1.0 - gv if fade else 1.0
+                a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2,
+                                                 fh, fv)  # fmt: skip
                 g1h, g1v = 0.25 * (p1[0] + p2[0]), 0.25 * (p1[3] + p2[3])
                 g2h, g2v = 0.25 * mm[0], 0.25 * mm[3]
                 att1 = math.exp(e_g)
@@ -513,7 +524,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             s2 = s * s
             fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J = angle_setup(
                 s, c, K[r], eps, pec, ks2, spec, dim, transition, use_fast, rtol, log_rtol, r0,
-                r08, r08sq, a0, ieps, T, tr_ok, lower_q2,
+                r08, r08sq, a0, ieps, T, tr_ok, lower_q2, fade,
             )  # fmt: skip
             lx[0] = math.log(2.0 * c) if c > 0 else -np.inf
             if not pec:
