@@ -265,6 +265,33 @@ def _smooth(t: float) -> float:
     return t * t * (3.0 - 2.0 * t)
 
 
+def _ray_switches(at, p0: str, end: float) -> list[tuple[float, str]]:
+    """Every change of ``at(t)`` (the pick at log-offset ``t``) met going from ``t = 0``
+    (pick ``p0``) to ``end``: ``[(t, method entered), ...]`` in order. :data:`_PROBES` probes
+    catch regions wider than ``|end|/_PROBES``; between two probes, the interval is bisected
+    to its first change, then again from there to the probe while the pick still differs, so
+    that two switches between the same probes are both found (a region crossed on the way,
+    e.g. IEM's between PO below and GO above, is not skipped)."""
+    out = []
+    lo, m_lo = 0.0, p0
+    for j in range(1, _PROBES + 1):
+        probe = end * j / _PROBES
+        for _ in range(len(AUTO_ORDER) + 2):  # (each pass enters a new region; bounded)
+            if at(probe) == m_lo:
+                break
+            hi = probe
+            for _ in range(_BISECT):  # m_lo at lo, another at hi: to the first change
+                mid = 0.5 * (lo + hi)
+                if at(mid) == m_lo:
+                    lo = mid
+                else:
+                    hi = mid
+            m_lo, lo = at(hi), hi
+            out.append((hi, m_lo))
+        lo = probe
+    return out
+
+
 def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     """The methods ``method="auto"`` blends for this roughness and their weights.
 
@@ -291,10 +318,14 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     both sides). Roughness without a size scaling (not a :class:`~emscatter.spectra.Roughness`)
     gets its pick with weight 1."""
     methods = tuple(methods)
+    picks: dict[tuple[float, float], str] = {}  # one ranking per probed point
 
     def pick(ls: float, ll: float) -> str:
-        r = roughness if ls == 0.0 and ll == 0.0 else _scaled(roughness, ls, ll)
-        return rank_methods(r, k, eps=eps, methods=methods)[0][0]
+        hit = picks.get((ls, ll))
+        if hit is None:
+            r = roughness if ls == 0.0 and ll == 0.0 else _scaled(roughness, ls, ll)
+            hit = picks[(ls, ll)] = rank_methods(r, k, eps=eps, methods=methods)[0][0]
+        return hit
 
     p0 = pick(0.0, 0.0)
     if not hasattr(roughness, "_params"):
@@ -304,22 +335,9 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     for axis in (0, 1):
         at = lambda t, a=axis: pick(t, 0.0) if a == 0 else pick(0.0, t)  # noqa: E731
         for sign in (1.0, -1.0):
-            lo, m_lo = 0.0, p0
-            for j in range(1, _PROBES + 1):  # probes along the ray catch narrow regions too
-                hi = sign * d * j / _PROBES
-                if at(hi) == m_lo:
-                    lo = hi
-                    continue
-                for _ in range(_BISECT):  # m_lo at lo, another at hi: to the first change
-                    mid = 0.5 * (lo + hi)
-                    if at(mid) == m_lo:
-                        lo = mid
-                    else:
-                        hi = mid
-                m_lo, lo = at(hi), sign * d * j / _PROBES
-                if m_lo != p0 and (m_lo not in nearest or abs(hi) < nearest[m_lo][0]):
-                    nearest[m_lo] = (abs(hi), ("k_sigma", "k_l")[axis], hi)
-                m_lo = at(lo)
+            for hi_switch, method in _ray_switches(at, p0, sign * d):
+                if method != p0 and (method not in nearest or abs(hi_switch) < nearest[method][0]):
+                    nearest[method] = (abs(hi_switch), ("k_sigma", "k_l")[axis], hi_switch)
     raw = {p0: 1.0}
     switches = []
     for other, (dist, name, pos) in nearest.items():
