@@ -301,16 +301,19 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     the IEM's ``kσ ≤ 3`` and slope), where two out-of-range methods' excesses cross, and at
     the edges of the measured correction (map cells, the 1 dB tolerance; :mod:`.measured`).
     Between methods that disagree (up to ~3 dB, e.g. IEM → GO at ``kσ = √10/2``) a hard
-    switch is a jump in σ⁰. So within a factor :data:`BLEND_FACTOR` of a switch, along either
-    parameter, σ⁰ is the linear combination ``Σ wₘ σ⁰ₘ``: the method of the side the roughness
-    is on has raw weight 1, each other method met within the band ``s((1 − dₘ/δ))`` (``dₘ``
-    the distance to its region along the kσ or kℓ axis in log units, ``δ = ln BLEND_FACTOR``,
-    ``s`` a C¹ step), normalized: ``½ : ½`` at a switch, pure a factor ``BLEND_FACTOR`` away
-    (three regions at a corner share likewise). Linear (not dB) because σ⁰ integrates
+    switch is a jump in σ⁰. So within a factor :data:`BLEND_FACTOR` of a switch σ⁰ is the
+    linear combination ``Σ wₘ σ⁰ₘ``, a tensor product of 1-D blends: along kσ, the method of
+    the side the roughness is on has raw weight 1 and each region met within the band
+    ``s(1 − d/δ)`` (``d`` the distance to it in log kσ, ``δ = ln BLEND_FACTOR``, ``s`` a C¹
+    step; the nearest entry per method); each of those regions, at the point where it is
+    entered, is blended likewise along kℓ (normalized), and the products are summed and
+    normalized: ``½ : ½`` at a switch, pure a factor ``BLEND_FACTOR`` away, and a neighbour
+    that changes identity along kℓ (a corner: e.g. above SPM's kσ = 0.3 the IEM for kℓ < 4,
+    PO beyond) fades instead of swapping. Linear (not dB) because σ⁰ integrates
     linearly: the blend's hemispherical reflectivity is the same convex combination of the
     methods' ones, so a blend of two energy-conserving answers conserves energy. The
-    switches are found numerically (the pick at
-    ``± ln BLEND_FACTOR`` on each axis, bisection to the switch), so they need no list kept in
+    switches are found numerically (:func:`_ray_switches`: probes to ``± ln BLEND_FACTOR``,
+    bisection to every switch between them), so they need no list kept in
     step with the criteria: a new limit or map blends like the others.
 
     Returns ``{"weights": {name: w}, "switches": [...]}`` (weights sum to 1, names in
@@ -331,22 +334,38 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     if not hasattr(roughness, "_params"):
         return {"weights": {p0: 1.0}, "switches": []}
     d = math.log(BLEND_FACTOR)
-    nearest: dict[str, tuple[float, str, float]] = {}  # other method -> (distance, axis, at)
-    for axis in (0, 1):
-        at = lambda t, a=axis: pick(t, 0.0) if a == 0 else pick(0.0, t)  # noqa: E731
+
+    def line_blend(ls: float, ll: float, axis: int, m: str) -> dict:
+        """1-D blend at ``(ls, ll)`` (pick ``m``) along ``axis``: ``{method: (raw weight,
+        (ls, ll) where its region is entered)}``, ``m`` itself 1 at the point."""
+        out = {m: (1.0, (ls, ll))}
         for sign in (1.0, -1.0):
-            for hi_switch, method in _ray_switches(at, p0, sign * d):
-                if method != p0 and (method not in nearest or abs(hi_switch) < nearest[method][0]):
-                    nearest[method] = (abs(hi_switch), ("k_sigma", "k_l")[axis], hi_switch)
-    raw = {p0: 1.0}
+            if axis == 0:
+                hits = _ray_switches(lambda t: pick(ls + t, ll), m, sign * d)
+            else:
+                hits = _ray_switches(lambda t: pick(ls, ll + t), m, sign * d)
+            for t, other in hits:
+                r = _smooth(1.0 - abs(t) / d)
+                if other != m and r > out.get(other, (0.0,))[0]:
+                    out[other] = (r, (ls + t, ll) if axis == 0 else (ls, ll + t))
+        return out
+
+    # tensor product: the kσ blend, each of its regions blended along kℓ where it is met (so
+    # a neighbour that changes identity along kℓ — a corner, e.g. IEM above SPM's kσ = 0.3
+    # for kℓ < 4 and PO for kℓ > 4 — fades instead of swapping)
+    raw: dict[str, float] = {}
     switches = []
-    for other, (dist, name, pos) in nearest.items():
-        r = _smooth(1.0 - dist / d)
-        if r > 0.0:
-            raw[other] = r
-            base = k * (roughness.sigma if name == "k_sigma" else roughness.length)
-            switches.append({"parameter": name, "at": base * math.exp(pos),
-                             "methods": (p0, other)})  # fmt: skip
+    for m, (r, point) in line_blend(0.0, 0.0, 0, p0).items():
+        across = line_blend(*point, 1, m)
+        total = sum(w for w, _ in across.values())
+        for other, (w, at) in across.items():
+            raw[other] = raw.get(other, 0.0) + r * w / total
+            if other != m:
+                switches.append({"parameter": "k_l", "at": k * roughness.length * math.exp(at[1]),
+                                 "methods": (m, other)})  # fmt: skip
+        if m != p0:
+            switches.append({"parameter": "k_sigma", "at": k * roughness.sigma * math.exp(point[0]),
+                             "methods": (p0, m)})  # fmt: skip
     total = sum(raw.values())
     weights = {n: r / total for n, r in raw.items()}
     order = sorted(weights, key=lambda n: -weights[n])
