@@ -264,8 +264,11 @@ def backscatter_hv(roughness, eps, k: float, theta, phi_i=0.0, *, n_radial: int 
         kr, wr, psi, wpsi = _polar_nodes(rough, eps, k, kis, ksv, n_radial, n_azimuth)
         px = np.multiply.outer(kr, np.cos(psi))
         py = np.multiply.outer(kr, np.sin(psi))
-        wt = np.multiply.outer(wr * kr, wpsi) * w(ksv[0] - px, ksv[1] - py) * w(px - kis[0],
-                                                                                 py - kis[1])
+        wt = (
+            np.multiply.outer(wr * kr, wpsi)
+            * w(ksv[0] - px, ksv[1] - py)
+            * w(px - kis[0], py - kis[1])
+        )
         neg = _partner(psi, math.pi)
         mirror = _partner(psi, -2.0 * psi)  # the node at −ψ
         half = (
