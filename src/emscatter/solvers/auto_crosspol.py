@@ -11,7 +11,9 @@ so ``R_h`` and ``R_v`` act on one polarization each, no mixing; Ulaby, Moore & F
   backscatter
   included — *is* the whole fourth-order (``σ⁴``) hv of perturbation theory (the exact
   small-roughness limit). Nodes ``6 × 6`` per segment: within 0.002 dB of the ``16 × 16``
-  default (Gaussian kσ = 0.3, kℓ = 3, ε = 3, 40°: −49.405 vs −49.407 dB), ~6 ms per angle.
+  default (Gaussian kσ = 0.3, kℓ = 3, ε = 3, 40°: −49.405 vs −49.407 dB), evaluated by
+  :func:`emscatter.solvers.spm.crosspol.backscatter_hv` (the backscatter symmetries: an
+  eighth of the general kernel work, same value to rounding), ~1–2 ms per angle.
   For a conductor (PEC, Re ε < 0, ``|ε| ≥ 100``; SPM2's TM kernel is singular at the horizon)
   or a power-law spectrum the IEM term below is used instead.
 * ``po``, ``go`` (and ``spm`` where SPM2 cannot): the IEM's multiple-scattering cross-pol
@@ -30,25 +32,61 @@ so ``R_h`` and ``R_v`` act on one polarization each, no mixing; Ulaby, Moore & F
   published comparisons
   (issue 20: emscatter IEM −4.4 dB bias, SMRT −5.1, pyi2em −4.6): a lower bound.
 
+Both terms are remembered per (roughness, ε, k, θi, φi) — SPM2's per unit σ⁴, since
+σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k and the angles only — so a repeated scene, a σ sweep or the
+blend's second method pays once (:func:`clear_cache`).
+
 What stays zero, by physics: a 1-D profile (a 2-D problem has no cross-polarization), a flat
 surface (σ = 0), and bistatic geometries in the plane of incidence for these branches'
 single scattering (first-order SPM, PO, GO: the in-plane first-order terms vanish; the
-second-order terms above are added in backscatter only — SPM2 costs ~6 ms per geometry). Out
+second-order terms above are added in backscatter only — SPM2 costs ms per geometry). Out
 of the plane the branches' own single-scattering cross-pol is returned unchanged.
 """
 
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 
 import numpy as np
 
 from ..fresnel import is_pec
 
-__all__ = ["backscatter_mask", "supplement"]
+__all__ = ["backscatter_mask", "supplement", "clear_cache"]
 
 _BACK_TOL = 1e-9
 SPM2_NODES = 6
+#: Backscatter hv values remembered (per method family, roughness, ε, k and angle); SPM2's
+#: are stored divided by σ⁴ (σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k, θ only), so a σ sweep reuses them.
+_CACHE: OrderedDict = OrderedDict()
+_CACHE_SIZE = 4096
+
+
+def clear_cache() -> None:
+    """Forget the remembered backscatter cross-pol values."""
+    _CACHE.clear()
+
+
+def _cached(keys, compute):
+    """Values for ``keys`` (a list of hashables): remembered ones, the rest by
+    ``compute(indices of the missing keys)`` (an array, one value each), remembered."""
+    out = np.empty(len(keys))
+    missing = []
+    for i, key in enumerate(keys):
+        hit = _CACHE.get(key)
+        if hit is None:
+            missing.append(i)
+        else:
+            _CACHE.move_to_end(key)
+            out[i] = hit
+    if missing:
+        vals = np.asarray(compute(np.asarray(missing)), dtype=float).reshape(-1)
+        for i, v in zip(missing, vals, strict=True):
+            out[i] = v
+            _CACHE[keys[i]] = float(v)
+        while len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    return out
 
 
 def backscatter_mask(ti, ts, ps, pi_) -> np.ndarray:
@@ -81,7 +119,29 @@ def _iem_term(rough, eps, k, ti, pi_):
 def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     """``(hv, label)``: the backscatter cross-pol σ⁰ [-] to add to method ``name``'s hv and vh,
     in the broadcast shape of the angles [rad] (0 away from backscatter), or ``(None, None)``
-    where nothing is added (module docstring). ``eps`` complex scalar or array, or "pec"."""
+    where nothing is added (module docstring). ``eps`` complex scalar or array, or "pec".
+    A repeated call (same inputs) is answered from the cache (a fresh array)."""
+    args = (ti, ts, ps, pi_) if is_pec(eps) else (ti, ts, ps, pi_, eps)
+    arrays = [np.asarray(a) for a in args]
+    key = None
+    if all(a.size <= 4096 and a.dtype != object for a in arrays):
+        key = ("call", name, rough, float(k), "pec" if is_pec(eps) else "eps",
+               *((a.dtype.str, a.shape, a.tobytes()) for a in arrays))  # fmt: skip
+        hit = _CACHE.get(key)
+        if hit is not None:
+            _CACHE.move_to_end(key)
+            hv, how = hit
+            return (None, None) if hv is None else (hv.copy(), how)
+    hv, how = _supplement(name, rough, eps, k, ti, ts, ps, pi_)
+    if key is not None:
+        _CACHE[key] = (None if hv is None else hv.copy(), how)
+        while len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    return hv, how
+
+
+def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
+    """:func:`supplement` without its per-call cache (per-angle values still remembered)."""
     if name not in ("spm", "po", "go") or rough.dimension != 2 or rough.sigma == 0:
         return None, None
     back = backscatter_mask(ti, ts, ps, pi_)
@@ -92,14 +152,42 @@ def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     pb = np.broadcast_to(pi_, shape)[back]
     out = np.zeros(shape)
     if name == "spm" and _spm2_ok(rough, eps):
-        from .spm.crosspol import sigma0_22
+        from .spm.crosspol import backscatter_hv
 
-        uniq, inv = np.unique(tb, return_inverse=True)  # σ⁰⁽²²⁾ does not depend on φi
-        s = sigma0_22(rough, complex(eps), k, uniq, uniq, math.pi, 0.0,
-                      n_radial=SPM2_NODES, n_azimuth=SPM2_NODES)  # fmt: skip
-        hv = 0.5 * (s[0, 1] + s[1, 0])  # equal in backscatter (reciprocity), to rounding
-        out[back] = hv[inv.reshape(-1)]
+        # σ⁰⁽²²⁾ depends on φi only through an anisotropic spectrum's axes
+        iso = rough.length == rough.length_y
+        pairs = np.stack([tb, np.zeros_like(pb) if iso else np.mod(pb, 2 * math.pi)], -1)
+        uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+        e = complex(eps)
+        base = ("spm2", type(rough), rough.length, rough.length_y, e, float(k))
+        keys = [(*base, float(t), float(f)) for t, f in uniq]
+
+        def spm2(idx):
+            vals = np.empty(idx.size)
+            for f in np.unique(uniq[idx, 1]):  # one pass per azimuth: every angle at once
+                sel = idx[uniq[idx, 1] == f]
+                unit = rough.sigma**4  # (stored per unit σ⁴)
+                vals[np.searchsorted(idx, sel)] = (
+                    backscatter_hv(
+                        rough, e, k, uniq[sel, 0], f, n_radial=SPM2_NODES, n_azimuth=SPM2_NODES
+                    )
+                    / unit
+                )
+            return vals
+
+        out[back] = rough.sigma**4 * _cached(keys, spm2)[inv.reshape(-1)]
         return out, "second-order SPM σ⁰⁽²²⁾ (backscatter)"
     e = eps if is_pec(eps) or np.ndim(eps) == 0 else np.broadcast_to(eps, shape)[back]
-    out[back] = _iem_term(rough, e, k, tb, pb)
+    ea = np.broadcast_to(np.asarray(e if not is_pec(e) else 0.0, dtype=complex), tb.shape)
+    cols = np.stack([tb, np.mod(pb, 2 * math.pi), ea.real, ea.imag], -1)
+    uniq, inv = np.unique(cols, axis=0, return_inverse=True)
+    tag = "pec" if is_pec(e) else "eps"
+    keys = [("iem", tag, rough, float(k), *map(float, row)) for row in uniq]
+
+    def iem(idx):
+        rows = uniq[idx]
+        ee = e if is_pec(e) or np.ndim(e) == 0 else rows[:, 2] + 1j * rows[:, 3]
+        return _iem_term(rough, ee, k, rows[:, 0], rows[:, 1])
+
+    out[back] = _cached(keys, iem)[inv.reshape(-1)]
     return out, "IEM multiple scattering (Fung et al. 1992; backscatter)"

@@ -265,6 +265,33 @@ def _smooth(t: float) -> float:
     return t * t * (3.0 - 2.0 * t)
 
 
+def _ray_switches(at, p0: str, end: float) -> list[tuple[float, str]]:
+    """Every change of ``at(t)`` (the pick at log-offset ``t``) met going from ``t = 0``
+    (pick ``p0``) to ``end``: ``[(t, method entered), ...]`` in order. :data:`_PROBES` probes
+    catch regions wider than ``|end|/_PROBES``; between two probes, the interval is bisected
+    to its first change, then again from there to the probe while the pick still differs, so
+    that two switches between the same probes are both found (a region crossed on the way,
+    e.g. IEM's between PO below and GO above, is not skipped)."""
+    out = []
+    lo, m_lo = 0.0, p0
+    for j in range(1, _PROBES + 1):
+        probe = end * j / _PROBES
+        for _ in range(len(AUTO_ORDER) + 2):  # (each pass enters a new region; bounded)
+            if at(probe) == m_lo:
+                break
+            hi = probe
+            for _ in range(_BISECT):  # m_lo at lo, another at hi: to the first change
+                mid = 0.5 * (lo + hi)
+                if at(mid) == m_lo:
+                    lo = mid
+                else:
+                    hi = mid
+            m_lo, lo = at(hi), hi
+            out.append((hi, m_lo))
+        lo = probe
+    return out
+
+
 def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     """The methods ``method="auto"`` blends for this roughness and their weights.
 
@@ -274,16 +301,19 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     the IEM's ``kσ ≤ 3`` and slope), where two out-of-range methods' excesses cross, and at
     the edges of the measured correction (map cells, the 1 dB tolerance; :mod:`.measured`).
     Between methods that disagree (up to ~3 dB, e.g. IEM → GO at ``kσ = √10/2``) a hard
-    switch is a jump in σ⁰. So within a factor :data:`BLEND_FACTOR` of a switch, along either
-    parameter, σ⁰ is the linear combination ``Σ wₘ σ⁰ₘ``: the method of the side the roughness
-    is on has raw weight 1, each other method met within the band ``s((1 − dₘ/δ))`` (``dₘ``
-    the distance to its region along the kσ or kℓ axis in log units, ``δ = ln BLEND_FACTOR``,
-    ``s`` a C¹ step), normalized: ``½ : ½`` at a switch, pure a factor ``BLEND_FACTOR`` away
-    (three regions at a corner share likewise). Linear (not dB) because σ⁰ integrates
+    switch is a jump in σ⁰. So within a factor :data:`BLEND_FACTOR` of a switch σ⁰ is the
+    linear combination ``Σ wₘ σ⁰ₘ``, a tensor product of 1-D blends: along kσ, the method of
+    the side the roughness is on has raw weight 1 and each region met within the band
+    ``s(1 − d/δ)`` (``d`` the distance to it in log kσ, ``δ = ln BLEND_FACTOR``, ``s`` a C¹
+    step; the nearest entry per method); each of those regions, at the point where it is
+    entered, is blended likewise along kℓ (normalized), and the products are summed and
+    normalized: ``½ : ½`` at a switch, pure a factor ``BLEND_FACTOR`` away, and a neighbour
+    that changes identity along kℓ (a corner: e.g. above SPM's kσ = 0.3 the IEM for kℓ < 4,
+    PO beyond) fades instead of swapping. Linear (not dB) because σ⁰ integrates
     linearly: the blend's hemispherical reflectivity is the same convex combination of the
     methods' ones, so a blend of two energy-conserving answers conserves energy. The
-    switches are found numerically (the pick at
-    ``± ln BLEND_FACTOR`` on each axis, bisection to the switch), so they need no list kept in
+    switches are found numerically (:func:`_ray_switches`: probes to ``± ln BLEND_FACTOR``,
+    bisection to every switch between them), so they need no list kept in
     step with the criteria: a new limit or map blends like the others.
 
     Returns ``{"weights": {name: w}, "switches": [...]}`` (weights sum to 1, names in
@@ -291,44 +321,51 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     both sides). Roughness without a size scaling (not a :class:`~emscatter.spectra.Roughness`)
     gets its pick with weight 1."""
     methods = tuple(methods)
+    picks: dict[tuple[float, float], str] = {}  # one ranking per probed point
 
     def pick(ls: float, ll: float) -> str:
-        r = roughness if ls == 0.0 and ll == 0.0 else _scaled(roughness, ls, ll)
-        return rank_methods(r, k, eps=eps, methods=methods)[0][0]
+        hit = picks.get((ls, ll))
+        if hit is None:
+            r = roughness if ls == 0.0 and ll == 0.0 else _scaled(roughness, ls, ll)
+            hit = picks[(ls, ll)] = rank_methods(r, k, eps=eps, methods=methods)[0][0]
+        return hit
 
     p0 = pick(0.0, 0.0)
     if not hasattr(roughness, "_params"):
         return {"weights": {p0: 1.0}, "switches": []}
     d = math.log(BLEND_FACTOR)
-    nearest: dict[str, tuple[float, str, float]] = {}  # other method -> (distance, axis, at)
-    for axis in (0, 1):
-        at = lambda t, a=axis: pick(t, 0.0) if a == 0 else pick(0.0, t)  # noqa: E731
+
+    def line_blend(ls: float, ll: float, axis: int, m: str) -> dict:
+        """1-D blend at ``(ls, ll)`` (pick ``m``) along ``axis``: ``{method: (raw weight,
+        (ls, ll) where its region is entered)}``, ``m`` itself 1 at the point."""
+        out = {m: (1.0, (ls, ll))}
         for sign in (1.0, -1.0):
-            lo, m_lo = 0.0, p0
-            for j in range(1, _PROBES + 1):  # probes along the ray catch narrow regions too
-                hi = sign * d * j / _PROBES
-                if at(hi) == m_lo:
-                    lo = hi
-                    continue
-                for _ in range(_BISECT):  # m_lo at lo, another at hi: to the first change
-                    mid = 0.5 * (lo + hi)
-                    if at(mid) == m_lo:
-                        lo = mid
-                    else:
-                        hi = mid
-                m_lo, lo = at(hi), sign * d * j / _PROBES
-                if m_lo != p0 and (m_lo not in nearest or abs(hi) < nearest[m_lo][0]):
-                    nearest[m_lo] = (abs(hi), ("k_sigma", "k_l")[axis], hi)
-                m_lo = at(lo)
-    raw = {p0: 1.0}
+            if axis == 0:
+                hits = _ray_switches(lambda t: pick(ls + t, ll), m, sign * d)
+            else:
+                hits = _ray_switches(lambda t: pick(ls, ll + t), m, sign * d)
+            for t, other in hits:
+                r = _smooth(1.0 - abs(t) / d)
+                if other != m and r > out.get(other, (0.0,))[0]:
+                    out[other] = (r, (ls + t, ll) if axis == 0 else (ls, ll + t))
+        return out
+
+    # tensor product: the kσ blend, each of its regions blended along kℓ where it is met (so
+    # a neighbour that changes identity along kℓ — a corner, e.g. IEM above SPM's kσ = 0.3
+    # for kℓ < 4 and PO for kℓ > 4 — fades instead of swapping)
+    raw: dict[str, float] = {}
     switches = []
-    for other, (dist, name, pos) in nearest.items():
-        r = _smooth(1.0 - dist / d)
-        if r > 0.0:
-            raw[other] = r
-            base = k * (roughness.sigma if name == "k_sigma" else roughness.length)
-            switches.append({"parameter": name, "at": base * math.exp(pos),
-                             "methods": (p0, other)})  # fmt: skip
+    for m, (r, point) in line_blend(0.0, 0.0, 0, p0).items():
+        across = line_blend(*point, 1, m)
+        total = sum(w for w, _ in across.values())
+        for other, (w, at) in across.items():
+            raw[other] = raw.get(other, 0.0) + r * w / total
+            if other != m:
+                switches.append({"parameter": "k_l", "at": k * roughness.length * math.exp(at[1]),
+                                 "methods": (m, other)})  # fmt: skip
+        if m != p0:
+            switches.append({"parameter": "k_sigma", "at": k * roughness.sigma * math.exp(point[0]),
+                             "methods": (p0, m)})  # fmt: skip
     total = sum(raw.values())
     weights = {n: r / total for n, r in raw.items()}
     order = sorted(weights, key=lambda n: -weights[n])
