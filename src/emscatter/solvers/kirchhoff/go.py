@@ -77,7 +77,7 @@ from emscatter.solvers.validity import (
     upper,
 )
 
-__all__ = ["bistatic", "check_validity", "VALIDITY", "slope_pdf_factor"]
+__all__ = ["bistatic", "check_validity", "VALIDITY", "slope_pdf_factor", "measured_pdf_factor"]
 
 #: Validity of the geometric-optics (stationary-phase) Kirchhoff solution (Ulaby, Moore &
 #: Fung 1982 vol. II §12-4 / Table 12.2): ``kℓ ≥ 6``, ``ℓ² ≥ 2.76 σλ`` (tangent plane),
@@ -105,6 +105,7 @@ _SRC_Q = "Ulaby, Moore & Fung 1982 vol. II §12-4, Table 12.2 (stationary phase)
 _SRC_SH = "Smith 1967; Thorsos 1988 JASA 83 78; Bourlier, Berginc & Saillard 2002"
 
 _CHUNK = 1 << 15
+_MEASURED_PDF = "measured (histogram); shadowing: Smith Λ of the Gaussian, measured variances"
 
 
 def check_validity(
@@ -187,6 +188,23 @@ def slope_pdf_factor(g, sx: float, sy: float, dimension: int) -> np.ndarray:
     return np.broadcast_to(np.where(ok, val, 0.0), (g.n,))
 
 
+def measured_pdf_factor(g, pdf, dimension: int) -> np.ndarray:
+    """:func:`slope_pdf_factor` with a measured slope density ``pdf(ζx[, ζy])`` (the
+    histogram of a height map, :meth:`emscatter.surfaces.measured.MeasuredRoughness.slope_pdf`)
+    in place of the Gaussian, at the specular slopes ``ζ = (−q_x/q_z, −q_y/q_z)``."""
+    qz = g.qz
+    ok = qz > 0
+    inv = 1.0 / np.where(ok, qz, 1.0)
+    if dimension == 2:
+        p = pdf(-g.qx * inv, -g.qy * inv)
+        r = g.q2 * inv * inv
+        val = math.pi * r * r * p
+    else:
+        p = pdf(-g.qx * inv)
+        val = 0.5 * math.pi * g.q2 * g.q2 * inv * inv * inv * p
+    return np.broadcast_to(np.where(ok, val, 0.0), (g.n,))
+
+
 def bistatic(
     roughness,
     eps,
@@ -219,6 +237,10 @@ def bistatic(
         variance is infinite (exponential, power law); default ``2k``, the spectrum the wave
         sees (:mod:`emscatter.solvers.validity`). Ignored for a Gaussian unless given.
     slope_variance : override the per-direction slope variance(s) ``⟨ζx²⟩[, ⟨ζy²⟩]`` [-].
+        A measured roughness (:mod:`emscatter.surfaces.measured`) without it uses its
+        measured slope density (histogram, non-Gaussian); shadowing then uses Smith's
+        Gaussian Λ with the measured slope variances (an approximation, stated in
+        ``info["slope_pdf"]``).
     threads : worker threads for large inputs (default: the CPU count, at most 8).
     coherent : False skips the coherent part (``coherent`` is then NaN and
         ``info["coherent"]`` says so; BOARD interface 3).
@@ -254,11 +276,17 @@ def _bistatic(
     n = g.size
     flat = np.empty((2, 2, n))
     coh = np.empty((2, n)) if coherent else np.full((2, n), np.nan)
-    signed = sx != sy and dim == 2
+    # a measured roughness (emscatter.surfaces.measured) brings its own slope density
+    pdf = getattr(rough, "slope_pdf", None) if slope_variance is None else None
+    signed = (sx != sy or pdf is not None) and dim == 2
 
     def work(start: int) -> None:
         loc = g.chunk(slice(start, min(start + _CHUNK, n)), signed_azimuth=signed)
-        val = slope_pdf_factor(loc, sx, sy, dim)
+        val = (
+            slope_pdf_factor(loc, sx, sy, dim)
+            if pdf is None
+            else measured_pdf_factor(loc, pdf, dim)
+        )
         if mode is not None:
             val = val * shadowing_factor(loc, sx, sy, mode)
         fresnel_factors(loc, dim, val, out=flat[:, :, start : start + loc.n])
@@ -268,7 +296,10 @@ def _bistatic(
     starts = range(0, n, _CHUNK)
     workers = workers_for(threads, len(starts))
     ti_c, ts_c, dphi_c, _, _, eps_c = g.compact  # unbroadcast: the kernel reads grids as such
-    if monostatic and not want_coh and go_monostatic.covers(g, dim, sx, sy, mode):
+    if pdf is not None:  # the numpy path: the compiled kernels know the Gaussian only
+        for st in starts:
+            work(st)
+    elif monostatic and not want_coh and go_monostatic.covers(g, dim, sx, sy, mode):
         flat = go_monostatic.backscatter_sigma0(g.ti_flat, eps_c, sx, mode)
     elif kirchhoff_compiled.go_sigma0(
         ti_c, ts_c, dphi_c, eps_c, dimension=dim, sx=sx, sy=sy, shadowing=mode, out=flat,
@@ -288,6 +319,7 @@ def _bistatic(
         "total_mean_square_slope": sx + sy,
         "slope_cutoff": slope_cutoff(rough, k, k_max, slope_variance),
         "shadowing": mode,
+        "slope_pdf": "gaussian" if pdf is None else _MEASURED_PDF,
         "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx)
         if validity
         else None,

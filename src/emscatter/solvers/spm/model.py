@@ -105,6 +105,8 @@ def _bistatic_checked(
     (the API supplies its own report)."""
     order = _check_order(order)
     cut = coherent_cutoff(rough, k, k_max)
+    band_check = getattr(rough, "warn_band", None)  # a measured map: does it resolve 2k?
+    band = band_check(k, stacklevel=4) if band_check is not None else None
     sig, (ti_b, ts_b, ps_b, pi_b, eps_b), coh = sigma0_broadcast(
         rough, eps, k, ti, ts, phi_s, phi_i, fresnel=order < 2
     )
@@ -122,6 +124,8 @@ def _bistatic_checked(
         "coherent_clipped": clipped,
         "coherent_cutoff": cut if order == 2 and coherent else None,
     }
+    if band is not None:
+        info["band"] = band
     if not coherent:
         info["coherent"] = "not computed (coherent=False)"
     return Scattering(

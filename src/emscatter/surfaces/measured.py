@@ -1,0 +1,512 @@
+"""A measured roughness: the statistics of a height map in the form every solver takes.
+
+:func:`measured_roughness` turns a :class:`~emscatter.surfaces.heightmap.HeightMap` into a
+:class:`MeasuredRoughness`, a :class:`~emscatter.spectra.Roughness` whose
+
+* **spectrum** is Welch's estimate from the map (Welch 1967, IEEE Trans. Audio Electroacoust.
+  15, 70): the map cut into ``segments`` × ``segments`` patches overlapping by half, each
+  Hann-windowed (no per-patch mean removal: the map is detrended as a whole, and the low-K
+  bins keep their content) (times the hole mask), ``|FFT|²`` normalized so that the height
+  PSD integrates to the variance, averaged and made symmetric ``P(K) = P(−K)``; 2-D
+  (anisotropic when the map is) or 1-D, bilinear on ``K``. Normalized as
+  :mod:`emscatter.spectra` (``w = P/σ²``, ``σ²`` the map's variance);
+* **band** is what the map resolves, ``[2π/L, π/Δ]`` (``L`` the patch side that sets the
+  spectral resolution, ``Δ`` the spacing); beyond ``π/Δ`` the spectrum is a recorded choice:
+  ``tail="none"`` (zero) or ``"power-law"`` (``C |K|^(−a)`` fitted to the radially averaged
+  PSD over the top of the band ``[π/(4Δ), 0.9 π/Δ]``, isotropic);
+* **correlation** ``ρ`` is the inverse transform of the same PSD (so ``ρ(0) = 1`` and the
+  n-fold spectra ``FFT(ρⁿ)`` are consistent with ``w``); ``length``/``length_y`` are its
+  1/e lags along x / y;
+* **slopes**: the mean-square slopes are the map's own cell-centred finite differences
+  (``_mss_closed`` returns them: the solvers treat the measured surface as differentiable at
+  its own resolution), and :meth:`MeasuredRoughness.slope_pdf` is their histogram → density
+  (non-Gaussian as measured) that geometric optics uses in place of the Gaussian.
+
+:meth:`MeasuredRoughness.band_check` says how much of the band a wavenumber needs lies
+outside the map: first-order SPM needs ``|K| = |k_s⊥ − k_i⊥|`` up to ``2k`` (backscatter at
+grazing; at 500 nm that is 2.5e7 rad/m, a spacing ≤ 125 nm); the SPM solver runs it and warns
+(:class:`BandWarning`) when part of the needed band is beyond the map with ``tail="none"``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from emscatter.spectra import Roughness
+from emscatter.surfaces.heightmap import HeightMap, HeightMapError
+
+__all__ = ["MeasuredRoughness", "measured_roughness", "BandWarning", "TAILS"]
+
+#: The choices for the spectrum beyond the band the map resolves.
+TAILS = ("none", "power-law")
+
+_MIN_PATCH = 8
+
+
+class BandWarning(UserWarning):
+    """Part of the spectral band a computation needs lies beyond what the map resolves."""
+
+
+def _bilinear(grid: np.ndarray, x0: float, dx: float, x: np.ndarray, y0=None, dy=None, y=None):
+    """Bilinear (linear in 1-D) interpolation on a uniform grid; NaN outside it."""
+    fx = (x - x0) / dx
+    nx = grid.shape[-1]
+    inside = (fx >= 0) & (fx <= nx - 1)
+    fx = np.clip(fx, 0, nx - 1)
+    ix = np.minimum(np.floor(fx).astype(np.intp), nx - 2)
+    tx = fx - ix
+    if y is None:
+        val = grid[ix] * (1 - tx) + grid[ix + 1] * tx
+        return np.where(inside, val, np.nan)
+    fy = (y - y0) / dy
+    ny = grid.shape[0]
+    inside &= (fy >= 0) & (fy <= ny - 1)
+    fy = np.clip(fy, 0, ny - 1)
+    iy = np.minimum(np.floor(fy).astype(np.intp), ny - 2)
+    ty = fy - iy
+    val = (grid[iy, ix] * (1 - tx) + grid[iy, ix + 1] * tx) * (1 - ty) + (
+        grid[iy + 1, ix] * (1 - tx) + grid[iy + 1, ix + 1] * tx
+    ) * ty
+    return np.where(inside, val, np.nan)
+
+
+def _symmetric_extended(p: np.ndarray) -> np.ndarray:
+    """fftshifted grid → symmetric grid spanning ``[−K_N, K_N]`` on every even axis (the
+    Nyquist line repeated), averaged with its point reflection ``P(−K)``."""
+    for ax in range(p.ndim):
+        if p.shape[ax] % 2 == 0:
+            first = np.take(p, [0], axis=ax)
+            p = np.concatenate([p, first], axis=ax)
+    flip = p[(slice(None, None, -1),) * p.ndim]
+    return 0.5 * (p + flip)
+
+
+def _box(p: np.ndarray, half: int) -> np.ndarray:
+    """Moving average over ``(2·half + 1)^d`` bins (edges: the bins that exist)."""
+    if half == 0:
+        return p
+    out, cnt = p.copy(), np.ones_like(p)
+    for ax in range(p.ndim):
+        acc, c = out.copy(), cnt.copy()
+        for s in range(1, half + 1):
+            for sign in (1, -1):
+                sl_to = [slice(None)] * p.ndim
+                sl_from = [slice(None)] * p.ndim
+                sl_to[ax] = slice(s, None) if sign > 0 else slice(None, -s)
+                sl_from[ax] = slice(None, -s) if sign > 0 else slice(s, None)
+                acc[tuple(sl_to)] += out[tuple(sl_from)]
+                c[tuple(sl_to)] += cnt[tuple(sl_from)]
+        out, cnt = acc, c
+    return out / cnt
+
+
+def _welch(hm: HeightMap, segments: int, smooth: int = 0):
+    """Welch PSD ``P`` [m^(2+d)] on the symmetric fftshifted grid, with the grid origin and
+    step per axis [rad/m] and the patch shape."""
+    h, m = hm.heights, hm.mask.astype(float)
+    shape = h.shape
+    patch = tuple(max(_MIN_PATCH, n // segments) for n in shape)
+    step = tuple(max(1, p // 2) for p in patch)
+    starts = [range(0, n - p + 1, s) for n, p, s in zip(shape, patch, step, strict=True)]
+    win = np.hanning(patch[0] + 2)[1:-1]
+    if h.ndim == 2:
+        win = np.outer(win, np.hanning(patch[1] + 2)[1:-1])
+    acc = np.zeros(patch)
+    wsum = 0.0
+    cell = float(np.prod(hm.spacing))
+    grids = np.meshgrid(*starts, indexing="ij")
+    for origin in zip(*(g.ravel() for g in grids), strict=True):
+        sl = tuple(slice(o, o + p) for o, p in zip(origin, patch, strict=True))
+        wm = win * m[sl]
+        if wm.sum() <= 0.5 * win.sum():  # mostly holes: no estimate from this patch
+            continue
+        acc += np.abs(np.fft.fftn(h[sl] * wm)) ** 2  # the map is detrended: no patch mean
+        wsum += (wm * wm).sum()
+    if wsum == 0:
+        raise HeightMapError(f"the map from {hm.source} has no patch with enough valid samples")
+    p = _box(np.fft.fftshift(acc * cell / ((2 * math.pi) ** h.ndim * wsum)), smooth)
+    dk = tuple(2 * math.pi / (n * d) for n, d in zip(patch, hm.spacing, strict=True))
+    k0 = tuple(-(n // 2) * s for n, s in zip(patch, dk, strict=True))
+    return _symmetric_extended(p), k0, dk, patch
+
+
+def _cell_slopes(hm: HeightMap):
+    """Cell-centred finite-difference slopes ``(ζx, ζy)`` of the valid cells (2-D: the mean of
+    the two differences across each cell; 1-D: forward differences, ``ζy`` None)."""
+    h, m = hm.heights, hm.mask
+    if h.ndim == 1:
+        ok = m[1:] & m[:-1]
+        return (np.diff(h) / hm.spacing[0])[ok], None
+    dy, dx = hm.spacing
+    ok = m[1:, 1:] & m[1:, :-1] & m[:-1, 1:] & m[:-1, :-1]
+    zx = 0.5 * ((h[1:, 1:] - h[1:, :-1]) + (h[:-1, 1:] - h[:-1, :-1])) / dx
+    zy = 0.5 * ((h[1:, 1:] - h[:-1, 1:]) + (h[1:, :-1] - h[:-1, :-1])) / dy
+    return zx[ok], zy[ok]
+
+
+def _density(zx, zy, bins: int):
+    """Histogram density of the slopes on a grid centred on 0 (odd ``bins``) over ±6 rms
+    (or the extreme slope, whichever is smaller), with the fraction that fell outside."""
+    bins = bins + 1 - bins % 2
+    if zy is None:
+        half = min(6 * math.sqrt(np.mean(zx * zx)), np.abs(zx).max()) * (1 + 1.0 / bins)
+        edges = np.linspace(-half, half, bins + 1)
+        hist, _ = np.histogram(zx, bins=edges)
+        step = edges[1] - edges[0]
+        return hist / (zx.size * step), (-half + 0.5 * step, step), None, 1 - hist.sum() / zx.size
+    halves = []
+    for z in (zx, zy):
+        halves.append(min(6 * math.sqrt(np.mean(z * z)), np.abs(z).max()) * (1 + 1.0 / bins))
+    ex = np.linspace(-halves[0], halves[0], bins + 1)
+    ey = np.linspace(-halves[1], halves[1], bins + 1)
+    hist, _, _ = np.histogram2d(zy, zx, bins=(ey, ex))
+    sx, sy = ex[1] - ex[0], ey[1] - ey[0]
+    dens = hist / (zx.size * sx * sy)
+    return dens, (ex[0] + 0.5 * sx, sx), (ey[0] + 0.5 * sy, sy), 1 - hist.sum() / zx.size
+
+
+@dataclass(frozen=True, eq=False)
+class MeasuredRoughness(Roughness):
+    """The roughness of a measured height map (module docstring); build it with
+    :func:`measured_roughness`. ``sigma`` [m] is the map's rms height, ``length`` /
+    ``length_y`` [m] the 1/e lags of its correlation. The arrays are the estimates: ``psd``
+    [m^(2+d)] on a uniform grid (origin ``k0``, step ``dk`` [rad/m] per axis, axis order
+    (y, x)), ``slope_density`` [-] on a grid of slopes (origin, step per axis)."""
+
+    psd: np.ndarray = None
+    k0: tuple = ()
+    dk: tuple = ()
+    slope_density: np.ndarray = None
+    slope_grid: tuple = ()
+    slopes_ms: tuple = (0.0, 0.0)
+    tail: str = "none"
+    tail_fit: tuple = ()
+    band_lo: float = 0.0
+    band_hi: float = math.inf
+    isotropic: bool = False
+    source: str = "array"
+    info: dict = field(default_factory=dict)
+    name: str = field(default="measured", init=False, repr=False)
+
+    # ---------------------------------------------------------------- Roughness hooks
+    @property
+    def is_isotropic(self) -> bool:
+        """True only when asked (``isotropic=True``: the spectrum averaged over rings)."""
+        return bool(self.isotropic)
+
+    @property
+    def spectral_support(self):
+        """(support radius, breakpoints) in units of 1/ℓ for the SPM2 quadrature: the band
+        edge (``tail="none"``) or 1000× beyond it (power-law tail)."""
+        lmin = min(self.length, self.length_y)
+        top = self.band_hi * (1.0 if self.tail == "none" else 1e3)
+        return top * lmin, tuple(b * lmin for b in (self.band_lo, 0.25 * self.band_hi))
+
+    def _params(self) -> dict:
+        raise TypeError(
+            "a MeasuredRoughness cannot be rebuilt from (sigma, length); use "
+            "measured_roughness(height_map) (profile() gives the 1-D spectrum along x)"
+        )
+
+    def _mss_closed(self):
+        return tuple(float(s) for s in self.slopes_ms)
+
+    def _rho_unit(self, u):
+        return self.correlation(np.asarray(u, dtype=float) * self.length)
+
+    def _w2_unit(self, q):
+        return self.spectrum(np.asarray(q, dtype=float) / self.length) / (
+            self.length * self.length_y
+        )
+
+    def _w1_unit(self, q):
+        return self.spectrum(np.asarray(q, dtype=float) / self.length) / self.length
+
+    # ---------------------------------------------------------------- spectrum
+    @cached_property
+    def _radial(self):
+        """Ring average of the PSD: (K centres [rad/m], P [m^(2+d)])."""
+        if self.dimension == 1:
+            k = self.k0[0] + self.dk[0] * np.arange(self.psd.size)
+            keep = k >= 0
+            return k[keep], self.psd[keep]
+        ky = self.k0[0] + self.dk[0] * np.arange(self.psd.shape[0])
+        kx = self.k0[1] + self.dk[1] * np.arange(self.psd.shape[1])
+        kr = np.hypot(*np.meshgrid(kx, ky, indexing="xy")[::-1])
+        step = min(self.dk)
+        idx = np.rint(kr / step).astype(np.intp)
+        top = int(min(abs(self.k0[0]), abs(self.k0[1])) / step)
+        cnt = np.bincount(idx.ravel(), minlength=top + 1)[: top + 1]
+        tot = np.bincount(idx.ravel(), self.psd.ravel(), minlength=top + 1)[: top + 1]
+        return np.arange(top + 1) * step, tot / np.maximum(cnt, 1)
+
+    def _tail(self, kr):
+        if self.tail == "none":
+            return np.zeros(np.shape(kr))
+        c, a = self.tail_fit
+        with np.errstate(divide="ignore"):
+            return c * np.maximum(kr, 1e-300) ** (-a)
+
+    def height_spectrum(self, kx, ky=0.0) -> np.ndarray:
+        """Height PSD ``σ² w`` [m^(2+d)]: the estimate inside the band, the tail beyond."""
+        kx = np.asarray(kx, dtype=float)
+        if self.dimension == 1:
+            kr = np.abs(kx)
+            kr0, lp = self._log_radial
+            val = _bilinear(lp, 0.0, kr0[1] - kr0[0], kr)
+        elif self.isotropic:
+            kr = np.sqrt(kx * kx + np.asarray(ky, dtype=float) ** 2)
+            kr0, lp = self._log_radial
+            val = _bilinear(lp, 0.0, kr0[1] - kr0[0], kr)
+        else:
+            ky = np.asarray(ky, dtype=float)
+            kx, ky = np.broadcast_arrays(kx, ky)
+            kr = np.sqrt(kx * kx + ky * ky)
+            val = _bilinear(self._log_psd, self.k0[1], self.dk[1], kx, self.k0[0], self.dk[0], ky)
+        return np.where(np.isnan(val), self._tail(kr), np.exp(val))
+
+    @cached_property
+    def _log_psd(self) -> np.ndarray:
+        """log P (interpolated in log: a steep spectrum is not overestimated between bins)."""
+        return np.log(np.maximum(self.psd, self.psd.max() * 1e-300))
+
+    @cached_property
+    def _log_radial(self):
+        kr, pr = self._radial
+        return kr, np.log(np.maximum(pr, pr.max() * 1e-300))
+
+    def spectrum(self, kx, ky=0.0) -> np.ndarray:
+        """Normalized spectrum ``w = P/σ²`` [m^d] (:mod:`emscatter.spectra`'s convention)."""
+        return self.height_spectrum(kx, ky) / self.sigma**2
+
+    # ---------------------------------------------------------------- correlation, n-fold
+    @cached_property
+    def _rho_grid(self) -> np.ndarray:
+        """ρ on the lag grid of the patch (fftshifted, lag 0 at the centre), ρ(0) = 1."""
+        core = self.psd[tuple(slice(0, n) for n in self.info["patch"])]
+        rho = np.fft.fftshift(np.real(np.fft.ifftn(np.fft.ifftshift(core))))
+        return rho / rho[tuple(n // 2 for n in rho.shape)]
+
+    def correlation(self, x, y=0.0) -> np.ndarray:
+        """ρ(x, y) [-] from the PSD (0 beyond half the patch), ``x, y`` [m]."""
+        rho = self._rho_grid
+        sp = self.info["spacing"]
+        x = np.asarray(x, dtype=float)
+        if self.dimension == 1:
+            c = rho.size // 2
+            v = _bilinear(rho, -c * sp[0], sp[0], x)
+        else:
+            cy, cx = rho.shape[0] // 2, rho.shape[1] // 2
+            v = _bilinear(rho, -cx * sp[1], sp[1], x, -cy * sp[0], sp[0], np.asarray(y, float))
+        return np.nan_to_num(v, nan=0.0)
+
+    def nfold_spectrum(self, n, kx, ky=0.0) -> np.ndarray:
+        """Normalized transform of ``ρⁿ`` by FFT of the measured ρ [m^d] (``n`` ≥ 1; ``n = 1``
+        is :meth:`spectrum` inside the band). Zero beyond the band."""
+        n = np.asarray(n, dtype=float)
+        kx = np.asarray(kx, dtype=float)
+        ky = np.asarray(ky, dtype=float)
+        n, kx, ky = np.broadcast_arrays(n, kx, ky)
+        out = np.empty(n.shape)
+        sp = self.info["spacing"]
+        cell = float(np.prod(sp))
+        for nv in np.unique(n):
+            sel = n == nv
+            grid = (
+                np.fft.fftshift(np.real(np.fft.fftn(np.fft.ifftshift(self._rho_grid**nv))))
+                * cell
+                / (2 * math.pi) ** self.dimension
+            )
+            shp = grid.shape
+            dk = tuple(2 * math.pi / (m * d) for m, d in zip(shp, sp, strict=True))
+            k0 = tuple(-(m // 2) * s for m, s in zip(shp, dk, strict=True))
+            if self.dimension == 1:
+                v = _bilinear(grid, k0[0], dk[0], kx[sel])
+            else:
+                v = _bilinear(grid, k0[1], dk[1], kx[sel], k0[0], dk[0], ky[sel])
+            out[sel] = np.nan_to_num(v, nan=0.0)
+        return out
+
+    # ---------------------------------------------------------------- slopes
+    def mean_square_slope(self, k_max: float | None = None) -> tuple[float, float]:
+        """Per-direction mean-square slopes [-]: the map's finite differences, or with
+        ``k_max`` [rad/m] the PSD's ``∫ Kx² P`` over ``|K| < k_max`` (band and tail)."""
+        if k_max is None:
+            return self._mss_closed()
+        if self.dimension == 1:
+            k = np.linspace(0, k_max, 4001)
+            return float(2 * np.trapezoid(k * k * self.height_spectrum(k), k)), 0.0
+        kr = np.linspace(0, k_max, 801)[1:]
+        ph = np.linspace(0, 2 * math.pi, 257)[:-1]
+        K, P = np.meshgrid(kr, ph, indexing="ij")
+        cx, cy = K * np.cos(P), K * np.sin(P)
+        hs = self.height_spectrum(cx, cy) * K * (2 * math.pi / ph.size)
+        return (float(np.trapezoid((cx * cx * hs).sum(1), kr)),
+                float(np.trapezoid((cy * cy * hs).sum(1), kr)))  # fmt: skip
+
+    def slope_pdf(self, zx, zy=None) -> np.ndarray:
+        """The measured slope density ``p(ζx, ζy)`` [-] (1-D: ``p₁(ζx)``), histogram →
+        density, bilinear between bin centres, 0 beyond the measured slopes."""
+        zx = np.asarray(zx, dtype=float)
+        if self.dimension == 1:
+            (x0, sx), _ = self.slope_grid
+            v = _bilinear(self.slope_density, x0, sx, zx)
+        else:
+            (x0, sx), (y0, sy) = self.slope_grid
+            v = _bilinear(self.slope_density, x0, sx, zx, y0, sy, np.asarray(zy, dtype=float))
+        return np.nan_to_num(v, nan=0.0)
+
+    # ---------------------------------------------------------------- band
+    def band_check(self, k: float, k_needed: float | None = None) -> dict:
+        """How much of the band ``[0, K_need]`` (default ``2k``, first-order SPM's reach)
+        lies outside ``[band_lo, band_hi]`` [rad/m]: ``fraction_above`` (beyond ``π/Δ``:
+        zero or the tail, by ``tail``), ``fraction_below`` (under the patch resolution
+        ``2π/L``, where the estimate is one bin wide), ``ok`` (nothing above, or a tail)."""
+        k = float(k)
+        need = 2 * k if k_needed is None else float(k_needed)
+        above = max(0.0, need - self.band_hi) / need
+        below = min(self.band_lo, need) / need
+        ok = above == 0 or self.tail != "none"
+        msg = (
+            f"the band |K| ≤ {need:.4g} rad/m (2k at k={k:.4g} rad/m) is inside the map's "
+            f"[{self.band_lo:.4g}, {self.band_hi:.4g}] rad/m"
+            if above == 0
+            else f"{100 * above:.1f}% of the band |K| ≤ {need:.4g} rad/m lies beyond the map's "
+            f"π/Δ = {self.band_hi:.4g} rad/m (spacing {math.pi / self.band_hi:.4g} m; it needs "
+            f"≤ {math.pi / need:.4g} m); beyond it the spectrum is "
+            + ("zero (tail='none')" if self.tail == "none" else "the fitted power-law tail")
+        )
+        return {"k_needed": need, "band": (self.band_lo, self.band_hi),
+                "fraction_above": above, "fraction_below": below, "tail": self.tail,
+                "ok": ok, "message": msg}  # fmt: skip
+
+    def warn_band(self, k: float, k_needed: float | None = None, stacklevel: int = 3) -> dict:
+        """:meth:`band_check`, with a :class:`BandWarning` when it is not ``ok``."""
+        rep = self.band_check(k, k_needed)
+        if not rep["ok"]:
+            warnings.warn(rep["message"], BandWarning, stacklevel=stacklevel)
+        return rep
+
+    # ---------------------------------------------------------------- views
+    def profile(self) -> MeasuredRoughness:
+        """The 1-D roughness along x: ``P₁(kx) = ∫ P(kx, ky) dky`` and the x-slopes."""
+        if self.dimension == 1:
+            return self
+        p1 = self.psd[: self.info["patch"][0]].sum(axis=0) * self.dk[0]
+        dens = self.slope_density.sum(axis=0) * self.slope_grid[1][1]
+        info = {**self.info, "spacing": (self.info["spacing"][1],),
+                "patch": (self.info["patch"][1],)}  # fmt: skip
+        return MeasuredRoughness(
+            sigma=self.sigma, length=self.length, dimension=1, psd=p1, k0=(self.k0[1],),
+            dk=(self.dk[1],), slope_density=dens, slope_grid=(self.slope_grid[0], None),
+            slopes_ms=(self.slopes_ms[0], 0.0), tail=self.tail, tail_fit=self.tail_fit,
+            band_lo=self.band_lo, band_hi=self.band_hi, source=self.source, info=info,
+        )  # fmt: skip
+
+    def surface(self):
+        raise TypeError("a measured profile has no 2-D spectrum; measure a map instead")
+
+    def describe(self) -> str:
+        return (
+            f"measured ({self.source}): σ={self.sigma:.4g} m, ℓ={self.length:.4g} m, "
+            f"ℓy={self.length_y:.4g} m, rms slopes {math.sqrt(self.slopes_ms[0]):.4g}/"
+            f"{math.sqrt(self.slopes_ms[1]):.4g}, band [{self.band_lo:.4g}, {self.band_hi:.4g}]"
+            f" rad/m, tail {self.tail}"
+        )
+
+
+def _one_over_e(rho: np.ndarray, step: float) -> float:
+    """First lag [m] where the (centre → edge) correlation falls below 1/e (linear)."""
+    target = math.exp(-1.0)
+    below = np.nonzero(rho < target)[0]
+    if below.size == 0:
+        return rho.size * step  # longer than the patch: at least that
+    i = int(below[0])
+    r0, r1 = rho[i - 1], rho[i]
+    return ((i - 1) + (r0 - target) / (r0 - r1)) * step
+
+
+def measured_roughness(
+    hm: HeightMap,
+    *,
+    segments: int = 8,
+    tail: str = "none",
+    isotropic: bool = False,
+    slope_bins: int | None = None,
+    smooth: int = 0,
+) -> MeasuredRoughness:
+    """The :class:`MeasuredRoughness` of a height map.
+
+    Parameters
+    ----------
+    hm : a :class:`~emscatter.surfaces.heightmap.HeightMap` (:func:`read_height_map`,
+        :func:`height_map`).
+    segments : Welch patches per axis (patch side ``n // segments``, at least 8 samples;
+        overlap ½): more segments, less variance, coarser resolution ``2π/L_patch``.
+    tail : ``"none"`` or ``"power-law"`` (module docstring): the spectrum beyond ``π/Δ``.
+    isotropic : True averages the spectrum over rings (for a map known to be isotropic).
+    smooth : half-width in bins of a moving average of the Welch estimate (0: none; 1: 3×3
+        bins, a ninth of the variance for a bias ∝ (Δk)² × the spectrum's curvature).
+    slope_bins : bins per axis of the slope histogram (default ``≈ N^(1/4)·2``, 21…201).
+    """
+    if not isinstance(hm, HeightMap):
+        raise TypeError(
+            f"hm must be a HeightMap (emscatter.surfaces.height_map / read_height_map), got "
+            f"{type(hm).__name__}"
+        )
+    if isinstance(segments, bool) or not isinstance(segments, int) or segments < 1:
+        raise ValueError(f"segments must be a positive integer, got {segments!r}")
+    if tail not in TAILS:
+        raise ValueError(f"tail must be one of {TAILS}, got {tail!r}")
+    if min(hm.shape) // segments < _MIN_PATCH and segments > 1:
+        segments = max(1, min(hm.shape) // _MIN_PATCH)
+    if isinstance(smooth, bool) or not isinstance(smooth, int) or not 0 <= smooth <= 8:
+        raise ValueError(f"smooth must be an integer 0…8 (bins), got {smooth!r}")
+    psd, k0, dk, patch = _welch(hm, segments, smooth)
+    sigma = hm.rms_height()
+    zx, zy = _cell_slopes(hm)
+    n_sl = zx.size
+    bins = slope_bins or int(np.clip(2 * round(n_sl**0.25), 21, 201))
+    dens, gx, gy, lost = _density(zx, zy, bins)
+    mss = (float(np.mean(zx * zx)), float(np.mean(zy * zy)) if zy is not None else 0.0)
+    band_lo = 2 * math.pi / max(p * d for p, d in zip(patch, hm.spacing, strict=True))
+    band_hi = math.pi / max(hm.spacing)
+    info = {"spacing": hm.spacing, "patch": patch, "segments": segments, "window": "hann",
+            "overlap": 0.5, "smooth": smooth, "slope_bins": bins,
+            "slopes_outside_histogram": float(lost),
+            "map_band": hm.band, "detrend": hm.detrend, "holes": hm.holes,
+            "spectral_mass": float(psd.sum() * np.prod(dk) / sigma**2)}  # fmt: skip
+    common = {"psd": psd, "k0": k0, "dk": dk, "slope_density": dens, "slope_grid": (gx, gy),
+              "slopes_ms": mss, "band_lo": band_lo, "band_hi": band_hi,
+              "isotropic": bool(isotropic) and hm.dimension == 2, "source": hm.source,
+              "info": info, "dimension": hm.dimension}  # fmt: skip
+    probe = MeasuredRoughness(sigma=sigma, length=1.0, length_y=None, **common)
+    rho = probe._rho_grid
+    if hm.dimension == 1:
+        lx = _one_over_e(rho[rho.size // 2 :], hm.spacing[0])
+        ly = None
+    else:
+        cy, cx = rho.shape[0] // 2, rho.shape[1] // 2
+        lx = _one_over_e(rho[cy, cx:], hm.spacing[1])
+        ly = _one_over_e(rho[cy:, cx], hm.spacing[0])
+        if isotropic:
+            lx = ly = math.sqrt(lx * ly)
+    fit = ()
+    if tail == "power-law":
+        kr, pr = probe._radial
+        sel = (kr >= 0.25 * band_hi) & (kr <= 0.9 * band_hi) & (pr > 0)
+        if sel.sum() < 4:
+            raise HeightMapError(
+                f"the map from {hm.source} has too few spectral bins near π/Δ for a power-law "
+                "tail fit; use tail='none'"
+            )
+        slope, icpt = np.polyfit(np.log(kr[sel]), np.log(pr[sel]), 1)
+        fit = (float(math.exp(icpt)), float(-slope))
+        info["tail_fit_range"] = (0.25 * band_hi, 0.9 * band_hi)
+    return MeasuredRoughness(sigma=sigma, length=lx, length_y=ly, tail=tail, tail_fit=fit,
+                             **common)  # fmt: skip
