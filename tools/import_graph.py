@@ -37,7 +37,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("frequency", "kernels", "surfaces"),
     ("scattering", "emissivity"),
     ("solvers.validity", "solvers.quadrature", "solvers.__init__"),
-    ("solvers.spm", "solvers.kirchhoff", "solvers.mom"),
+    ("solvers.spm", "solvers.kirchhoff", "solvers.mom", "solvers.mom3d"),
     ("solvers.iem",),
     ("solvers.measured", "solvers.select", "solvers.auto_crosspol"),
     ("method_resolution", "api", "coherent"),

@@ -1,0 +1,273 @@
+"""Method of moments for a perfectly conducting 2-D rough surface (the 3-D problem): one
+realization (:func:`solve_realization`) and the Monte Carlo σ⁰ (:func:`bistatic`).
+
+The formulation (MFIE, pulse bases, point matching, analytic ``J/2`` self term) is in
+:mod:`.operator`, the tapered incident wave and its power in :mod:`.incident`, the far field and
+the hemisphere quadrature in :mod:`.farfield`. Monte Carlo estimators over ``n``
+realizations of the far-field amplitude ``A = p̂_s·F`` (:mod:`.farfield`):
+
+* incoherent σ⁰ from the sample variance ``n/(n−1) (⟨|A|²⟩ − |⟨A⟩|²)``;
+* coherent power from the unbiased ``(n |⟨A⟩|² − ⟨|A|²⟩)/(n−1)``, integrated over the upper
+  hemisphere (the specular lobe of a finite beam has a width ~ ``2/(k g cosθi)``), summed over
+  the scattered polarizations: the coherent reflectivity per incident polarization;
+* per realization, the energy ratio ``∫ Σ_p dP/dΩ dΩ / P_inc`` (1 for a perfect conductor:
+  the check of every solution, in ``info["energy"]``).
+
+Not registered in :mod:`emscatter.solvers` (a perfect conductor only: the solver contract runs
+dielectrics); call it as ``emscatter.solvers.mom3d.bistatic``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from emscatter.conventions import check_angle, check_finite, check_positive, fmt
+from emscatter.fresnel import is_pec
+from emscatter.scattering import Scattering
+from emscatter.solvers.mom3d.farfield import amplitudes, hemisphere
+from emscatter.solvers.mom3d.incident import tapered_beam
+from emscatter.solvers.mom3d.operator import assemble, make_patch, rhs, solve
+
+__all__ = ["bistatic", "matrix_bytes", "solve_realization"]
+
+#: Largest dense matrix :func:`bistatic` assembles unless told otherwise [bytes].
+MAX_MATRIX_BYTES = 2 * 2**30
+#: Below this many points per wavelength the pulse-basis MFIE is not trusted.
+MIN_PPW = 6.0
+
+
+def matrix_bytes(n_nodes: int, dtype=np.complex128) -> int:
+    """Bytes of the dense ``(2N, 2N)`` MFIE matrix for ``n_nodes`` nodes."""
+    return (2 * n_nodes) ** 2 * np.dtype(dtype).itemsize
+
+
+def _dtype_for(n_nodes: int):
+    """complex128 up to 2048 nodes (64 MiB … 268 MB), complex64 above (half the memory; GMRES
+    tolerances of 1e-5 are far above its rounding)."""
+    return np.complex128 if n_nodes <= 2048 else np.complex64
+
+
+def solve_realization(
+    heights,
+    spacing: float,
+    k: float,
+    theta_i: float,
+    theta_s,
+    phi_s,
+    phi_i: float = 0.0,
+    *,
+    taper_g: float | None = None,
+    polarizations: tuple[str, ...] = ("h", "v"),
+    n_mu: int | None = None,
+    tol: float = 1e-5,
+    max_iter: int = 300,
+    dtype=None,
+) -> dict:
+    """Solve the MFIE on one ``(ny, nx)`` height map [m] with square ``spacing`` [m].
+
+    Returns a dict: ``amplitude`` ``(2, P, D)`` (scattered pol × incident pol × direction, the
+    directions ``theta_s, phi_s`` flattened), ``hemisphere`` (the same on the quadrature of
+    :func:`~emscatter.solvers.mom3d.farfield.hemisphere`, with ``weights``), ``power`` the
+    incident power [m²], ``energy`` ``(P,)`` the scattered-to-incident power ratio,
+    ``iterations``, ``residual``, ``seconds`` and the sizes.
+    """
+    t0 = time.perf_counter()
+    h = np.asarray(heights, dtype=float)
+    patch = make_patch(h, spacing, spacing)
+    ny, nx = patch.shape
+    half_x, half_y = (nx - 1) / 2 * spacing, (ny - 1) / 2 * spacing
+    g = taper_g if taper_g is not None else min(nx, ny) * spacing / 4.0
+    beam = tapered_beam(k, theta_i, phi_i, g, math.hypot(half_x, half_y))
+    points = patch.points
+    dt = dtype if dtype is not None else _dtype_for(patch.n)
+    mat = assemble(patch, k, dtype=dt)
+    t_assemble = time.perf_counter() - t0
+    b = [rhs(patch, beam.fields(points, p)[1]) for p in polarizations]
+    sol = solve(mat, patch, b, tol=tol, max_iter=max_iter)
+    del mat
+    t_solve = time.perf_counter() - t0 - t_assemble
+    u = np.stack(sol.u)  # (P, N, 3)
+    area = spacing * spacing
+    amp = amplitudes(points, area, k, u, theta_s, phi_s)
+    if n_mu is None:  # resolve the beam's lobes: ~4 nodes per 2π/L in k⊥
+        n_mu = max(24, int(math.ceil(2.0 * k * max(nx, ny) * spacing / math.pi)))
+    th, ph, wt = hemisphere(n_mu)
+    hemi = amplitudes(points, area, k, u, th, ph)
+    scale = k * k / (16.0 * math.pi**2) / beam.power
+    energy = scale * np.einsum("spd,d->p", np.abs(hemi) ** 2, wt)
+    if not np.all(np.isfinite(energy)):
+        raise FloatingPointError("mom3d: the scattered power is not finite (NaN or inf)")
+    return {
+        "amplitude": amp,
+        "hemisphere": hemi,
+        "weights": wt,
+        "power": beam.power,
+        "energy": energy,
+        "iterations": sol.iterations,
+        "residual": sol.residual,
+        "seconds": {"assemble": t_assemble, "solve": t_solve, "total": time.perf_counter() - t0},
+        "unknowns": 2 * patch.n,
+        "taper_g": g,
+        "n_mu": n_mu,
+        "matrix_bytes": matrix_bytes(patch.n, dt),
+    }
+
+
+def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes):
+    if not is_pec(eps):
+        raise ValueError(
+            f"mom3d solves perfect conductors only: eps must be 'pec', got {eps!r} "
+            "(dielectrics are the next step of issue 19)"
+        )
+    if getattr(roughness, "dimension", None) != 2:
+        raise ValueError(
+            "mom3d needs a 2-D surface roughness (dimension=2), got "
+            f"dimension={getattr(roughness, 'dimension', None)!r}"
+        )
+    k = check_positive("k", k, unit="rad/m")
+    ti = float(check_angle("theta_i", theta_i, high=math.radians(80.0)))
+    if not isinstance(realizations, int) or isinstance(realizations, bool) or realizations < 2:
+        raise ValueError(
+            f"realizations must be an int ≥ 2 (coherent and incoherent parts need two), "
+            f"got {realizations!r}"
+        )
+    ppw = check_positive("points_per_wavelength", ppw)
+    if ppw < MIN_PPW:
+        raise ValueError(f"points_per_wavelength must be ≥ {MIN_PPW:g}, got {fmt(ppw)}")
+    lam = 2 * math.pi / k
+    length = 8.0 * lam if length is None else check_positive("length", length, unit="m")
+    n_side = int(math.ceil(length / lam * ppw))
+    need = matrix_bytes(n_side * n_side, _dtype_for(n_side * n_side))
+    if need > max_bytes:
+        raise ValueError(
+            f"length={fmt(length)} m at points_per_wavelength={fmt(ppw)} needs "
+            f"{n_side}² nodes and a {need / 2**30:.3g} GiB dense matrix, over "
+            f"max_matrix_bytes={max_bytes / 2**30:.3g} GiB: use a smaller patch or raise it"
+        )
+    return k, ti, length, n_side
+
+
+def bistatic(
+    roughness,
+    eps,
+    k: float,
+    theta_i: float,
+    theta_s,
+    phi_s=0.0,
+    phi_i: float = 0.0,
+    *,
+    realizations: int = 8,
+    seed=0,
+    length: float | None = None,
+    points_per_wavelength: float = 8.0,
+    taper_g: float | None = None,
+    tol: float = 1e-5,
+    max_iter: int = 300,
+    max_matrix_bytes: int = MAX_MATRIX_BYTES,
+    progress: bool = False,
+) -> Scattering:
+    """Monte Carlo MoM σ⁰ per unit area of a perfectly conducting 2-D rough surface.
+
+    Parameters
+    ----------
+    roughness : a 2-D :class:`~emscatter.spectra.Roughness` (Gaussian, exponential, …).
+    eps : ``"pec"`` (the only medium solved so far).
+    k : free-space wavenumber [rad/m].
+    theta_i : incidence angle [rad], scalar, ``[0°, 80°]``; ``phi_i`` its azimuth [rad].
+    theta_s, phi_s : scattering directions [rad], broadcast together.
+    realizations : surfaces (≥ 2), each from ``SeedSequence(seed).spawn``; reproducible.
+    length : side of the square patch [m] (default 8λ).
+    points_per_wavelength : nodes per λ along each axis (default 8, at least 6).
+    taper_g : taper radius [m] (default ``length/4``).
+    tol, max_iter : GMRES relative residual and iteration cap (an unconverged solve raises).
+    max_matrix_bytes : refuse patches whose dense matrix exceeds this (default 2 GiB).
+
+    Returns
+    -------
+    :class:`~emscatter.scattering.Scattering` with ``sigma0[pol_s, pol_i]`` (incoherent),
+    ``coherent`` per incident pol, ``method="mom3d"``, and in ``info``: ``energy``
+    ``(realizations, 2)``, ``incoherent_reflectivity`` ``(2,)``, iterations, seconds per
+    realization, unknowns, matrix bytes, ``sigma0_std`` (standard error of σ⁰).
+    """
+    from emscatter.surfaces.generate import generate_surface
+
+    k, ti, length, n_side = _check(
+        roughness, eps, k, theta_i, length, points_per_wavelength, realizations, max_matrix_bytes
+    )
+    pi_ = float(check_finite("phi_i", phi_i))
+    ts = check_angle("theta_s", theta_s)
+    ps = check_finite("phi_s", phi_s)
+    ts_b, ps_b = np.broadcast_arrays(ts, ps)
+    shape = ts_b.shape
+    spacing = 2 * math.pi / k / points_per_wavelength
+    seeds = np.random.SeedSequence(seed).spawn(realizations)
+    amps, hemis, energy, iters, secs = [], [], [], [], []
+    out = None
+    for i, ss in enumerate(seeds):  # one dense solve per realization
+        surf = generate_surface(roughness, (n_side, n_side), spacing, rng=np.random.default_rng(ss))
+        out = solve_realization(
+            surf.heights,
+            spacing,
+            k,
+            ti,
+            ts_b.ravel(),
+            ps_b.ravel(),
+            pi_,
+            taper_g=taper_g,
+            tol=tol,
+            max_iter=max_iter,
+        )
+        amps.append(out["amplitude"])
+        hemis.append(out["hemisphere"])
+        energy.append(out["energy"])
+        iters.append(out["iterations"])
+        secs.append(out["seconds"]["total"])
+        if progress:
+            print(
+                f"mom3d realization {i + 1}/{realizations}: {secs[-1]:.1f} s, energy {energy[-1]}"
+            )
+    n = realizations
+    a = np.stack(amps)  # (n, 2, 2, D)
+    scale = k * k / (16.0 * math.pi**2) / out["power"]
+    var = n / (n - 1) * (np.mean(np.abs(a) ** 2, axis=0) - np.abs(a.mean(axis=0)) ** 2)
+    sig = 4.0 * math.pi * math.cos(ti) * scale * var
+    sig_se = 4.0 * math.pi * math.cos(ti) * scale * np.std(np.abs(a) ** 2, axis=0) / math.sqrt(n)
+    hm = np.stack(hemis)
+    p_tot = np.mean(np.abs(hm) ** 2, axis=0)
+    p_coh = (n * np.abs(hm.mean(axis=0)) ** 2 - p_tot) / (n - 1)
+    wt = out["weights"]
+    r_coh = scale * np.einsum("spd,d->p", p_coh, wt)
+    r_tot = scale * np.einsum("spd,d->p", p_tot, wt)
+    sigma0 = sig.reshape(2, 2, *shape)
+    if not np.all(np.isfinite(sigma0)):
+        raise FloatingPointError("mom3d: σ⁰ is not finite")
+    coherent = np.broadcast_to(
+        np.clip(r_coh, 0.0, None)[(...,) + (None,) * len(shape)], (2, *shape)
+    )
+    return Scattering(
+        sigma0=sigma0,
+        coherent=np.array(coherent),
+        method="mom3d",
+        theta_i=np.broadcast_to(ti, shape).copy(),
+        theta_s=np.array(ts_b, dtype=float),
+        phi_s=np.array(ps_b, dtype=float),
+        phi_i=np.broadcast_to(pi_, shape).copy(),
+        k=k,
+        dimension=2,
+        info={
+            "energy": np.array(energy),
+            "incoherent_reflectivity": r_tot - r_coh,
+            "sigma0_std": sig_se.reshape(2, 2, *shape),
+            "iterations": np.array(iters),
+            "seconds_per_realization": float(np.mean(secs)),
+            "unknowns": out["unknowns"],
+            "matrix_bytes": out["matrix_bytes"],
+            "length": length,
+            "points_per_wavelength": points_per_wavelength,
+            "taper_g": out["taper_g"],
+            "realizations": n,
+        },
+    )
