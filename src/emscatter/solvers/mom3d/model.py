@@ -71,7 +71,8 @@ def solve_realization(
     Returns a dict: ``amplitude`` ``(2, P, D)`` (scattered pol × incident pol × direction, the
     directions ``theta_s, phi_s`` flattened), ``hemisphere`` (the same on the quadrature of
     :func:`~emscatter.solvers.mom3d.farfield.hemisphere`, with ``weights``), ``power`` the
-    incident power [m²], ``energy`` ``(P,)`` the scattered-to-incident power ratio,
+    incident power [m²], ``beam`` (:class:`~.incident.TaperedBeam`), ``current`` ``(P, N, 3)``
+    the density ``u = sJ`` on ``points`` ``(N, 3)``, ``energy`` ``(P,)`` the scattered-to-incident power ratio,
     ``iterations``, ``residual``, ``seconds`` and the sizes.
     """
     t0 = time.perf_counter()
@@ -105,6 +106,9 @@ def solve_realization(
         "hemisphere": hemi,
         "weights": wt,
         "power": beam.power,
+        "beam": beam,
+        "current": u,
+        "points": points,
         "energy": energy,
         "iterations": sol.iterations,
         "residual": sol.residual,
