@@ -72,7 +72,8 @@ def solve_realization(
     directions ``theta_s, phi_s`` flattened), ``hemisphere`` (the same on the quadrature of
     :func:`~emscatter.solvers.mom3d.farfield.hemisphere`, with ``weights``), ``power`` the
     incident power [m²], ``beam`` (:class:`~.incident.TaperedBeam`), ``current`` ``(P, N, 3)``
-    the density ``u = sJ`` on ``points`` ``(N, 3)``, ``energy`` ``(P,)`` the scattered-to-incident power ratio,
+    the density ``u = sJ`` on ``points`` ``(N, 3)``, ``energy`` ``(P,)`` the
+    scattered-to-incident power ratio,
     ``iterations``, ``residual``, ``seconds`` and the sizes.
     """
     t0 = time.perf_counter()
