@@ -240,7 +240,7 @@ def build_table(
         memory_limit = sizing.env_limit()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        table, reports = _build(
+        args = (
             rough,
             material,
             wl,
@@ -258,6 +258,14 @@ def build_table(
             dtype,
             memory_limit,
         )
+        too_large = None
+        try:
+            table, reports = _build(*args)
+        except sizing.TableTooLarge as exc:
+            too_large = exc
+    if too_large is not None:  # the resolution note (if any) still reaches the caller
+        _pass_on(caught, stacklevel=3)
+        raise too_large
     if out_of_range == "warn":
         for message in validity_messages(reports):
             warnings.warn(message, select.ValidityWarning, stacklevel=2)

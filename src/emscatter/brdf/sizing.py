@@ -53,6 +53,7 @@ __all__ = [
     "lobe_width",
     "memory_limit",
     "predicted_error",
+    "TableTooLarge",
 ]
 
 #: Grid spacing over lobe width the default grid keeps (predicted p90 error ≈ 1.6 %).
@@ -240,44 +241,80 @@ def check_memory(
             return need
     if need <= limit:
         return need
-    kind = "anisotropic" if anisotropic else "isotropic"
-    hints = []
+    kind = "an anisotropic" if anisotropic else "an isotropic"
+    hints = []  # (API text, CLI text)
     for res in ((45, 72), (30, 48)) if anisotropic else ((90, 180), (60, 120)):
         if res[0] < n_theta:
-            est = estimate_bytes(
-                *res,
+            est = format_bytes(
+                estimate_bytes(
+                    *res,
+                    n_wl,
+                    anisotropic=anisotropic,
+                    polarized=polarized,
+                    itemsize=itemsize,
+                    energy=energy,
+                )
+            )
+            hints.append(
+                (f"resolution={res} ({est})", f"--n-theta {res[0]} --n-phi {res[1]} ({est})")
+            )
+    if itemsize > 4:
+        est = format_bytes(
+            estimate_bytes(
+                n_theta,
+                n_phi,
                 n_wl,
                 anisotropic=anisotropic,
                 polarized=polarized,
-                itemsize=itemsize,
+                itemsize=4,
                 energy=energy,
             )
-            hints.append(f"resolution={res} ({format_bytes(est)})")
-    if itemsize > 4:
-        est = estimate_bytes(
-            n_theta,
-            n_phi,
-            n_wl,
-            anisotropic=anisotropic,
-            polarized=polarized,
-            itemsize=4,
-            energy=energy,
         )
-        hints.append(f"dtype='float32' (--float32; {format_bytes(est)})")
-    if polarized:
-        hints.append("polarized=False")
+        hints.append((f"dtype='float32' ({est})", f"--float32 ({est})"))
     if energy == "rescale":
-        hints.append("energy='off' (no remedy copies)")
+        est = format_bytes(
+            estimate_bytes(
+                n_theta,
+                n_phi,
+                n_wl,
+                anisotropic=anisotropic,
+                polarized=polarized,
+                itemsize=min(itemsize, 4),
+                energy="off",
+            )
+        )
+        hints.append(
+            (f"energy='off' (with float32: {est})", f"--energy off (with --float32: {est})")
+        )
+    if polarized:
+        hints.append(("polarized=False", "no --polarized"))
     if n_wl > 1:
-        hints.append("fewer wavelengths")
+        hints.append(("fewer wavelengths", "fewer --wavelengths-nm"))
     pairs = grid_points(n_theta, n_phi, anisotropic)
-    raise MemoryError(
-        f"build_table: a {kind} {n_theta} × {n_phi} table at {n_wl} wavelength(s) "
+    head = (
+        f"build_table: {kind} {n_theta} × {n_phi} table at {n_wl} wavelength(s) "
         f"({pairs:.3g} node pairs each, {np.dtype(dtype).name}) needs about "
         f"{format_bytes(need)}, more than the {format_bytes(limit)} this process may "
-        f"allocate ({where}); reduce it with " + ", ".join(hints) + " — nothing was "
-        "computed"
+        f"allocate ({where}); reduce it with "
     )
+    raise TableTooLarge(head, [h[0] for h in hints], [h[1] for h in hints], need, limit)
+
+
+class TableTooLarge(MemoryError):
+    """A build whose estimated peak exceeds the limit, raised before any work: ``need`` and
+    ``limit`` [bytes], the remedies for the API (``str(exc)``) and for the CLI (:meth:`cli`)."""
+
+    def __init__(self, head: str, api_hints: list, cli_hints: list, need: int, limit: int):
+        self.head, self.api_hints, self.cli_hints = head, api_hints, cli_hints
+        self.need, self.limit = need, limit
+        super().__init__(self._text(api_hints))
+
+    def _text(self, hints) -> str:
+        return self.head + ", ".join(hints) + " — nothing was computed"
+
+    def cli(self) -> str:
+        """The message with the command line's options."""
+        return self._text(self.cli_hints).replace("build_table: ", "", 1)
 
 
 def env_limit() -> int | None:

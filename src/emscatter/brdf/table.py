@@ -350,8 +350,13 @@ class BrdfTable:
         """Directional albedo per wavelength and θi node (φi node): the incoherent part is the
         exact hemispherical integral of the interpolated table (linear in θi between nodes,
         like the table), the coherent part is ``coherent``."""
-        w = self.outgoing_weights()
-        inc = np.tensordot(self.values, w, axes=([-2, -1], [0, 1]))
+        w = self.outgoing_weights().reshape(-1)
+        flat = self.values.reshape(-1, w.size)
+        inc = np.empty(flat.shape[0])
+        step = max(1, (1 << 22) // w.size)  # float64 blocks: a float32 table is not copied whole
+        for lo in range(0, flat.shape[0], step):
+            inc[lo : lo + step] = flat[lo : lo + step].astype(float) @ w
+        inc = inc.reshape(self.values.shape[:-2])
         return Albedo(
             wavelengths=self.wavelengths,
             theta_i=self.theta_i,

@@ -7,8 +7,9 @@ and a scalar one would call Python once per ray)::
     from emscatter.render import mitsuba as em_mi
     mi.set_variant("llvm_ad_spectral")
     bsdf = mi.load_dict(em_mi.bsdf_dict(table))       # registers the plugin and the table
-    # or in a scene dict / XML:  {"type": "emscatter", "table": em_mi.register_table(table)}
-    #                            <bsdf type="emscatter"><string name="table" value="KEY"/></bsdf>
+    # or in a scene dict / XML (register_table registers the plugin for the current variant):
+    #     {"type": "emscatter", "table": em_mi.register_table(table)}
+    #     <bsdf type="emscatter"><string name="table" value="KEY"/></bsdf>
 
 Scene-dict / XML parameters: ``table`` (a key from :func:`register_table`), ``coherent``
 (bool, default true: include the coherent delta lobe), ``sampling_resolution`` (int, 64).
@@ -16,9 +17,11 @@ Scene-dict / XML parameters: ``table`` (a key from :func:`register_table`), ``co
 What it does (numpy preparation in :mod:`emscatter.render.plugin_data`):
 
 * ``eval``: ``f_r cosθo`` with ``f_r`` from a Dr.Jit ``Texture3f`` with linear filtering over the
-  table's own uniform (θi, θo, Δφ) nodes — the same multilinear interpolant as
-  :meth:`BrdfTable.evaluate`; spectral variants interpolate linearly between the table's
-  wavelengths (constant beyond them); RGB variants use the table's sRGB conversion.
+  table's own (θi, θo, Δφ) nodes — the same multilinear interpolant as
+  :meth:`BrdfTable.evaluate`; non-uniform axes (adaptive ``tol=`` grids) are located by a
+  binary search over their nodes, so nothing is resampled; spectral variants interpolate
+  linearly between the table's wavelengths (constant beyond them); RGB variants use the
+  table's sRGB conversion.
 * ``sample`` / ``pdf``: a continuous marginal/conditional 2-D distribution over the half-vector
   square (Mitsuba's ``MarginalContinuous2D1``, interpolated in θi between the table's nodes)
   built from ``f_r cosθo``; the pdf is exactly that of the samples drawn.
@@ -35,6 +38,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import sys
 import weakref
 
 import numpy as np
@@ -82,7 +86,11 @@ def channels_of_variant(variant: str) -> str:
 
 def register_table(table, key: str | None = None) -> str:
     """Make ``table`` (BrdfTable or BrdfFunction) available to scenes as ``{"table": key}``
-    (in this process; the registry keeps a reference until :func:`unregister_table`)."""
+    (in this process; the registry keeps a reference until :func:`unregister_table`).
+
+    With a Mitsuba variant set it also registers the plugin for that variant (:func:`register`),
+    so ``{"type": "emscatter", "table": register_table(t)}`` loads as written; a variant set
+    later needs :func:`register` (or :func:`bsdf_dict`) once in it."""
     if not (hasattr(table, "evaluate") or callable(getattr(table, "_fr", None))):
         raise TypeError(f"table must be a BrdfTable or BrdfFunction, got {type(table).__name__}")
     if key is None:
@@ -93,6 +101,9 @@ def register_table(table, key: str | None = None) -> str:
         _TABLES[key] = table
         for k in [k for k in _PREPARED if k[0] == key]:
             del _PREPARED[k]
+    mi = sys.modules.get("mitsuba")  # only where the user already imported Mitsuba
+    if mi is not None and mi.variant() is not None:
+        register()
     return key
 
 
