@@ -217,3 +217,22 @@ def test_cli_float32(tmp_path):
     argv = ["brdf", str(out), "--method", "go", "--n-theta", "8", "--n-phi", "9"]
     assert main([*argv, "--out-of-range", "ignore", "--wavelengths-nm", "550", "--float32"]) == 0
     assert read_npz(out).values.dtype == np.float32
+
+
+def test_chunked_fill_warns_once_per_cause(monkeypatch):
+    """The chunks' validity reports merge into one text per check: the same warnings, with the
+    same θi ranges, as one solver call over the whole grid."""
+    rough = GaussianCorrelation(0.05e-6, 1e-6)  # GO out of its range at grazing
+
+    def messages():
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            build_table(rough, EPS, [LAM], method="go", resolution=(30, 24))
+        return [str(w.message) for w in caught]
+
+    whole = messages()
+    monkeypatch.setattr(sizing, "CHUNK_PAIRS", 50)
+    parts = messages()
+    assert len(parts) == len(whole) >= 1
+    for a, b in zip(whole, parts, strict=True):
+        assert a == b  # same check, wavelengths, θi range, node count and worst value

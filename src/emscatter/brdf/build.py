@@ -38,7 +38,7 @@ from ..fresnel import check_eps
 from ..scattering import Scattering
 from ..solvers import select
 from ..spectra import check_roughness
-from . import frames, grid, sizing
+from . import chunks, frames, grid, sizing
 from .energy import apply_energy_remedy
 from .table import FORMAT_VERSION, BrdfTable
 
@@ -577,22 +577,6 @@ def _chunked_sigma0(rough, eps, lam, name, angles, rows, out_of_range, options, 
         yield (sl, *_sigma0(rough, eps, lam, name, *part, out_of_range, options, polarized))
 
 
-def _merge_info(infos):
-    """One solver info from the chunks' (validity: valid only if every chunk is; reasons
-    in order, once)."""
-    if len(infos) == 1:
-        return infos[0]
-    out = dict(infos[0])
-    reps = [i.get("validity", {}) for i in infos]
-    if any(reps):
-        val = dict(reps[0])
-        val["valid"] = all(r.get("valid", True) for r in reps)
-        for key in ("reasons", "angle_reasons"):
-            val[key] = list(dict.fromkeys(x for r in reps for x in r.get(key, [])))
-        out["validity"] = val
-    return out
-
-
 def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, out, out_pol):
     """Fill ``out`` (n_θ, n_θ, n_Δφ) and ``out_pol`` (2, 2, …) or None; the solver info."""
     n = theta.size
@@ -610,23 +594,7 @@ def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, 
             out_pol[:, :, iu[sl], ou[sl]] = fp
             out_pol[:, :, ou[sl], iu[sl]] = fp.transpose(1, 0, 2, 3)  # f_pq(ωi→ωo) = f_qp(ωo→ωi)
         infos.append(info)
-    return _merge_info(infos)
-
-
-def _upper_pairs(nd: int, step: int):
-    """``(a, b)`` index chunks of the pairs ``a ≤ b < nd`` (row-major, as ``np.triu_indices``),
-    whole rows of about ``step`` pairs at a time (the full index arrays would be 16 B a pair)."""
-    lo = 0
-    while lo < nd:
-        counts = nd - np.arange(lo, nd)
-        hi = lo + max(1, int(np.searchsorted(np.cumsum(counts), step, side="right")))
-        rows = np.arange(lo, min(hi, nd))
-        n = nd - rows
-        a = np.repeat(rows, n)
-        start = np.cumsum(n) - n
-        b = np.arange(a.size) - np.repeat(start, n) + a
-        yield a, b
-        lo = rows[-1] + 1
+    return chunks.merge_info(infos, theta)
 
 
 def _fill_anisotropic(rough, eps, lam, name, theta, phi, out_of_range, options, out, out_pol):
@@ -639,7 +607,7 @@ def _fill_anisotropic(rough, eps, lam, name, theta, phi, out_of_range, options, 
     p2 = None if out_pol is None else out_pol.reshape(2, 2, nd, nd)
     infos = []
     pol = p2 is not None
-    for aa, bb in _upper_pairs(nd, sizing.CHUNK_PAIRS):
+    for aa, bb in chunks.upper_pairs(nd, sizing.CHUNK_PAIRS):
         f, fp, info = _sigma0(
             rough, eps, lam, name, th[aa], th[bb], ph[bb], ph[aa], out_of_range, options, pol
         )
@@ -649,7 +617,7 @@ def _fill_anisotropic(rough, eps, lam, name, theta, phi, out_of_range, options, 
             p2[:, :, aa, bb] = fp
             p2[:, :, bb, aa] = fp.transpose(1, 0, 2)
         infos.append(info)
-    return _merge_info(infos)
+    return chunks.merge_info(infos, theta)
 
 
 def _jsonable_scalar(v) -> bool:
