@@ -593,7 +593,7 @@ def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, 
         if out_pol is not None:
             out_pol[:, :, iu[sl], ou[sl]] = fp
             out_pol[:, :, ou[sl], iu[sl]] = fp.transpose(1, 0, 2, 3)  # f_pq(ωi→ωo) = f_qp(ωo→ωi)
-        infos.append(info)
+        infos.append(chunks.slim(info))
     return chunks.merge_info(infos, theta)
 
 
@@ -616,7 +616,7 @@ def _fill_anisotropic(rough, eps, lam, name, theta, phi, out_of_range, options, 
         if p2 is not None:
             p2[:, :, aa, bb] = fp
             p2[:, :, bb, aa] = fp.transpose(1, 0, 2)
-        infos.append(info)
+        infos.append(chunks.slim(info))
     return chunks.merge_info(infos, theta)
 
 

@@ -9,7 +9,21 @@ import re
 
 import numpy as np
 
-__all__ = ["merge_info", "upper_pairs"]
+__all__ = ["merge_info", "slim", "upper_pairs"]
+
+
+def slim(info: dict) -> dict:
+    """A solver info without its per-point arrays (``angle_valid``, ``angle_excess``, …: 9 B a
+    point, which over the chunks of a 1e8-pair table would add up to a gigabyte); the
+    reports' texts and flags are kept."""
+
+    def small(v):
+        return not (isinstance(v, np.ndarray) and v.size > 64)
+
+    out = {k: v for k, v in info.items() if small(v)}
+    if isinstance(out.get("validity"), dict):
+        out["validity"] = {k: v for k, v in out["validity"].items() if small(v)}
+    return out
 
 
 def upper_pairs(nd: int, step: int):

@@ -61,7 +61,7 @@ TARGET_STEP = 0.1
 #: The most θ nodes the default grid takes by itself (256² × 512 × 8 B = 268 MB a wavelength).
 MAX_AUTO_THETA = 256
 #: Solver points per call while a table is filled (bounds the solver's temporaries).
-CHUNK_PAIRS = 1 << 21
+CHUNK_PAIRS = 1 << 20
 #: Solver workspace per point [bytes] (GO fills measured 150–250 B a point, with margin).
 WORKSPACE_PER_POINT = 300
 _K_MEDIAN, _K_P90 = 0.37, 1.6  # relative error ≈ K (h/s)² (module docstring)
