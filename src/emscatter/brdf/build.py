@@ -236,8 +236,6 @@ def build_table(
         or not memory_limit > 0
     ):
         raise ValueError(f"memory_limit must be a positive number of bytes, got {memory_limit!r}")
-    if memory_limit is None:
-        memory_limit = sizing.env_limit()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         args = (

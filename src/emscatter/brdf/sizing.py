@@ -222,8 +222,9 @@ def check_memory(
     energy: str = "rescale",
     limit: int | None = None,
 ) -> int:
-    """The estimate [bytes]; ``MemoryError`` naming it, the limit and how to reduce it when it
-    exceeds ``limit`` (bytes; None: :func:`memory_limit`)."""
+    """The estimate [bytes]; :class:`TableTooLarge` (a ``MemoryError``) naming it, the limit and
+    how to reduce it when it exceeds ``limit`` (bytes; None: ``EMSCATTER_MEMORY_LIMIT`` if set,
+    else :func:`memory_limit`)."""
     itemsize = np.dtype(dtype).itemsize
     need = estimate_bytes(
         n_theta,
@@ -235,6 +236,8 @@ def check_memory(
         energy=energy,
     )
     where = "memory_limit="
+    if limit is None and env_limit() is not None:
+        limit, where = env_limit(), "EMSCATTER_MEMORY_LIMIT"
     if limit is None:
         limit, where = memory_limit()
         if limit is None:
