@@ -62,8 +62,8 @@ TARGET_STEP = 0.1
 MAX_AUTO_THETA = 256
 #: Solver points per call while a table is filled (bounds the solver's temporaries).
 CHUNK_PAIRS = 1 << 20
-#: Solver workspace per point [bytes] (GO fills measured 150–250 B a point, with margin).
-WORKSPACE_PER_POINT = 300
+#: Solver workspace per point [bytes] (GO fills measured 230–370 B a point, with margin).
+WORKSPACE_PER_POINT = 450
 _K_MEDIAN, _K_P90 = 0.37, 1.6  # relative error ≈ K (h/s)² (module docstring)
 _BASE = (90, 180)
 
