@@ -193,7 +193,7 @@ def build_table(
     resolution : ``(n_theta, n_phi)``: θ nodes ``k·90°/n_theta`` (shared by θi and θo) and
         ``n_phi`` Δφ nodes on ``[0, π]`` (isotropic) or φ nodes on ``[0, 2π)`` (anisotropic).
         None (default): from the width of the specular lobe (:mod:`.sizing`): 90 × 180 (1°)
-        unless the lobe needs finer nodes (GO ``m = 0.05``: 222 × 444), at most 256 θ nodes;
+        unless the lobe needs finer nodes (GO ``m = 0.05``: 223 × 446), at most 256 θ nodes;
         a grid too coarse for the lobe (beyond that cap, or anisotropic tables, which keep
         90 × 180) warns with the predicted error and the resolution that meets it.
     theta, phi : explicit axes [rad] instead (θ in ``[0, π/2)``; φ as above).
