@@ -38,7 +38,7 @@ from ..fresnel import check_eps
 from ..scattering import Scattering
 from ..solvers import select
 from ..spectra import check_roughness
-from . import frames, grid
+from . import chunks, frames, grid, sizing
 from .energy import apply_energy_remedy
 from .table import FORMAT_VERSION, BrdfTable
 
@@ -167,7 +167,7 @@ def build_table(
     wavelengths,
     *,
     method: str = "auto",
-    resolution: tuple[int, int] = (90, 180),
+    resolution: tuple[int, int] | None = None,
     theta=None,
     phi=None,
     anisotropic: bool | None = None,
@@ -176,6 +176,8 @@ def build_table(
     out_of_range: str = "warn",
     tol: float | None = None,
     tol_floor: float = 1e-2,
+    dtype="float64",
+    memory_limit: int | None = None,
     **options,
 ) -> BrdfTable:
     """A BRDF table of ``surface`` (2-D roughness) over ``material`` at ``wavelengths`` [m].
@@ -190,6 +192,10 @@ def build_table(
         pick a different solver per wavelength (recorded per wavelength).
     resolution : ``(n_theta, n_phi)``: θ nodes ``k·90°/n_theta`` (shared by θi and θo) and
         ``n_phi`` Δφ nodes on ``[0, π]`` (isotropic) or φ nodes on ``[0, 2π)`` (anisotropic).
+        None (default): from the width of the specular lobe (:mod:`.sizing`): 90 × 180 (1°)
+        unless the lobe needs finer nodes (GO ``m = 0.05``: 223 × 446), at most 256 θ nodes;
+        a grid too coarse for the lobe (beyond that cap, or anisotropic tables, which keep
+        90 × 180) warns with the predicted error and the resolution that meets it.
     theta, phi : explicit axes [rad] instead (θ in ``[0, π/2)``; φ as above).
     tol : target interpolation error instead of a fixed resolution: the grid is refined from
         a coarse one until the interpolant is within ``tol`` of direct evaluation at every
@@ -201,6 +207,13 @@ def build_table(
         (:mod:`.energy`) where the albedo exceeds 1; ``"off"`` only records the albedo
         (diagnostics — such a table may hand a renderer energy it does not have).
     out_of_range : the solvers' validity policy (``"warn"``, ``"raise"``, ``"ignore"``).
+    dtype : storage of ``values`` (and ``polarized``): ``"float64"`` or ``"float32"`` (half
+        the memory; ~6e-8 relative rounding, far below any interpolation error).
+    memory_limit : bytes the build may use; None → what this process may still allocate
+        (``EMSCATTER_MEMORY_LIMIT`` if set, else the address-space / cgroup limit or the
+        available memory, :func:`.sizing.memory_limit`). The build's peak is estimated before
+        any work (:func:`.sizing.estimate_bytes`); over the limit a ``MemoryError`` names the
+        estimate, the limit and what reduces it.
     options : passed to the solver (e.g. ``shadowing=False`` for GO).
     """
     rough = check_roughness(surface, "surface")
@@ -216,9 +229,16 @@ def build_table(
         )
     if out_of_range not in OUT_OF_RANGE:
         raise ValueError(f"out_of_range must be one of {OUT_OF_RANGE}, got {out_of_range!r}")
+    dtype = _check_dtype(dtype)
+    if memory_limit is not None and (
+        isinstance(memory_limit, bool)
+        or not isinstance(memory_limit, numbers.Real)
+        or not memory_limit > 0
+    ):
+        raise ValueError(f"memory_limit must be a positive number of bytes, got {memory_limit!r}")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        table, reports = _build(
+        args = (
             rough,
             material,
             wl,
@@ -233,7 +253,17 @@ def build_table(
             tol,
             tol_floor,
             options,
+            dtype,
+            memory_limit,
         )
+        too_large = None
+        try:
+            table, reports = _build(*args)
+        except sizing.TableTooLarge as exc:
+            too_large = exc
+    if too_large is not None:  # the resolution note (if any) still reaches the caller
+        _pass_on(caught, stacklevel=3)
+        raise too_large
     if out_of_range == "warn":
         for message in validity_messages(reports):
             warnings.warn(message, select.ValidityWarning, stacklevel=2)
@@ -243,6 +273,18 @@ def build_table(
 
 #: The ``out_of_range`` policies a table takes (``"nan"`` would put NaN in the table).
 OUT_OF_RANGE = ("warn", "raise", "ignore")
+#: Storage types of a table's values.
+DTYPES = ("float64", "float32")
+
+
+def _check_dtype(dtype) -> np.dtype:
+    try:
+        dt = np.dtype(dtype)
+    except TypeError:
+        dt = None
+    if dt is None or dt.name not in DTYPES:
+        raise ValueError(f"dtype must be one of {DTYPES}, got {dtype!r}")
+    return dt
 
 
 def _pass_on(caught, *, stacklevel: int) -> None:
@@ -271,14 +313,30 @@ def _build(
     tol,
     tol_floor,
     options,
+    dtype="float64",
+    memory_limit=None,
 ):
     """The table and ``[(wavelength [m], solver, validity report), ...]`` of its fill calls;
     the solvers run with ``out_of_range="ignore"`` when the policy is ``"warn"`` (the table
     warns once per cause instead, :func:`validity_messages`)."""
     policy = "ignore" if out_of_range == "warn" else out_of_range
-    if not (isinstance(resolution, tuple | list) and len(resolution) == 2):
-        raise ValueError(f"resolution must be (n_theta, n_phi), got {resolution!r}")
+    if resolution is not None and not (
+        isinstance(resolution, tuple | list) and len(resolution) == 2
+    ):
+        raise ValueError(f"resolution must be (n_theta, n_phi) or None, got {resolution!r}")
     aniso = (not rough.is_isotropic) if anisotropic is None else bool(anisotropic)
+    setups = []
+    for lam in wl:
+        eps = material_eps(material, float(lam))
+        setups.append(
+            (float(lam), eps, _solver_name(rough, 2 * math.pi / lam, method, eps, out_of_range))
+        )
+    if resolution is None:
+        explicit = theta is not None and phi is not None
+        width = sizing.lobe_width(rough, wl, [name for _, _, name in setups])
+        resolution, note = sizing.auto_resolution(width, aniso)
+        if note is not None and tol is None and not explicit:
+            warnings.warn(note, UserWarning, stacklevel=2)
     theta_ax = default_theta(resolution[0]) if theta is None else np.asarray(theta, float)
     if phi is None:
         phi_ax = default_phi(resolution[1]) if aniso else default_phi_d(resolution[1])
@@ -290,11 +348,16 @@ def _build(
     else:
         phi_ax = grid.check_axis("phi", phi_ax, 0.0, math.pi)
     fill = _fill_anisotropic if aniso else _fill_isotropic
-    setups = []
-    for lam in wl:
-        eps = material_eps(material, float(lam))
-        setups.append(
-            (float(lam), eps, _solver_name(rough, 2 * math.pi / lam, method, eps, out_of_range))
+    if tol is None:  # before any work (the adaptive grid is bounded by its node limits)
+        sizing.check_memory(
+            theta_ax.size,
+            phi_ax.size,
+            wl.size,
+            anisotropic=aniso,
+            polarized=polarized,
+            dtype=dtype,
+            energy=energy,
+            limit=memory_limit,
         )
     resolution_report = {
         "n_theta": int(theta_ax.size),
@@ -306,13 +369,25 @@ def _build(
             theta_ax, phi_ax, resolution_report = _adaptive(
                 rough, setups, aniso, tol, tol_floor, policy, options
             )
-    values, pol_values, coh = [], [], []
+    shape = (theta_ax.size, phi_ax.size) * 2 if aniso else (theta_ax.size,) * 2 + (phi_ax.size,)
+    values = np.empty((wl.size, *shape), dtype=dtype)
+    pol_values = np.empty((wl.size, 2, 2, *shape), dtype=dtype) if polarized else None
+    coh = []
     per_wl = []
     reports = []
-    for lam, eps, name in setups:
+    for j, (lam, eps, name) in enumerate(setups):
         with _at_wavelength(lam):
-            f, fp, info = fill(
-                rough, eps, float(lam), name, theta_ax, phi_ax, policy, options, polarized
+            info = fill(
+                rough,
+                eps,
+                float(lam),
+                name,
+                theta_ax,
+                phi_ax,
+                policy,
+                options,
+                values[j],
+                None if pol_values is None else pol_values[j],
             )
             coh.append(
                 _coherent(
@@ -326,8 +401,6 @@ def _build(
                     options,
                 )
             )
-        values.append(f)
-        pol_values.append(fp)
         validity = info.get("validity", {})
         reports.append((float(lam), name, validity))
         per_wl.append(
@@ -364,14 +437,17 @@ def _build(
         else "solver's coherent reflectivity (delta lobe, not in values)",
     }
     grid_kw = {"phi_i": phi_ax, "phi_o": phi_ax} if aniso else {"phi_d": phi_ax}
+    for arr in (values, pol_values):
+        if arr is not None:
+            arr.setflags(write=False)  # the table takes them without a copy
     table = BrdfTable(
         wavelengths=wl,
         theta_i=theta_ax,
         theta_o=theta_ax,
-        values=np.stack(values),
+        values=values,
         coherent=0.5 * (coh[0] + coh[1]),
         coherent_polarized=coh,
-        polarized=np.stack(pol_values, axis=2) if polarized else None,
+        polarized=None if pol_values is None else np.moveaxis(pol_values, 0, 2),
         metadata=meta,
         **grid_kw,
     )
@@ -487,44 +563,59 @@ def _adaptive(rough, setups, aniso, tol, floor, out_of_range, options):
     return theta, phi, {**report, "adaptive": True}
 
 
-def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, polarized):
+def _chunked_sigma0(rough, eps, lam, name, angles, rows, out_of_range, options, polarized):
+    """``_sigma0`` over ``rows`` pair rows of the angle arrays (``ti, to, po, pi_``, each of
+    ``rows`` rows or broadcasting from 1), at most :data:`.sizing.CHUNK_PAIRS` points a call:
+    yields ``(slice, f, f_pol, info)``."""
+    width = max(int(np.broadcast_shapes(*(np.shape(a) for a in angles))[-1]), 1)
+    step = max(1, sizing.CHUNK_PAIRS // width)
+    for lo in range(0, rows, step):
+        sl = slice(lo, min(rows, lo + step))
+        part = [a[sl] if np.shape(a)[0] == rows else a for a in angles]
+        yield (sl, *_sigma0(rough, eps, lam, name, *part, out_of_range, options, polarized))
+
+
+def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, out, out_pol):
+    """Fill ``out`` (n_θ, n_θ, n_Δφ) and ``out_pol`` (2, 2, …) or None; the solver info."""
     n = theta.size
     iu, ou = np.triu_indices(n)  # θi ≤ θo
     ti, to = theta[iu][:, None], theta[ou][:, None]
     pi_ = np.full((1, 1), -math.pi)  # renderer φi = −π, φo = Δφ − π: emscatter φi = 0
-    f_half, fp_half, info = _sigma0(
-        rough, eps, lam, name, ti, to, phi_d[None, :] + pi_, pi_, out_of_range, options, polarized
-    )
-    f = np.empty((n, n, phi_d.size))
-    f[iu, ou] = f_half
-    f[ou, iu] = f_half
-    fp = None
-    if polarized:
-        fp = np.empty((2, 2, n, n, phi_d.size))
-        fp[:, :, iu, ou] = fp_half
-        fp[:, :, ou, iu] = fp_half.transpose(1, 0, 2, 3)  # f_pq(ωi→ωo) = f_qp(ωo→ωi)
-    return f, fp, info
+    angles = (ti, to, phi_d[None, :] + pi_, pi_)
+    infos = []
+    for sl, f, fp, info in _chunked_sigma0(
+        rough, eps, lam, name, angles, iu.size, out_of_range, options, out_pol is not None
+    ):
+        out[iu[sl], ou[sl]] = f
+        out[ou[sl], iu[sl]] = f
+        if out_pol is not None:
+            out_pol[:, :, iu[sl], ou[sl]] = fp
+            out_pol[:, :, ou[sl], iu[sl]] = fp.transpose(1, 0, 2, 3)  # f_pq(ωi→ωo) = f_qp(ωo→ωi)
+        infos.append(chunks.slim(info))
+    return chunks.merge_info(infos, theta)
 
 
-def _fill_anisotropic(rough, eps, lam, name, theta, phi, out_of_range, options, polarized):
+def _fill_anisotropic(rough, eps, lam, name, theta, phi, out_of_range, options, out, out_pol):
+    """Fill ``out`` (n_θ, n_φ, n_θ, n_φ) and ``out_pol`` (2, 2, …) or None; the solver info."""
     nt, npf = theta.size, phi.size
     nd = nt * npf
     th, ph = np.meshgrid(theta, phi, indexing="ij")
     th, ph = th.ravel(), ph.ravel()
-    a, b = np.triu_indices(nd)
-    f_half, fp_half, info = _sigma0(
-        rough, eps, lam, name, th[a], th[b], ph[b], ph[a], out_of_range, options, polarized
-    )
-    f = np.empty((nd, nd))
-    f[a, b] = f_half
-    f[b, a] = f_half
-    fp = None
-    if polarized:
-        fp = np.empty((2, 2, nd, nd))
-        fp[:, :, a, b] = fp_half
-        fp[:, :, b, a] = fp_half.transpose(1, 0, 2)
-        fp = fp.reshape(2, 2, nt, npf, nt, npf)
-    return f.reshape(nt, npf, nt, npf), fp, info
+    f2 = out.reshape(nd, nd)
+    p2 = None if out_pol is None else out_pol.reshape(2, 2, nd, nd)
+    infos = []
+    pol = p2 is not None
+    for aa, bb in chunks.upper_pairs(nd, sizing.CHUNK_PAIRS):
+        f, fp, info = _sigma0(
+            rough, eps, lam, name, th[aa], th[bb], ph[bb], ph[aa], out_of_range, options, pol
+        )
+        f2[aa, bb] = f
+        f2[bb, aa] = f
+        if p2 is not None:
+            p2[:, :, aa, bb] = fp
+            p2[:, :, bb, aa] = fp.transpose(1, 0, 2)
+        infos.append(chunks.slim(info))
+    return chunks.merge_info(infos, theta)
 
 
 def _jsonable_scalar(v) -> bool:

@@ -72,8 +72,13 @@ class Albedo:
         return self.incoherent + self.coherent
 
 
-def _as_float_array(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
-    arr = np.array(value, dtype=float)
+def _as_float_array(name: str, value, shape: tuple[int, ...], keep32: bool = False) -> np.ndarray:
+    """A read-only float64 copy (float32 kept as float32 when ``keep32``), checked."""
+    dt = np.float32 if keep32 and np.asarray(value).dtype == np.float32 else float
+    if isinstance(value, np.ndarray) and value.dtype == dt and not value.flags.writeable:
+        arr = value  # already a read-only array (the builders'): no copy of a large grid
+    else:
+        arr = np.array(value, dtype=dt)
     if arr.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
     if not np.all(np.isfinite(arr)):
@@ -95,7 +100,8 @@ class BrdfTable:
     wavelengths : (n_wl,) [m], strictly increasing.
     theta_i, theta_o : θ nodes [rad] in ``[0, π/2)``, strictly increasing.
     values : unpolarized incoherent ``f_r`` [1/sr], ``(n_wl, n_ti, n_to, n_pd)`` or
-        ``(n_wl, n_ti, n_pi, n_to, n_po)``.
+        ``(n_wl, n_ti, n_pi, n_to, n_po)``; stored as float64, or as float32 when given float32
+        (``build_table(dtype="float32")``: half the memory; evaluation is in float64).
     phi_d : isotropic tables: Δφ nodes [rad] in ``[0, π]``.
     phi_i, phi_o : anisotropic tables: φ nodes [rad] in ``[0, 2π)``.
     coherent, coherent_polarized : coherent reflectivity (module docstring); None → 0.
@@ -142,9 +148,9 @@ class BrdfTable:
             grid_shape = (self.theta_i.size, self.phi_i.size, self.theta_o.size, self.phi_o.size)
             inc_shape = (wl.size, self.theta_i.size, self.phi_i.size)
         shape = (wl.size, *grid_shape)
-        set_(self, "values", _as_float_array("values", self.values, shape))
+        set_(self, "values", _as_float_array("values", self.values, shape, keep32=True))
         if self.polarized is not None:
-            pol = _as_float_array("polarized", self.polarized, (2, 2, *shape))
+            pol = _as_float_array("polarized", self.polarized, (2, 2, *shape), keep32=True)
             set_(self, "polarized", pol)
         for name, lead in (("coherent", ()), ("coherent_polarized", (2,))):
             val = getattr(self, name)
@@ -344,8 +350,13 @@ class BrdfTable:
         """Directional albedo per wavelength and θi node (φi node): the incoherent part is the
         exact hemispherical integral of the interpolated table (linear in θi between nodes,
         like the table), the coherent part is ``coherent``."""
-        w = self.outgoing_weights()
-        inc = np.tensordot(self.values, w, axes=([-2, -1], [0, 1]))
+        w = self.outgoing_weights().reshape(-1)
+        flat = self.values.reshape(-1, w.size)
+        inc = np.empty(flat.shape[0])
+        step = max(1, (1 << 22) // w.size)  # float64 blocks: a float32 table is not copied whole
+        for lo in range(0, flat.shape[0], step):
+            inc[lo : lo + step] = flat[lo : lo + step].astype(float) @ w
+        inc = inc.reshape(self.values.shape[:-2])
         return Albedo(
             wavelengths=self.wavelengths,
             theta_i=self.theta_i,

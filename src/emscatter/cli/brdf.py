@@ -133,8 +133,18 @@ def register(subparsers) -> None:
         choices=_method_choices(),
         help="solver, or auto (the best valid one per wavelength)",
     )
-    p.add_argument("--n-theta", type=Integer(low=2, high=2000), default=90, help="θ nodes")
-    p.add_argument("--n-phi", type=Integer(low=4, high=4000), default=180, help="Δφ (or φ) nodes")
+    p.add_argument(
+        "--n-theta",
+        type=Integer(low=2, high=2000),
+        default=None,
+        help="θ nodes (default: from the lobe width, 90 unless the lobe is narrower than ~10°)",
+    )
+    p.add_argument(
+        "--n-phi",
+        type=Integer(low=4, high=4000),
+        default=None,
+        help="Δφ (or φ) nodes (default: 2 × the θ nodes, at least 180)",
+    )
     p.add_argument(
         "--tol",
         type=Number(low=0, high=1),
@@ -142,6 +152,11 @@ def register(subparsers) -> None:
         help="target interpolation error: refine the grid adaptively instead of --n-theta/--n-phi",
     )
     p.add_argument("--polarized", action="store_true", help="also store f_r per polarization pair")
+    p.add_argument(
+        "--float32",
+        action="store_true",
+        help="store the table in float32 (half the memory; every exporter and the plugin take it)",
+    )
     p.add_argument(
         "--anisotropic",
         action="store_true",
@@ -183,18 +198,26 @@ def run(a) -> int:
     from ..brdf import build_table
 
     fmt_name, rough, wl = check_inputs(a)
-    table = build_table(
-        rough,
-        a.material,
-        wl,
-        method=a.method,
-        resolution=(a.n_theta, a.n_phi),
-        tol=a.tol,
-        anisotropic=True if a.anisotropic else None,
-        polarized=a.polarized,
-        energy=a.energy,
-        out_of_range=a.out_of_range,
-    )
+    resolution = None
+    if a.n_theta is not None or a.n_phi is not None:
+        n_theta = 90 if a.n_theta is None else a.n_theta
+        resolution = (n_theta, max(180, 2 * n_theta) if a.n_phi is None else a.n_phi)
+    try:
+        table = build_table(
+            rough,
+            a.material,
+            wl,
+            method=a.method,
+            resolution=resolution,
+            tol=a.tol,
+            anisotropic=True if a.anisotropic else None,
+            polarized=a.polarized,
+            energy=a.energy,
+            out_of_range=a.out_of_range,
+            dtype="float32" if a.float32 else "float64",
+        )
+    except MemoryError as exc:  # the estimate, before any work: a user error, not a crash
+        raise ValueError(exc.cli() if hasattr(exc, "cli") else str(exc)) from None
     path = export(table, a.output, fmt_name, rgl_channels=a.rgl_channels)
     energy = table.metadata.get("energy", {})
     print(f"wrote {path} ({fmt_name}): {table.describe()}")

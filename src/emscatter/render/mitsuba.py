@@ -7,8 +7,9 @@ and a scalar one would call Python once per ray)::
     from emscatter.render import mitsuba as em_mi
     mi.set_variant("llvm_ad_spectral")
     bsdf = mi.load_dict(em_mi.bsdf_dict(table))       # registers the plugin and the table
-    # or in a scene dict / XML:  {"type": "emscatter", "table": em_mi.register_table(table)}
-    #                            <bsdf type="emscatter"><string name="table" value="KEY"/></bsdf>
+    # or in a scene dict / XML (register_table registers the plugin for the current variant):
+    #     {"type": "emscatter", "table": em_mi.register_table(table)}
+    #     <bsdf type="emscatter"><string name="table" value="KEY"/></bsdf>
 
 Scene-dict / XML parameters: ``table`` (a key from :func:`register_table`), ``coherent``
 (bool, default true: include the coherent delta lobe), ``sampling_resolution`` (int, 64).
@@ -16,9 +17,11 @@ Scene-dict / XML parameters: ``table`` (a key from :func:`register_table`), ``co
 What it does (numpy preparation in :mod:`emscatter.render.plugin_data`):
 
 * ``eval``: ``f_r cosθo`` with ``f_r`` from a Dr.Jit ``Texture3f`` with linear filtering over the
-  table's own uniform (θi, θo, Δφ) nodes — the same multilinear interpolant as
-  :meth:`BrdfTable.evaluate`; spectral variants interpolate linearly between the table's
-  wavelengths (constant beyond them); RGB variants use the table's sRGB conversion.
+  table's own (θi, θo, Δφ) nodes — the same multilinear interpolant as
+  :meth:`BrdfTable.evaluate`; non-uniform axes (adaptive ``tol=`` grids) are located by a
+  binary search over their nodes, so nothing is resampled; spectral variants interpolate
+  linearly between the table's wavelengths (constant beyond them); RGB variants use the
+  table's sRGB conversion.
 * ``sample`` / ``pdf``: a continuous marginal/conditional 2-D distribution over the half-vector
   square (Mitsuba's ``MarginalContinuous2D1``, interpolated in θi between the table's nodes)
   built from ``f_r cosθo``; the pdf is exactly that of the samples drawn.
@@ -35,11 +38,12 @@ from __future__ import annotations
 
 import itertools
 import math
+import sys
 import weakref
 
 import numpy as np
 
-from .plugin_data import PluginData, prepare
+from .plugin_data import Axis, PluginData, prepare
 
 __all__ = [
     "PLUGIN_NAME",
@@ -82,7 +86,11 @@ def channels_of_variant(variant: str) -> str:
 
 def register_table(table, key: str | None = None) -> str:
     """Make ``table`` (BrdfTable or BrdfFunction) available to scenes as ``{"table": key}``
-    (in this process; the registry keeps a reference until :func:`unregister_table`)."""
+    (in this process; the registry keeps a reference until :func:`unregister_table`).
+
+    With a Mitsuba variant set it also registers the plugin for that variant (:func:`register`),
+    so ``{"type": "emscatter", "table": register_table(t)}`` loads as written; a variant set
+    later needs :func:`register` (or :func:`bsdf_dict`) once in it."""
     if not (hasattr(table, "evaluate") or callable(getattr(table, "_fr", None))):
         raise TypeError(f"table must be a BrdfTable or BrdfFunction, got {type(table).__name__}")
     if key is None:
@@ -93,6 +101,9 @@ def register_table(table, key: str | None = None) -> str:
         _TABLES[key] = table
         for k in [k for k in _PREPARED if k[0] == key]:
             del _PREPARED[k]
+    mi = sys.modules.get("mitsuba")  # only where the user already imported Mitsuba
+    if mi is not None and mi.variant() is not None:
+        register()
     return key
 
 
@@ -158,13 +169,6 @@ def _prepared(key: str, channels: str, resolution: int) -> PluginData:
     return _PREPARED[cache_key]
 
 
-def _axis_of(nodes) -> tuple[int, float, float]:
-    """``(size, start, step)`` of uniform nodes (step 1 for a single node)."""
-    nodes = np.asarray(nodes, dtype=float)
-    step = float(nodes[1] - nodes[0]) if nodes.size > 1 else 1.0
-    return int(nodes.size), float(nodes[0]), step
-
-
 def _bsdf_class(mi):
     variant = mi.variant()
     if variant in _CLASSES:
@@ -180,9 +184,50 @@ def _bsdf_class(mi):
     def texture(cls, array):
         return cls(mi.TensorXf(array), use_accel=False, filter_mode=linear, wrap_mode=clamp)
 
+    nodes_of: dict[tuple, object] = {}  # Dr.Jit copies of non-uniform axes, per axis
+
+    def dr_nodes(axis, periodic):
+        key = (axis.points, periodic)
+        if key not in nodes_of:
+            pts = list(axis.points)
+            nodes_of[key] = mi.Float(pts + [pts[0] + 2 * math.pi] if periodic else pts)
+        return nodes_of[key]
+
+    def position(x, axis):
+        """Fractional node index of angle ``x`` on a clamped axis, in ``[0, size − 1]``:
+        the uniform formula, or a binary search over non-uniform nodes (same multilinear
+        interpolant as :meth:`BrdfTable.evaluate`)."""
+        n = axis.size
+        if n == 1:
+            return mi.Float(0.0)
+        if axis.uniform:
+            return dr.clip((x - axis.start) * (1.0 / axis.step), 0.0, n - 1.0)
+        nodes = dr_nodes(axis, False)
+        xc = dr.clip(x, axis.points[0], axis.points[-1])
+        i1 = dr.binary_search(1, n - 1, lambda i: dr.gather(mi.Float, nodes, i) <= xc)
+        i0 = i1 - 1
+        a0, a1 = dr.gather(mi.Float, nodes, i0), dr.gather(mi.Float, nodes, i1)
+        return mi.Float(i0) + dr.clip((xc - a0) / (a1 - a0), 0.0, 1.0)
+
+    def periodic_position(x, axis):
+        """``(i0, t)`` of azimuth ``x`` ∈ [0, 2π) on a periodic axis: interval ``i0`` (from
+        node ``i0`` to ``i0 + 1``, node ``size`` being node 0 at +2π) and the weight of its
+        upper end."""
+        n = axis.size
+        if axis.uniform:  # start 0, step 2π/n (plugin_data makes other axes non-uniform)
+            a = x * (1.0 / axis.step)
+            a0f = dr.floor(a)
+            return dr.minimum(mi.UInt32(a0f), n - 1), dr.clip(a - a0f, 0.0, 1.0)
+        nodes = dr_nodes(axis, True)
+        xw = dr.select(x < axis.points[0], x + 2 * math.pi, x)
+        i1 = dr.binary_search(1, n, lambda i: dr.gather(mi.Float, nodes, i) <= xw)
+        i0 = i1 - 1
+        a0, a1 = dr.gather(mi.Float, nodes, i0), dr.gather(mi.Float, nodes, i1)
+        return i0, dr.clip((xw - a0) / (a1 - a0), 0.0, 1.0)
+
     def coord(x, axis):
-        """Texture coordinate of angle ``x`` on a uniform axis (texel centres at the nodes)."""
-        return ((x - axis.start) * (1.0 / axis.step) + 0.5) * (1.0 / axis.size)
+        """Texture coordinate of angle ``x`` (texel centres at the nodes)."""
+        return (position(x, axis) + 0.5) * (1.0 / axis.size)
 
     def elevation(w):
         """θ [rad], accurate near the pole (as Mitsuba's ``measured``)."""
@@ -222,7 +267,7 @@ def _bsdf_class(mi):
                 self._pdelta = texture(mi.Texture2f, periodic(data.delta_probability[..., None]))
             smp = data.sampler
             self._n = smp.resolution
-            self._s_theta = _axis_of(smp.theta_i)
+            self._s_theta = Axis.of(smp.theta_i)
             self._s_phi = (
                 None if smp.phi_i is None else (smp.phi_i.size, 2 * math.pi / smp.phi_i.size)
             )
@@ -281,7 +326,7 @@ def _bsdf_class(mi):
             ti, to = elevation(wi), elevation(wo)
 
             def clamped(x, axis):
-                x = dr.clip((x - axis.start) * (1.0 / axis.step), 0.0, axis.size - 1.0)
+                x = position(x, axis)
                 i0 = dr.minimum(mi.UInt32(x), max(axis.size - 2, 0))
                 return i0, dr.minimum(i0 + 1, axis.size - 1), x - mi.Float(i0)
 
@@ -289,17 +334,13 @@ def _bsdf_class(mi):
                 dphi = dr.abs(dr.atan2(wo.y, wo.x) - dr.atan2(wi.y, wi.x))
                 dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
                 return [clamped(ti, d.theta_i), clamped(to, d.theta_o), clamped(dphi, d.phi)]
-            a = self._azimuth(wi) * (1.0 / d.phi_i.step)
-            a0f = dr.floor(a)
-            a0 = mi.UInt32(a0f) % d.phi_i.size
-            b = self._azimuth(wo) * (1.0 / d.phi.step)  # φo: the repeated column closes 2π
-            b0f = dr.floor(b)
-            b0 = dr.minimum(mi.UInt32(b0f), d.phi.size - 1)
+            a0, ta = periodic_position(self._azimuth(wi), d.phi_i)
+            b0, tb = periodic_position(self._azimuth(wo), d.phi)  # φo: repeated column at 2π
             return [
-                (a0, (a0 + 1) % d.phi_i.size, a - a0f),
+                (a0, (a0 + 1) % d.phi_i.size, ta),
                 clamped(ti, d.theta_i),
                 clamped(to, d.theta_o),
-                (b0, b0 + 1, b - b0f),
+                (b0, b0 + 1, tb),
             ]
 
         def _corners(self, coords):
@@ -367,9 +408,9 @@ def _bsdf_class(mi):
             ti = elevation(si.wi)
             if d.isotropic:
                 return tex.eval(mi.Point1f(coord(ti, d.theta_i)), active)
+            a0, ta = periodic_position(self._azimuth(si.wi), d.phi_i)
             pos = mi.Point2f(
-                coord(ti, d.theta_i),
-                (self._azimuth(si.wi) * (1.0 / d.phi_i.step) + 0.5) * (1.0 / (d.phi_i.size + 1)),
+                coord(ti, d.theta_i), (mi.Float(a0) + ta + 0.5) * (1.0 / (d.phi_i.size + 1))
             )
             return tex.eval(pos, active)
 
@@ -382,8 +423,8 @@ def _bsdf_class(mi):
 
         def _slices(self, si):
             """Incident sampling nodes around ``si.wi`` and their mixture weights."""
-            n_t, t0, dt = self._s_theta
-            x = dr.clip((elevation(si.wi) - t0) * (1.0 / dt), 0.0, n_t - 1.0)
+            n_t = self._s_theta.size
+            x = position(elevation(si.wi), self._s_theta)
             i0 = dr.minimum(mi.UInt32(x), max(n_t - 2, 0))
             t = x - mi.Float(i0)
             i1 = dr.minimum(i0 + 1, n_t - 1)
@@ -452,9 +493,8 @@ def _bsdf_class(mi):
                 idx = dr.select(xi < t, i1, i0)
             else:  # anisotropic: θ decision, then φ decision from the leftover variate
                 (s00, _), (s01, _), (s10, _), (s11, _) = slices
-                n_t, t0, dt = self._s_theta
-                x = dr.clip((elevation(si.wi) - t0) * (1.0 / dt), 0.0, n_t - 1.0)
-                t = x - dr.floor(x)
+                x = position(elevation(si.wi), self._s_theta)  # as in _slices
+                t = x - mi.Float(dr.minimum(mi.UInt32(x), max(self._s_theta.size - 2, 0)))
                 up = xi < t
                 xi2 = dr.select(
                     up, xi / dr.maximum(t, 1e-30), (xi - t) / dr.maximum(1.0 - t, 1e-30)

@@ -3,12 +3,13 @@
 :func:`prepare` turns an emscatter BRDF table (or any :class:`~emscatter.brdf.source.BrdfFunction`)
 into :class:`PluginData`:
 
-* ``values``: ``f_r`` [1/sr] on a *uniform* grid, ``(n_ti, n_to, n_pd, C)`` for isotropic
-  tables (θi, θo, Δφ ∈ [0, π], Δφ = π the mirror half-plane) — for an emscatter table on uniform
-  nodes these are its own nodes, so linear texture filtering reproduces
-  :meth:`BrdfTable.evaluate` (multilinear, θ clamped beyond the end nodes) to float32 precision;
-  other grids are resampled. Anisotropic tables: ``(n_pi · n_ti, n_to, n_po + 1, C)``, φi blocks
-  of θi rows (interpolated in φi by two lookups), φo periodic (first column repeated at 2π).
+* ``values``: ``f_r`` [1/sr], ``(n_ti, n_to, n_pd, C)`` for isotropic tables (θi, θo,
+  Δφ ∈ [0, π], Δφ = π the mirror half-plane) on an emscatter table's *own* nodes, uniform or
+  not (adaptive ``tol=`` grids, user axes: :class:`Axis` with ``points``, located by a binary
+  search), so the plugin reproduces :meth:`BrdfTable.evaluate` (multilinear, θ clamped beyond
+  the end nodes) to float32 precision; analytic functions (no table) are sampled on 90 × 90 ×
+  180. Anisotropic tables: ``(n_pi · n_ti, n_to, n_po + 1, C)``, φi blocks of θi rows
+  (interpolated in φi by two lookups), φo periodic (first column repeated at 2π + φ₀).
 * channels ``C``: the table's wavelengths (Mitsuba's spectral variants interpolate linearly
   between them, constant beyond), linear sRGB
   (:func:`~emscatter.brdf.colour.spectrum_to_rgb_weights`) or one luminance channel;
@@ -40,26 +41,36 @@ _DEFAULT_PHI = 180
 
 @dataclass(frozen=True)
 class Axis:
-    """A uniform axis: nodes ``start + k·step``, k = 0 … size−1 [rad]."""
+    """A table axis [rad]: uniform nodes ``start + k·step``, k = 0 … size−1, or (``points``
+    given) any strictly increasing nodes — an adaptive (``tol=``) or user grid, looked up by a
+    binary search in the plugin instead of the uniform formula."""
 
     start: float
     step: float
     size: int
+    points: tuple[float, ...] | None = None
+
+    @property
+    def uniform(self) -> bool:
+        return self.points is None
 
     @property
     def nodes(self) -> np.ndarray:
+        if self.points is not None:
+            return np.array(self.points)
         return self.start + self.step * np.arange(self.size)
 
     @staticmethod
-    def of(nodes: np.ndarray) -> Axis | None:
-        """The axis if ``nodes`` are uniform (relative 1e-9), else None."""
-        nodes = np.asarray(nodes, dtype=float)
+    def of(nodes: np.ndarray) -> Axis:
+        """The axis of ``nodes``: uniform when they are (relative 1e-9), else with ``points``
+        (``step`` then the mean spacing; a single node has step 1)."""
+        nodes = np.asarray(nodes, dtype=float).reshape(-1)
         if nodes.size < 2:
-            return None
+            return Axis(float(nodes[0]), 1.0, 1)
         step = (nodes[-1] - nodes[0]) / (nodes.size - 1)
-        if step <= 0 or np.max(np.abs(np.diff(nodes) - step)) > 1e-9 * max(step, 1e-300):
-            return None
-        return Axis(float(nodes[0]), float(step), int(nodes.size))
+        if step > 0 and np.max(np.abs(np.diff(nodes) - step)) <= 1e-9 * max(step, 1e-300):
+            return Axis(float(nodes[0]), float(step), int(nodes.size))
+        return Axis(float(nodes[0]), float(step), int(nodes.size), tuple(map(float, nodes)))
 
 
 @dataclass(frozen=True)
@@ -101,9 +112,9 @@ def _channel_matrix(source: BrdfFunction, channels: str) -> np.ndarray:
 def _isotropic_values(source: BrdfFunction, mat: np.ndarray):
     table = source.table
     axes = None
-    if table is not None and table.isotropic:
+    if table is not None and table.isotropic:  # the table's own nodes, uniform or not
         axes = [Axis.of(a) for a in (table.theta_i, table.theta_o, table.phi_d)]
-    if axes is not None and all(a is not None for a in axes):
+    if axes is not None:
         vals = np.moveaxis(table.values, 0, -1)  # (n_ti, n_to, n_pd, n_wl)
     else:  # resample on the builders' default uniform grid
         th = Axis(0.0, 0.5 * math.pi / _DEFAULT_THETA, _DEFAULT_THETA)
@@ -118,15 +129,15 @@ def _isotropic_values(source: BrdfFunction, mat: np.ndarray):
 def _anisotropic_values(source: BrdfFunction, mat: np.ndarray):
     table = source.table
     axes = None
-    if table is not None and not table.isotropic:
+    if table is not None and not table.isotropic:  # its own nodes (φ: periodic, any spacing)
         axes = [Axis.of(a) for a in (table.theta_i, table.phi_i, table.theta_o, table.phi_o)]
-        periodic_ok = axes[1] is not None and axes[3] is not None
-        periodic_ok = periodic_ok and all(
-            abs(a.start) < 1e-12 and abs(a.step * a.size - 2 * math.pi) < 1e-9 for a in axes[1::2]
-        )
-        if not periodic_ok:
-            axes = None
-    if axes is not None and all(a is not None for a in axes):
+        for k in (1, 3):  # a uniform φ axis must start at 0 and close 2π to use the formula
+            a = axes[k]
+            if a.uniform and not (
+                abs(a.start) < 1e-12 and abs(a.step * a.size - 2 * math.pi) < 1e-9
+            ):
+                axes[k] = Axis(a.start, a.step, a.size, tuple(map(float, a.nodes)))
+    if axes is not None:
         vals = np.moveaxis(table.values, 0, -1)  # (n_ti, n_pi, n_to, n_po, n_wl)
     else:
         th = Axis(0.0, 0.5 * math.pi / 45, 45)
@@ -167,7 +178,7 @@ def prepare(brdf, channels: str, *, sampling_resolution: int = 64) -> PluginData
         axes, values = _anisotropic_values(source, mat)
         ti_ax, pi_ax, to_ax, ph_ax = axes
         # sampling slices on at most 30 θi × 24 φi nodes (tables of 64² cells each)
-        s_theta = np.linspace(ti_ax.start, ti_ax.nodes[-1], min(ti_ax.size, 30))
+        s_theta = np.linspace(ti_ax.nodes[0], ti_ax.nodes[-1], min(ti_ax.size, 30))
         s_phi = np.arange(min(pi_ax.size, 24)) * (2 * math.pi / min(pi_ax.size, 24))
         coh = _anisotropic_coherent(source, ti_ax, pi_ax) @ mat.T  # (n_pi, n_ti, C)
     coh = np.clip(coh, 0.0, 1.0)
