@@ -480,7 +480,7 @@ def check_roughen_street_canyon():
 
     def gains(**kw):
         paths = rt.PathSolver(deterministic=True)(sc, seed=1, **{**specular, **kw})
-        return radio.compare.path_gains(paths)[:, 0]
+        return radio.roughening.path_gains(paths)[:, 0]
 
     flat0 = gains()
     handle = radio.roughen(sc, table_options=opts)

@@ -1,5 +1,5 @@
 """Rough minus flat in one call: path gains and radio maps of a Sionna scene with its own
-materials and with emscatter's rough equivalents (:func:`emscatter.radio.roughen.roughen`).
+materials and with emscatter's rough equivalents (:func:`.roughen.roughen`).
 
 ::
 
@@ -137,7 +137,7 @@ def compare_rough_flat(
     :data:`MAP_DEFAULTS`; points as tuples) of ``scene`` flat and rough (module docstring).
 
     ``roughness``, ``mapping`` and ``roughen_kw`` (``frequencies``, ``extrapolate``,
-    ``method``, ``table_options``, …) go to :func:`~emscatter.radio.roughen.roughen`; the
+    ``method``, ``table_options``, …) go to :func:`~emscatter.radio.roughening.roughen.roughen`; the
     scene needs its transmitters (and receivers, for path gains) added. Returns ``{"frequency",
     "reference", "transmitters", "receivers", "materials" (one row per object), "settings",
     "path_gain": {"flat", "rough", "difference_db", "lit"}, "radio_map": {..., "cell_centers"}}``
@@ -212,7 +212,7 @@ def write_comparison(result: dict, out_dir, stem: str, *, title: str = "", tx_xy
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..io import save_figure, write_csv
+    from ...io import save_figure, write_csv
 
     out = Path(out_dir)
     written = []

@@ -50,10 +50,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import materials
-from ..spectra import GaussianCorrelation, Roughness
-from .indoor import ROUGHNESS as _INDOOR_ROUGHNESS
-from .tables import check_surface
+from ... import materials
+from ...spectra import GaussianCorrelation, Roughness
+from ..indoor import ROUGHNESS as _INDOOR_ROUGHNESS
+from ..tables import check_surface
 
 __all__ = [
     "DEFAULT_ROUGHNESS",
@@ -86,8 +86,7 @@ DEFAULT_ROUGHNESS: dict[str, Roughness | None] = {
 
 #: Where :data:`DEFAULT_ROUGHNESS` comes from (recorded in every :class:`Roughened` table).
 DEFAULT_ROUGHNESS_SOURCE = (
-    "emscatter's representative table (emscatter.radio.roughen.DEFAULT_ROUGHNESS; the indoor "
-    "media as emscatter.radio.indoor.ROUGHNESS): plastered concrete and brick rough at "
+    "emscatter's representative table (emscatter.radio.DEFAULT_ROUGHNESS; the indoor media as emscatter.radio.indoor.ROUGHNESS): plastered concrete and brick rough at "
     "millimetre-wave scale, boards and wood nearly smooth, glass and acrylic flat, ground at "
     "the centimetre scale of bare soil (Ulaby, Moore & Fung 1982, vol. II ch. 11). "
     "Representative values, not measurements of any building: give measured (σ, ℓ) with mapping="
@@ -219,8 +218,8 @@ def _medium_of(obj_name, mat, extrapolate: bool):
     """``(itu_type, medium, medium_key, thickness)`` of a Sionna radio material."""
     from sionna.rt import ITURadioMaterial, RadioMaterial
 
-    from .material import EmscatterRadioMaterial
-    from .medium import ConductiveMedium
+    from ..material import EmscatterRadioMaterial
+    from ..medium import ConductiveMedium
 
     if isinstance(mat, EmscatterRadioMaterial):
         med = mat.medium
@@ -383,7 +382,7 @@ def roughen(
     ``method``, ``out_of_range``, ``table_options``: as for
     :class:`~emscatter.radio.material.EmscatterRadioMaterial`. Tables are built lazily, at the
     first trace, only for used materials."""
-    from .material import EmscatterRadioMaterial
+    from ..material import EmscatterRadioMaterial
 
     assignments = plan(scene, roughness, mapping, frequencies=frequencies, extrapolate=extrapolate)
     if flat:
