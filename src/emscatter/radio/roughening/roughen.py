@@ -86,7 +86,8 @@ DEFAULT_ROUGHNESS: dict[str, Roughness | None] = {
 
 #: Where :data:`DEFAULT_ROUGHNESS` comes from (recorded in every :class:`Roughened` table).
 DEFAULT_ROUGHNESS_SOURCE = (
-    "emscatter's representative table (emscatter.radio.DEFAULT_ROUGHNESS; the indoor media as emscatter.radio.indoor.ROUGHNESS): plastered concrete and brick rough at "
+    "emscatter's representative table (emscatter.radio.DEFAULT_ROUGHNESS; the indoor media as "
+    "emscatter.radio.indoor.ROUGHNESS): plastered concrete and brick rough at "
     "millimetre-wave scale, boards and wood nearly smooth, glass and acrylic flat, ground at "
     "the centimetre scale of bare soil (Ulaby, Moore & Fung 1982, vol. II ch. 11). "
     "Representative values, not measurements of any building: give measured (σ, ℓ) with mapping="
