@@ -88,3 +88,75 @@ def test_street_canyon_rough_in_one_call_flat_back_and_rough_minus_flat():
     assert "no transmitter" in e["no_transmitter"]
     assert "reference must be 'original' or 'flat'" in e["bad_reference"]
     assert e["unchanged"]  # nothing changed by the failed calls
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--scene", "garage"], "invalid choice: 'garage'"),
+        (["--scene", "gone.xml"], "no scene file at 'gone.xml'"),
+        (["--scene", "simple_street_canyon", "--medium", "brick=-1,2"], "must be in (0, 1) m"),
+        (["--scene", "simple_street_canyon", "--medium", "brickflat"], "expected NAME=SIGMA"),
+        (["--scene", "simple_street_canyon", "--medium", "brick=1e-3"], "two numbers"),
+        (["--scene", "simple_street_canyon", "--tx", "1,2"], "expected X,Y,Z in metres"),
+        (["--scene", "etoile"], "--tx X,Y,Z [m] is required for scene 'etoile'"),
+        (["--plate", "--medium", "brick=1e-3,1e-2"], "--medium and --tx apply to scenes"),
+    ],
+)
+def test_cli_any_scene_bad_arguments_before_any_work(argv, message, tmp_path, capsys):
+    from emscatter.cli import main
+
+    out = tmp_path / "o"
+    assert main(["radio", *argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err, err
+    assert not out.exists()
+
+
+def _cli(args):
+    src = str(HERE.parent / "src")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]),
+           "MPLBACKEND": "Agg"}  # fmt: skip
+    return subprocess.run([sys.executable, "-m", "emscatter.cli", "radio", *args],
+                          capture_output=True, text=True, env=env, timeout=900)  # fmt: skip
+
+
+def test_cli_any_scene_names_and_bands_checked_before_tracing(tmp_path):
+    out = tmp_path / "o"
+    p = _cli(
+        ["--scene", "simple_street_canyon", "--medium", "granite=1e-3,1e-2", "--out", str(out)]
+    )
+    assert p.returncode == 2 and "mapping names ['granite']" in p.stderr and "'brick'" in p.stderr
+    p = _cli(["--scene", "simple_street_canyon", "--frequencies-ghz", "28,50", "--out", str(out)])
+    assert p.returncode == 2
+    assert "'brick' (objects building_2) at 50 GHz" in p.stderr and "1–40 GHz" in p.stderr
+    assert not out.exists()
+
+
+def test_cli_street_canyon_rough_minus_flat_png_and_csv(tmp_path):
+    from emscatter.io import read_csv
+
+    args = ["--scene", "simple_street_canyon", "--medium", "brick=1.2e-3,8e-3", "--medium",
+            "glass=flat", "--frequencies-ghz", "28", "--quick", "--out", str(tmp_path)]  # fmt: skip
+    p = _cli(args)
+    assert p.returncode == 0, p.stderr[-3000:]
+    stem = tmp_path / "simple_street_canyon_28GHz"
+    assert Path(f"{stem}_map.png").read_bytes()[:4] == b"\x89PNG"
+    header, cols, meta = read_csv(f"{stem}_map.csv")
+    assert header == ["x_m", "y_m", "z_m", "flat_db", "rough_db", "rough_minus_flat_db"]
+    assert meta["frequency_hz"] == 28e9 and meta["reference"] == "original"
+    lit = np.isfinite(cols["flat_db"]) & np.isfinite(cols["rough_db"])
+    d = cols["rough_minus_flat_db"]
+    assert lit.sum() > 500 and np.all(np.isfinite(d[lit])) and np.all(np.isnan(d[~lit]))
+    assert np.allclose(cols["z_m"], 1.5)
+    np.testing.assert_allclose(d[lit], cols["rough_db"][lit] - cols["flat_db"][lit], atol=1e-6)
+    # the rough brick building (x ∈ [32, 64], y ∈ [10, 38]) passes less power (coherent
+    # transmission through its rough walls and specular reflection both drop)
+    x, y = cols["x_m"], cols["y_m"]
+    inside = lit & (x > 35) & (x < 60) & (y > 13) & (y < 35)
+    assert inside.sum() > 20 and np.median(d[inside]) < -0.5
+    _, mats, _ = read_csv(f"{stem}_materials.csv")
+    rows = dict(zip(mats["object"], mats["roughness_from"], strict=True))
+    assert rows["building_2"] == "mapping['brick']" and rows["building_1"] == "mapping['glass']"
+    assert rows["floor"] == "default table (concrete)"
+    assert "rough − flat median" in p.stdout
