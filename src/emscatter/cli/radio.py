@@ -1,12 +1,86 @@
-"""``emscatter radio``: Sionna RT scenes with emscatter materials against Sionna's defaults."""
+"""``emscatter radio``: Sionna RT scenes with emscatter materials against Sionna's defaults.
+
+Two modes: the indoor cross-check (``--scene room|floor_wall|box|all``: Sionna S = 0.3, flat
+and rough sets) and, with ``--medium`` or ``--tx`` or any other scene (a Sionna scene name such
+as ``simple_street_canyon``, or a Mitsuba/Sionna ``*.xml`` file), "any scene rough": the scene's
+own materials against emscatter's rough equivalents (:func:`emscatter.radio.roughen`), radio
+maps of rough − flat as PNG and CSV per frequency. Every argument, the media named, the bands
+and the output folder are checked before a ray is traced.
+"""
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import math
+import re
+from pathlib import Path
 
 from .args import Integer, Number, OutputFolder, add_command
 
 SCENES = ("room", "floor_wall", "box")
+#: Transmitters [m] for the scenes that need none on the command line (simple_street_canyon:
+#: in the main street, 10 m up, facing the brick building_2).
+DEFAULT_TX = {"simple_street_canyon": (20.0, 0.0, 10.0)}
+
+
+def sionna_scene_names() -> list[str]:
+    """Scenes shipped with Sionna RT (folders of ``sionna/rt/scenes``), found without importing
+    Sionna (it sets a Dr.Jit variant)."""
+    spec = importlib.util.find_spec("sionna")
+    if spec is None or not spec.submodule_search_locations:
+        return []
+    root = Path(next(iter(spec.submodule_search_locations))) / "rt" / "scenes"
+    if not root.is_dir():
+        return []
+    return sorted(p.name for p in root.iterdir() if p.is_dir() and not p.name.startswith("_"))
+
+
+def _scene(text: str) -> str:
+    """An indoor set-up, ``all``, a Sionna scene name, or an existing ``*.xml`` file."""
+    if text in (*SCENES, "all"):
+        return text
+    if text.lower().endswith(".xml"):
+        if not Path(text).expanduser().is_file():
+            raise argparse.ArgumentTypeError(f"no scene file at {text!r} (a Mitsuba/Sionna XML)")
+        return str(Path(text).expanduser())
+    names = sionna_scene_names()
+    if text in names:
+        return text
+    raise argparse.ArgumentTypeError(
+        f"invalid choice: {text!r} (choose from {', '.join((*SCENES, 'all'))}, a Sionna scene "
+        f"({', '.join(names) or 'Sionna RT is not installed'}) or a *.xml scene file)"
+    )
+
+
+def _medium(text: str) -> tuple[str, object]:
+    """``NAME=σ,ℓ`` [m] (Gaussian correlation) or ``NAME=flat`` → ``(NAME, (σ, ℓ) | None)``."""
+    m = re.fullmatch(r"\s*([^=\s]+)\s*=\s*(.+?)\s*", text)
+    if m is None:
+        raise argparse.ArgumentTypeError(
+            "expected NAME=SIGMA,LENGTH in metres (e.g. brick=0.8e-3,8e-3) or NAME=flat, "
+            f"got {text!r}"
+        )
+    name, value = m.groups()
+    if value.lower() == "flat":
+        return name, None
+    parts = value.split(",")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(
+            f"{name}: expected SIGMA,LENGTH in metres (two numbers, e.g. 0.8e-3,8e-3), "
+            f"got {value!r}"
+        )
+    sigma = Number(low=0.0, high=1.0, unit="m")(parts[0].strip())
+    length = Number(low=0.0, high=100.0, unit="m")(parts[1].strip())
+    return name, (sigma, length)
+
+
+def _point(text: str) -> tuple[float, float, float]:
+    parts = text.split(",")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z in metres, got {text!r}")
+    v = tuple(float(Number(low=-1e6, high=1e6, unit="m")(p.strip())) for p in parts)
+    return v  # type: ignore[return-value]
 
 
 def _frequencies_ghz(text: str) -> tuple[float, ...]:
@@ -33,7 +107,37 @@ def register(subparsers) -> None:
             "summary against frequency (PNG). --plate runs the large-plate cross-check instead."
         ),
     )
-    r.add_argument("--scene", default="room", choices=[*SCENES, "all"], help="which scene(s)")
+    r.add_argument(
+        "--scene",
+        default="room",
+        type=_scene,
+        metavar="NAME|FILE",
+        help=(
+            "room, floor_wall, box or all (the indoor cross-check), or any Sionna scene name "
+            "(simple_street_canyon, ...) or a Mitsuba/Sionna *.xml file (rough − flat maps)"
+        ),
+    )
+    r.add_argument(
+        "--medium",
+        action="append",
+        type=_medium,
+        default=[],
+        metavar="NAME=SIGMA,LENGTH",
+        help=(
+            "roughness of an ITU type, material or object of the scene: rms height and "
+            "correlation length [m] (Gaussian), or NAME=flat; repeat for more. Unnamed media "
+            "take emscatter's default table (emscatter.radio.DEFAULT_ROUGHNESS)"
+        ),
+    )
+    r.add_argument(
+        "--tx", type=_point, default=None, metavar="X,Y,Z", help="transmitter position [m]"
+    )
+    r.add_argument(
+        "--map-height",
+        type=Number(low=-1e4, high=1e4, unit="m"),
+        default=1.5,
+        help="height z of the radio-map plane [m] (any-scene mode)",
+    )
     r.add_argument(
         "--frequencies-ghz",
         type=_frequencies_ghz,
@@ -50,9 +154,9 @@ def register(subparsers) -> None:
     r.add_argument("--max-depth", type=Integer(low=1, high=8), default=3, help="bounces")
     r.add_argument(
         "--cell-size",
-        type=Number(low=0.0, high=10.0, unit="m"),
-        default=0.1,
-        help="radio-map cell size [m]",
+        type=Number(low=0.0, high=100.0, unit="m"),
+        default=None,
+        help="radio-map cell size [m] (default 0.1 m indoors, 1/100 of the scene elsewhere)",
     )
     r.add_argument(
         "--extrapolate",
@@ -77,12 +181,18 @@ def run(a) -> int:
         raise ValueError(
             "--extrapolate applies to the indoor scenes, not to --plate (its media are in band)"
         )
+    if a.plate and (a.medium or a.tx is not None):
+        raise ValueError("--medium and --tx apply to scenes, not to --plate")
     if a.plate:
         from ..radio import demo
 
         for p in demo.run(out, a.quick):
             print(f"  {p}")
         return 0
+    if a.medium or a.tx is not None or a.scene not in (*SCENES, "all"):
+        return run_any_scene(a)
+    if a.cell_size is None:
+        a.cell_size = 0.1
     from ..radio import indoor
     from ..radio.tables import TableOptions
 
@@ -113,5 +223,92 @@ def run(a) -> int:
             f"{s['median_abs_dpg_vs_flat_db']:.2f} dB, |Δ delay spread| "
             f"{s['median_abs_dds_vs_flat_ns']:.2f} ns;   rough − Sionna S=0.3: "
             f"{s['median_abs_dpg_vs_sionna_db']:.2f} dB, {s['median_abs_dds_vs_sionna_ns']:.2f} ns"
+        )
+    return 0
+
+
+def _quick_tables():
+    from ..radio.tables import TableOptions
+
+    return TableOptions(n_cos=65, n_cos_spm=9, n_theta=16, n_alpha=13, n_s=32)
+
+
+def _load_any(a):
+    """The Sionna scene of ``--scene`` with its own (ITU) materials, at Sionna's default
+    frequency (the bands are checked by emscatter before the frequency is set)."""
+    import sionna.rt as rt
+
+    from ..radio import indoor, scenes
+
+    if a.scene == "all":
+        raise ValueError("--scene all is the indoor cross-check; name one scene with --medium/--tx")
+    if a.scene in indoor.SETUPS and not isinstance(indoor.SETUPS[a.scene].scene, str):
+        spec = indoor.SETUPS[a.scene].scene  # the generated room: Sionna's ITU materials
+        return scenes.load(
+            spec, 3.5e9,
+            lambda o, m, t: rt.ITURadioMaterial(f"itu-{o}", itu_type=m, thickness=t),
+        )  # fmt: skip
+    if a.scene.lower().endswith(".xml"):
+        return rt.load_scene(a.scene, merge_shapes=False)
+    return rt.load_scene(getattr(rt.scene, a.scene), merge_shapes=False)
+
+
+def run_any_scene(a) -> int:
+    """Rough − flat radio maps of any scene (module docstring)."""
+    import numpy as np
+
+    from ..radio import indoor
+    from ..radio.roughening import compare_rough_flat, plan, write_comparison
+
+    tx = a.tx
+    if tx is None:
+        setup = indoor.SETUPS.get(a.scene)
+        tx = setup.tx if setup is not None else DEFAULT_TX.get(a.scene)
+    if tx is None:
+        raise ValueError(
+            f"--tx X,Y,Z [m] is required for scene {a.scene!r} (where the transmitter stands)"
+        )
+    mapping = dict(a.medium)
+    freqs = a.frequencies_ghz
+    import sionna.rt as rt
+
+    if a.extrapolate:
+        raise ValueError(
+            "--extrapolate applies to the indoor cross-check (--scene room|floor_wall|box|all); "
+            "the scene's own ITU materials, the flat reference here, stop at their bands"
+        )
+    sc = _load_any(a)
+    # every name, medium and band checked before a ray is traced
+    plan(sc, mapping=mapping, frequencies=freqs, extrapolate=a.extrapolate)
+    arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization="V")
+    sc.tx_array = sc.rx_array = arr
+    sc.add(rt.Transmitter("tx", position=[float(x) for x in tx]))
+    box = sc.mi_scene.bbox()
+    lo, hi = np.array(box.min), np.array(box.max)
+    size = hi[:2] - lo[:2]
+    cell = a.cell_size or float(max(size.max() / 100.0, 0.05))
+    samples, depth, opts = a.samples, a.max_depth, None
+    if a.quick:
+        samples, depth, opts = min(samples, 100_000), min(depth, 2), _quick_tables()
+        cell = max(cell, float(size.max() / 60.0))
+    stem = Path(a.scene).stem
+    out = Path(a.out)
+    for f in freqs:
+        sc.frequency = f
+        res = compare_rough_flat(
+            sc, mapping=mapping, paths=False, extrapolate=a.extrapolate, table_options=opts,
+            frequencies=freqs,
+            radio_map={"center": (*((lo[:2] + hi[:2]) / 2), a.map_height),
+                       "orientation": (0.0, 0.0, 0.0), "size": tuple(size),
+                       "cell_size": (cell, cell), "samples_per_tx": samples, "max_depth": depth},
+        )  # fmt: skip
+        for p in write_comparison(res, out, f"{stem}_{f / 1e9:g}GHz", title=stem, tx_xy=tx[:2]):
+            print(f"  {p}")
+        d = res["radio_map"]["difference_db"]
+        lit = res["radio_map"]["lit"]
+        med = float(np.median(d[lit])) if lit.any() else math.nan
+        print(
+            f"{stem} {f / 1e9:g} GHz: rough − flat median {med:+.2f} dB over {int(lit.sum())} "
+            f"cells lit in both ({cell:g} m cells, {samples} rays, depth {depth})"
         )
     return 0

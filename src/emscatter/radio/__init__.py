@@ -19,6 +19,8 @@ the functions that run Sionna), so ``import emscatter.radio`` stays light. Modul
 :mod:`.medium` (what a wall is made of), :mod:`.convention` (the ``exp(±jωt)`` flip),
 :mod:`.slab` (rough-slab coefficients), :mod:`.tables` (per-frequency tables from the solvers),
 :mod:`.material` (the Sionna class), :mod:`.scenes` (PLY/XML scenes from NumPy),
+:mod:`.roughening` (any Sionna scene rough in one call, flat again, and rough − flat path
+gains and radio maps in one call: ``roughen``, ``flatten``, ``compare_rough_flat``),
 :mod:`.plate`, :mod:`.indoor` and :mod:`.sweep` (the three cross-checks), :mod:`.demo`.
 """
 
@@ -28,6 +30,14 @@ from dataclasses import dataclass
 
 from .convention import from_sionna, sionna_eps_conductivity, sionna_permittivity, to_sionna
 from .medium import ConductiveMedium, check_thickness, real_number, resolve_medium
+from .roughening import (
+    DEFAULT_ROUGHNESS,
+    DEFAULT_ROUGHNESS_SOURCE,
+    Roughened,
+    compare_rough_flat,
+    flatten,
+    roughen,
+)
 from .slab import slab_coefficients
 from .tables import (
     EnergyWarning,
@@ -41,6 +51,12 @@ from .tables import (
 
 __all__ = [
     "MaterialSpec",
+    "roughen",
+    "flatten",
+    "compare_rough_flat",
+    "Roughened",
+    "DEFAULT_ROUGHNESS",
+    "DEFAULT_ROUGHNESS_SOURCE",
     "ConductiveMedium",
     "resolve_medium",
     "slab_coefficients",
