@@ -39,6 +39,7 @@ import numpy as np
 
 from emscatter.spectra import Roughness
 from emscatter.surfaces.heightmap import HeightMap, HeightMapError
+from emscatter.surfaces.nfold import nfold_table
 
 __all__ = ["MeasuredRoughness", "measured_roughness", "BandWarning", "TAILS"]
 
@@ -331,6 +332,26 @@ class MeasuredRoughness(Roughness):
                 v = _bilinear(grid, k0[1], dk[1], kx[sel], k0[0], dk[0], ky[sel])
             out[sel] = np.nan_to_num(v, nan=0.0)
         return out
+
+    @cached_property
+    def _nfold(self):
+        tail = None
+        if self.tail != "none":
+            tail = lambda kr: self._tail(kr) / self.sigma**2  # noqa: E731
+        lengths = (self.length,) if self.dimension == 1 else (self.length, self.length_y)
+        return nfold_table(self._rho_grid, self.info["spacing"], lengths, tail)
+
+    def log_nfold_table(self):
+        """``f(n, s) = log(w_n/L)`` for the PO and IEM series
+        (:func:`emscatter.solvers.kirchhoff.po.log_nfold`'s convention: ``s`` the scaled
+        wavenumber ``√((Kx ℓx)² + (Ky ℓy)²)``, ``L = ℓx ℓy``; 1-D ``|Kx| ℓ``, ``L = ℓ``): FFT of
+        the measured ``ρⁿ``, averaged over ellipses (:mod:`emscatter.surfaces.nfold`)."""
+        return self._nfold[0]
+
+    @property
+    def nfold_info(self) -> dict:
+        """How :meth:`log_nfold_table` was built (orders by FFT, averaging, the scaling)."""
+        return dict(self._nfold[1])
 
     # ---------------------------------------------------------------- slopes
     def mean_square_slope(self, k_max: float | None = None) -> tuple[float, float]:
