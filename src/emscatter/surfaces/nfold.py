@@ -23,9 +23,7 @@ builds, once per roughness, the table the series read through
 * ``n`` between integers ``j < n < j + 1``: the two orders carried to ``n`` by the same
   scaling, mixed linearly (the series' continuum sum and peak search ask for real ``n``);
 * beyond the grid's ellipse (``s`` above the inscribed Nyquist ellipse) ``w_n`` is zero
-  (``log`` floor :data:`LOG_FLOOR`), or for ``n = 1`` the roughness' recorded tail.
-
-Negative FFT values (estimation noise far out in ``K``) are floored.
+  (``log`` floor :data:`LOG_FLOOR`, also for negative FFT noise), or for ``n = 1`` the tail.
 """
 
 from __future__ import annotations
@@ -46,12 +44,7 @@ LOG_FLOOR = -700.0
 def _orders(rho: np.ndarray) -> int:
     """``n_tab`` (module docstring): ``ρ(2Δ)ⁿ ≥ 1/e`` along the steeper axis."""
     c = tuple(m // 2 for m in rho.shape)
-    vals = []
-    for ax in range(rho.ndim):
-        idx = list(c)
-        idx[ax] = c[ax] + 2
-        vals.append(float(rho[tuple(idx)]))
-    r2 = min(vals)
+    r2 = min(float(rho[c[:ax] + (c[ax] + 2,) + c[ax + 1 :]]) for ax in range(rho.ndim))
     if not 0 < r2 < 1:
         return 1 if r2 <= 0 else N_TAB_MAX
     return int(np.clip(math.floor(-1.0 / math.log(r2)), 1, N_TAB_MAX))
@@ -60,37 +53,23 @@ def _orders(rho: np.ndarray) -> int:
 def nfold_table(rho: np.ndarray, spacing: tuple, lengths: tuple, tail=None):
     """The callable ``f(n, s) = log(w_n(s)/L)`` of a sampled correlation (module docstring).
 
-    Parameters
-    ----------
-    rho : ρ on the lag grid (fftshifted, lag 0 at ``shape // 2``), axis order (y, x) in 2-D.
-    spacing : lag step per axis [m], axis order of ``rho``.
-    lengths : ``(ℓx, ℓy)`` [m] (2-D) or ``(ℓ,)`` (1-D): the scale of ``s``.
-    tail : None, or a callable ``w₁(|K|)`` [m^d] beyond the grid for ``n = 1`` (physical
-        ``|K| = s/√(ℓx ℓy)``).
-
+    ``rho``: ρ on the lag grid (fftshifted, lag 0 at ``shape // 2``, axes (y, x)); ``spacing``
+    [m] per axis of ``rho``; ``lengths`` ``(ℓx, ℓy)`` or ``(ℓ,)`` [m], the scale of ``s``;
+    ``tail``: None or ``w₁(|K|)`` [m^d] beyond the grid for ``n = 1`` (``|K| = s/√(ℓxℓy)``).
     Returns ``(f, info)``; ``info`` names ``n_tab``, the grid of ``s`` and the averaging.
     """
     d = rho.ndim
     shape = rho.shape
     cell = float(np.prod(spacing))
     n_tab = _orders(rho)
-    if d == 1:
-        (ell,) = lengths
-        kx = (np.arange(shape[0]) - shape[0] // 2) * (2 * math.pi / (shape[0] * spacing[0]))
-        s_grid = np.abs(kx) * ell
-        ds = 2 * math.pi / (shape[0] * spacing[0]) * ell
-        s_max = (shape[0] // 2) * ds
-        norm = ell
-    else:
-        lx, ly = lengths
-        dky = 2 * math.pi / (shape[0] * spacing[0])
-        dkx = 2 * math.pi / (shape[1] * spacing[1])
-        ky = (np.arange(shape[0]) - shape[0] // 2) * dky
-        kx = (np.arange(shape[1]) - shape[1] // 2) * dkx
-        s_grid = np.hypot(ky[:, None] * ly, kx[None, :] * lx)
-        ds = min(dkx * lx, dky * ly)
-        s_max = min((shape[1] // 2) * dkx * lx, (shape[0] // 2) * dky * ly)
-        norm = lx * ly
+    ell = tuple(reversed(lengths))  # per axis of rho: (ℓy, ℓx) or (ℓ,)
+    dks = [2 * math.pi / (m * sp) * e for m, sp, e in zip(shape, spacing, ell, strict=True)]
+    comps = np.meshgrid(*[(np.arange(m) - m // 2) * q for m, q in zip(shape, dks, strict=True)],
+                        indexing="ij")  # fmt: skip
+    s_grid = np.sqrt(sum(c * c for c in comps))
+    ds = min(dks)
+    s_max = min((m // 2) * q for m, q in zip(shape, dks, strict=True))
+    norm = float(np.prod(lengths))
     nb = int(s_max / ds) + 1
     idx = np.rint(s_grid / ds).astype(np.intp).ravel()
     keep = idx < nb
@@ -105,12 +84,9 @@ def nfold_table(rho: np.ndarray, spacing: tuple, lengths: tuple, tail=None):
         w = np.real(np.fft.fftn(power)) * scale
         ring = np.bincount(idx, np.fft.fftshift(w).ravel()[keep], minlength=nb) / cnt
         table[n] = np.log(np.maximum(ring, math.exp(LOG_FLOOR)))
-    table[0] = table[1]
-    s_axis = np.arange(nb) * ds
 
     def at(row, n, sa):
-        """log w_row at s √(row/n), scaled by (row/n)^{d/2}: the order ``row`` carried to ``n``
-        by the differentiable scaling (exact for the Gaussian)."""
+        """Order ``row`` carried to ``n``: log w_row(s √(row/n)) + (d/2) log(row/n)."""
         ratio = row / n
         fs = sa * np.sqrt(ratio) / ds
         inside = fs <= nb - 1
@@ -139,11 +115,7 @@ def nfold_table(rho: np.ndarray, spacing: tuple, lengths: tuple, tail=None):
                 val[one] = np.log(np.maximum(w1, math.exp(LOG_FLOOR)))
         return val
 
-    info = {
-        "n_tab": n_tab,
-        "s_step": ds,
-        "s_max": float(s_axis[-1]),
-        "average": "ellipses s = √((Kx ℓx)² + (Ky ℓy)²)" if d == 2 else "|Kx| ℓ",
-        "beyond_n_tab": "differentiable scaling (n_tab/n)^(d/2) w_n_tab(s √(n_tab/n))",
-    }
+    info = {"n_tab": n_tab, "s_step": ds, "s_max": (nb - 1) * ds,
+            "average": "ellipses s = √((Kx ℓx)² + (Ky ℓy)²)" if d == 2 else "|Kx| ℓ",
+            "beyond_n_tab": "scaling (n_tab/n)^(d/2) w_n_tab(s √(n_tab/n))"}  # fmt: skip
     return f, info
