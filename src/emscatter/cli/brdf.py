@@ -5,9 +5,12 @@ metadata), ``.binary`` (MERL), ``.bsdf`` (RGL, Mitsuba's ``measured``; the rende
 exporter). ``--fit`` also fits a Beckmann/GGX microfacet model and prints (or writes) the
 Mitsuba dict — the quick path when a dict is all you need.
 
-Every input is checked before the table is built: the output paths (:mod:`.paths`), the
-format against the extension, the material at every wavelength, the method name, and options
-that do not apply (``--fit-json`` without ``--fit``, ``--rgl-channels`` for a non-RGL file,
+``--height-map FILE`` (with ``--detrend``, ``--unit``, ``--segments``, ``--tail``;
+:mod:`.heightmap_args`) takes the surface from a measured height map instead of
+``--kind/--sigma/--length``. Every input is checked before the table is built: the output
+paths (:mod:`.paths`), the format against the extension, the height map (read and measured),
+the material at every wavelength, the method name, and options that do not apply
+(``--fit-json`` without ``--fit``, ``--rgl-channels`` for a non-RGL file,
 ``--n-theta``/``--n-phi`` with ``--tol``) are errors, never ignored.
 """
 
@@ -25,6 +28,7 @@ from .args import (
     reject_unless,
     roughness_from_args,
 )
+from .heightmap_args import add_height_map_args, height_map_roughness
 from .paths import OutputPath, check_format
 
 FORMATS = {".npz": "npz", ".binary": "merl", ".bsdf": "rgl"}
@@ -89,9 +93,10 @@ def check_inputs(a) -> tuple[str, object, object]:
         ("--n-theta", "--n-phi"),
         "to a fixed grid only; --tol refines the grid by itself (drop one of them)",
     )
-    rough = roughness_from_args(a)
+    rough = height_map_roughness(a) or roughness_from_args(a)
     if rough.dimension != 2:
-        raise ValueError("--profile describes a 1-D profile; a BRDF table needs a 2-D surface")
+        what = f"--height-map {a.height_map} is" if a.height_map else "--profile describes"
+        raise ValueError(f"{what} a 1-D profile; a BRDF table needs a 2-D surface")
     wl = np.asarray(a.wavelengths_nm, float) * 1e-9
     for lam in wl:
         try:
@@ -113,6 +118,7 @@ def register(subparsers) -> None:
         help="output file: .npz (table + metadata), .binary (MERL) or .bsdf (RGL)",
     )
     add_roughness_args(p, sigma=0.15e-6, length=1.0e-6)
+    add_height_map_args(p)
     p.add_argument(
         "--material",
         type=_material,

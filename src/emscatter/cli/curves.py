@@ -3,7 +3,10 @@
 Every option is honoured or rejected: a single angle, a list or a range gives exactly those
 angles (bistatic with several incidence angles computes them all); an option that does not
 apply to the quantity is an error. ``--json``/``--csv`` carry every input and a schema line, and
-``--from FILE`` recomputes a figure from such a file.
+``--from FILE`` recomputes a figure from such a file. ``--height-map FILE`` (with
+``--detrend``, ``--unit``, ``--segments``, ``--tail``; :mod:`.heightmap_args`) takes the surface
+from a measured height map instead of ``--kind/--sigma/--length`` (recorded: the file and the
+choices, with the measured σ and ℓ).
 """
 
 from __future__ import annotations
@@ -29,6 +32,12 @@ from .args import (
     parse_eps,
     reject_unless,
     roughness_from_args,
+)
+from .heightmap_args import (
+    add_height_map_args,
+    height_map_argv,
+    height_map_inputs,
+    height_map_roughness,
 )
 from .paths import check_distinct
 
@@ -56,6 +65,7 @@ def register(subparsers) -> None:
     )
     c.add_argument("--quantity", default="bistatic", choices=QUANTITIES, help="what to compute")
     add_roughness_args(c)
+    add_height_map_args(c)
     c.add_argument(
         "--eps",
         type=parse_eps,
@@ -167,6 +177,8 @@ def _inputs(a, rough) -> dict:
         "method": a.method,
         "out_of_range": a.out_of_range,
     }
+    if a.height_map is not None:
+        inputs["roughness"] = height_map_inputs(a, rough)
     if a.quantity == "bistatic":
         inputs.update(theta_s_deg=a.theta_s_deg, phi_s_deg=a.phi_s_deg)
     if a.quantity == "emissivity":
@@ -182,14 +194,18 @@ def _argv_from_inputs(inputs: dict) -> list[str]:
     """The ``curves`` options that reproduce ``inputs`` (inverse of :func:`_inputs`)."""
     r = inputs["roughness"]
     eps = inputs["eps"]
-    argv = ["--quantity", inputs["quantity"], "--kind", r["kind"]]
-    argv += ["--sigma", repr(r["sigma_m"]), "--length", repr(r["length_m"])]
-    if r.get("length_y_m") is not None:
-        argv += ["--length-y", repr(r["length_y_m"])]
-    if r.get("hurst") is not None:
-        argv += ["--hurst", repr(r["hurst"])]
-    if r.get("dimension") == 1:
-        argv.append("--profile")
+    argv = ["--quantity", inputs["quantity"]]
+    if "height_map" in r:  # a measured surface: the file and the choices, not σ and ℓ
+        argv += height_map_argv(r)
+    else:
+        argv += ["--kind", r["kind"], "--sigma", repr(r["sigma_m"])]
+        argv += ["--length", repr(r["length_m"])]
+        if r.get("length_y_m") is not None:
+            argv += ["--length-y", repr(r["length_y_m"])]
+        if r.get("hurst") is not None:
+            argv += ["--hurst", repr(r["hurst"])]
+        if r.get("dimension") == 1:
+            argv.append("--profile")
     if eps == "pec" or "material" in eps:
         argv += ["--eps", "pec" if eps == "pec" else eps["material"]]
     else:
@@ -362,8 +378,8 @@ def run(a) -> int:
         a.theta_s_deg = a.theta_s_deg if a.theta_s_deg is not None else Angles()(DEFAULT_THETA_S)
         a.phi_s_deg = 0.0 if a.phi_s_deg is None else a.phi_s_deg
     a.tol = 1e-4 if a.tol is None else a.tol
-    rough = roughness_from_args(a)
     _check_material(a)
+    rough = height_map_roughness(a) or roughness_from_args(a)
     cols, fig, method, report = _compute(a, rough)
     inputs = _inputs(a, rough)
     meta = {

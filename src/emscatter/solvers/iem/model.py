@@ -532,7 +532,7 @@ def bistatic(
 
     Parameters
     ----------
-    roughness : Gaussian, exponential or power-law :class:`~emscatter.spectra.Roughness`,
+    roughness : Gaussian, exponential, power-law or measured (``measured_roughness``) roughness,
         ``dimension`` 2 (surface, per unit area) or 1 (profile, per unit length; hh and vv,
         ``φs ∈ {φi, φi + π}``).
     eps : relative permittivity (``Im ε ≥ 0``; broadcasts with the angles) or ``"pec"``.

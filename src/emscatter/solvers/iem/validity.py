@@ -12,6 +12,7 @@ from emscatter.fresnel import is_pec
 from emscatter.solvers.kirchhoff.common import check_roughness
 from emscatter.solvers.validity import angle_upper, build_report, check_solver_options, upper
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
+from emscatter.surfaces.measured import MeasuredRoughness
 
 __all__ = ["OPTIONS", "VALIDITY", "check_validity", "nominal_rms_slope"]
 
@@ -35,8 +36,12 @@ VALIDITY = {
 
 def nominal_rms_slope(roughness) -> tuple[float, float]:
     """The model's per-direction rms slopes ``(s_x, s_y)`` [-] for shadowing (module docstring):
-    Gaussian ``√2 σ/ℓ``, exponential ``σ/ℓ``, power law ``√(2H) σ/ℓ``."""
+    Gaussian ``√2 σ/ℓ``, exponential ``σ/ℓ``, power law ``√(2H) σ/ℓ``; a measured map
+    (:mod:`emscatter.surfaces.measured`) its own finite-difference rms slopes."""
     rough = check_roughness(roughness)
+    if isinstance(rough, MeasuredRoughness):
+        sx, sy = rough.mean_square_slope()
+        return math.sqrt(sx), math.sqrt(sy if rough.dimension == 2 else sx)
     if isinstance(rough, GaussianCorrelation):
         c = math.sqrt(2.0)
     elif isinstance(rough, ExponentialCorrelation):

@@ -212,7 +212,8 @@ def log_nfold(roughness):
         return functools.partial(_powerlaw_log_w, table)
     raise TypeError(
         "physical optics needs the n-fold spectrum of a GaussianCorrelation, "
-        f"ExponentialCorrelation or PowerLawCorrelation, got {type(roughness).__name__}"
+        "ExponentialCorrelation, PowerLawCorrelation or MeasuredRoughness "
+        f"(emscatter.surfaces.measured_roughness), got {type(roughness).__name__}"
     )
 
 
@@ -469,8 +470,10 @@ def bistatic(
 
     Parameters
     ----------
-    roughness : Gaussian, exponential or power-law :class:`~emscatter.spectra.Roughness`,
-        ``dimension`` 2 (all four polarizations) or 1 (hh, vv; ``φ ∈ {0, π}``).
+    roughness : Gaussian, exponential or power-law :class:`~emscatter.spectra.Roughness`, or a
+        measured map's (:class:`~emscatter.surfaces.measured.MeasuredRoughness`: its n-fold
+        spectra tabulated by :mod:`emscatter.surfaces.nfold`), ``dimension`` 2 (all four
+        polarizations) or 1 (hh, vv; ``φ ∈ {0, π}``).
     eps : relative permittivity (``Im ε ≥ 0``, broadcasts with the angles) or "pec".
     k : free-space wavenumber [rad/m].
     theta_i, theta_s, phi_s, phi_i : angles [rad], numpy-broadcast.
