@@ -477,7 +477,7 @@ def _emissivity_one(rough, eps, k, ti, pi_, method, tol, out_of_range, options) 
     if not converged.all():
         quadrature["reason"] = (
             f"quadrature stopped at error {float(np.max(err)):.2g} > tol {tol:g} at "
-            f"{angles_deg(ti, ~converged)} (evaluation budget)"
+            f"{angles_deg(ti, ~converged)} (evaluation or time budget)"
         )
     info = {"validity": report, "energy": balance, "methods": methods, "quadrature": quadrature}
     if make_nan:
