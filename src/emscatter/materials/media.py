@@ -37,7 +37,7 @@ def check_parameter(
 def debye(f: np.ndarray, eps_static, eps_inf, tau, conductivity=0.0) -> np.ndarray:
     """Single Debye relaxation plus ionic conduction under ``exp(−iωt)`` (``Im ε ≥ 0``):
     ``ε = ε∞ + (εs − ε∞)/(1 − iωτ) + iσ/(ωε₀)``; ``f`` [Hz], ``tau`` [s], ``conductivity``
-    [S/m] (Debye 1929; the form of Klein & Swift 1977, eq. 6, conjugated to this convention)."""
+    [S/m] (Debye 1929; the form of Klein & Swift 1977, conjugated to this convention)."""
     w = 2.0 * math.pi * np.asarray(f, dtype=float)
     return (
         eps_inf

@@ -6,7 +6,7 @@ numbers):
 
 * :class:`DobsonSoil` — the semi-empirical refractive mixing model of Dobson, Ulaby,
   Hallikainen & El-Rayes, "Microwave dielectric behavior of wet soil — Part II: Dielectric
-  mixing models", IEEE TGRS 23 (1985) 35–46, eqs. 27–28 with the free-water Debye terms of
+  mixing models", IEEE TGRS 23 (1985) 35–46, with the free-water Debye terms of
   Ulaby, Moore & Fung, *Microwave Remote Sensing* Vol. III (1986), App. E; fitted on
   1.4–18 GHz. Below 1.4 GHz (down to 0.3 GHz) the corrections of Peplinski, Ulaby & Dobson,
   "Dielectric properties of soils in the 0.3–1.3-GHz range", IEEE TGRS 33 (1995) 803–807
@@ -64,7 +64,7 @@ class DobsonSoil(Material):
     bulk_density : dry bulk density ρb [kg/m³], in [1000, 2000].
     temperature : [K], in [273.15, 313.15] (0–40 °C, the range of the free-water polynomials).
 
-    Band 0.3–18 GHz. The model (Dobson eqs. 27–28, α = 0.65, ρs = 2.66 g/cm³,
+    Band 0.3–18 GHz. The model (Dobson et al. 1985, α = 0.65, ρs = 2.66 g/cm³,
     εs = (1.01 + 0.44 ρs)² − 0.062)::
 
         ε′ = [1 + (ρb/ρs)(εs^α − 1) + m_v^β′ ε′fw^α − m_v]^(1/α)
@@ -72,7 +72,7 @@ class DobsonSoil(Material):
         β′ = 1.2748 − 0.519 S − 0.152 C,  β″ = 1.33797 − 0.603 S − 0.166 C
 
     with free water ``εfw = εw∞ + (εw0 − εw∞)/(1 − i2πfτw) + iσeff(ρs − ρb)/(2πfε₀ρs m_v)``
-    (Dobson eqs. 21–23, densities in g/cm³). σeff [S/m] is
+    (densities in g/cm³). σeff [S/m] is
     ``−1.645 + 1.939ρb − 2.25622S + 1.594C`` (Dobson, 1.4–18 GHz) or
     ``0.0467 + 0.2204ρb − 0.4111S + 0.6614C`` (Peplinski, below 1.4 GHz, where also
     ``ε′ → 1.15ε′ − 0.68``).
@@ -132,7 +132,7 @@ class DobsonSoil(Material):
             0.0467 + 0.2204 * rho_b - 0.4111 * s + 0.6614 * c,
             -1.645 + 1.939 * rho_b - 2.25622 * s + 1.594 * c,
         )
-        # free water (Ulaby, Moore & Fung 1986, App. E; Dobson eqs. 21–23)
+        # free water (Ulaby, Moore & Fung 1986, App. E, as used by Dobson et al. 1985)
         two_pi_tau = 1.1109e-10 - 3.824e-12 * t + 6.938e-14 * t**2 - 5.096e-16 * t**3  # [s]
         eps_w0 = 88.045 - 0.4147 * t + 6.295e-4 * t**2 + 1.075e-5 * t**3
         eps_winf = 4.9

@@ -6,15 +6,15 @@ Two published models, each a :class:`~emscatter.materials.Material` (``Im ε ≥
 * :class:`KleinSwiftWater` — Klein & Swift, "An improved model for the dielectric constant of
   sea water at microwave frequencies", IEEE TAP 25 (1977) 104–111: one Debye relaxation with
   ``ε∞ = 4.9`` plus ionic conduction, the static permittivity, relaxation time and
-  conductivity as polynomials in temperature and salinity (their eqs. 13–20). Measured at
+  conductivity as polynomials in temperature and salinity. Measured at
   1.43 and 2.653 GHz; one relaxation holds up to about 10 GHz, the band given here
   (0.1–10 GHz). Temperature 0–40 °C, salinity 0–40 psu (the fit's data: 4–35 psu; 0 is
   the pure-water limit the polynomials reduce to).
 * :class:`MeissnerWentzWater` — Meissner & Wentz, "The complex dielectric constant of pure and
   sea water from microwave satellite observations", IEEE TGRS 42 (2004) 1836–1849: two Debye
-  relaxations plus conduction (eq. 12), pure-water parameters (eqs. 13–16, Table III), their
-  salinity dependence (eq. 17, Table VI) and the conductivity of Stogryn et al. (1995)
-  (eqs. 18–20). Band 1–400 GHz; salinity 0–40 psu; temperature −2…34 °C for sea water and
+  relaxations plus conduction, fitted pure-water parameters, their salinity dependence and
+  the sea-water conductivity of Stogryn et al. (1995) (coefficients as in the paper's tables).
+  Band 1–400 GHz; salinity 0–40 psu; temperature −2…34 °C for sea water and
   −25…40 °C for pure water (S = 0).
 
 Units are SI: temperature [K] (the published polynomials use °C: converted inside), salinity
@@ -78,7 +78,7 @@ class KleinSwiftWater(Material):
 
     def parameters(self) -> tuple[float, float, float]:
         """Static permittivity εs [-], relaxation time τ [s], ionic conductivity σ [S/m]
-        (Klein & Swift eqs. 13–20; T in °C, S in psu inside)."""
+        (Klein & Swift 1977; T in °C, S in psu inside)."""
         t, s = self.temperature - ZERO_CELSIUS, self.salinity
         eps_t = 87.134 - 1.949e-1 * t - 1.276e-2 * t**2 + 2.491e-4 * t**3
         a = 1.0 + 1.613e-5 * s * t - 3.656e-3 * s + 3.210e-5 * s**2 - 4.232e-7 * s**3
@@ -102,7 +102,7 @@ class KleinSwiftWater(Material):
         return {**super().to_dict(), "temperature": self.temperature, "salinity": self.salinity}
 
 
-# Meissner & Wentz 2004, Table III (pure water) and Table VI (salinity terms)
+# Meissner & Wentz 2004: pure-water coefficients (a) and salinity terms (b) of their fit
 _MW_A = (5.7230, 2.2379e-02, -7.1237e-04, 5.0478, -7.0315e-02, 6.0059e-04, 3.6143,
          2.8841e-02, 1.3652e-01, 1.4825e-03, 2.4166e-04)  # fmt: skip
 _MW_B = (-3.56417e-03, 4.74868e-06, 1.15574e-05, 2.39357e-03, -3.13530e-05, 2.52477e-07,
@@ -141,7 +141,7 @@ class MeissnerWentzWater(Material):
         return (1e9, 400e9)
 
     def parameters(self):
-        """``(εs, ε1, ε∞, ν1 [Hz], ν2 [Hz], σ [S/m])`` (Meissner & Wentz eqs. 13–20)."""
+        """``(εs, ε1, ε∞, ν1 [Hz], ν2 [Hz], σ [S/m])`` (Meissner & Wentz 2004)."""
         t, s = self.temperature - ZERO_CELSIUS, self.salinity
         a, b = _MW_A, _MW_B
         eps_s = (3.70886e4 - 8.2168e1 * t) / (4.21854e2 + t)  # Stogryn et al. 1995
@@ -154,7 +154,7 @@ class MeissnerWentzWater(Material):
         eps_1 *= math.exp(b[6] * s + b[7] * s**2 + b[8] * t * s)
         nu_2 *= 1.0 + s * (b[9] + b[10] * t)
         eps_inf *= 1.0 + s * (b[11] + b[12] * t)
-        # conductivity (Stogryn et al. 1995; MW 2004 eqs. 18–20)
+        # conductivity (Stogryn et al. 1995, as used by Meissner & Wentz 2004)
         sigma35 = 2.903602 + 8.607e-2 * t + 4.738817e-4 * t**2 - 2.991e-6 * t**3 + 4.3047e-9 * t**4
         r15 = s * (37.5109 + 5.45216 * s + 1.4409e-2 * s**2) / (1004.75 + 182.283 * s + s**2)
         alpha0 = (6.9431 + 3.2841 * s - 9.9486e-2 * s**2) / (84.850 + 69.024 * s + s**2)
