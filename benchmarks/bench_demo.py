@@ -47,7 +47,7 @@ def main(argv=None):
             for f in files
             if f in warm_files and not filecmp.cmp(tmp / "cold" / f, tmp / "warm" / f, False)
         ]
-        cache_mb = sum(p.stat().st_size for p in (tmp / "cache").rglob("*.pkl")) / 2**20
+        cache_mb = sum(p.stat().st_size for p in (tmp / "cache").rglob("*.npz")) / 2**20
     data = {
         "benchmark": "demo, cold vs warm result cache",
         "command": command(),

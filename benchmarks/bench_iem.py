@@ -40,7 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from emscatter.io import write_json
-from emscatter.solvers import iem, iem_jit
+from emscatter.solvers.iem import compiled as iem_jit
+from emscatter.solvers.iem import model as iem
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 HERE = Path(__file__).resolve().parent

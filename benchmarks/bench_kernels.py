@@ -176,7 +176,7 @@ def op_counts(func, replacements: dict, args: tuple) -> dict:
 
 def spm_counts(pec: bool) -> dict:
     """Ops of the compiled SPM1 loop for this case (Gaussian spectrum)."""
-    from emscatter.kernels import spm as ks
+    from emscatter.solvers.spm import kernel as ks
 
     x = np.full(64, 0.5)
     outs = [np.empty(64) for _ in range(4)]
@@ -187,7 +187,7 @@ def spm_counts(pec: bool) -> dict:
 def go_counts(pec: bool) -> dict:
     """Ops of the compiled GO loop with Smith shadowing (the mode is a runtime select: the
     few ops of the other modes are counted too)."""
-    from emscatter.kernels import go as kg
+    from emscatter.solvers.kirchhoff import go_kernel as kg
 
     x = np.full(64, 0.5)
     outs = [np.empty(64) for _ in range(4)]
@@ -203,10 +203,10 @@ def main(argv=None) -> dict:
     args = ap.parse_args(argv)
     import os
 
-    from emscatter.kernels.go import go_sigma0
-    from emscatter.kernels.spm import GAUSSIAN, spm1_sigma0
-    from emscatter.solvers import kirchhoff_go as go
-    from emscatter.solvers import spm
+    from emscatter.solvers.kirchhoff import go
+    from emscatter.solvers.kirchhoff.go_kernel import go_sigma0
+    from emscatter.solvers.spm import model as spm
+    from emscatter.solvers.spm.kernel import GAUSSIAN, spm1_sigma0
     from emscatter.spectra import GaussianCorrelation
 
     os.environ["EMSCATTER_KERNELS"] = "numpy"  # the solvers' own path is the reference here

@@ -23,8 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from emscatter.solvers import kirchhoff_go as go
-from emscatter.solvers import kirchhoff_po as po
+from emscatter.solvers.kirchhoff import go, po
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 K0 = 2 * math.pi

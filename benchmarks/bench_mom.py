@@ -24,9 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from emscatter.solvers import mom
-from emscatter.solvers.mom_kernels import solve_fb, solve_lu
-from emscatter.solvers.mom_solve import _assemble, _derivatives
+from emscatter.solvers.mom import model as mom
+from emscatter.solvers.mom.operators import solve_fb, solve_lu
+from emscatter.solvers.mom.solve import _assemble, _derivatives
 from emscatter.spectra import GaussianCorrelation
 from emscatter.surfaces.generate import generate_surface
 

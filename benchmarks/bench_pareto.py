@@ -30,7 +30,7 @@ from common import command, machine, save, stamp, timeit, write  # noqa: E402
 
 
 def po_rtol(repeat):
-    from emscatter.solvers import kirchhoff_po as po
+    from emscatter.solvers.kirchhoff import po
     from emscatter.spectra import GaussianCorrelation
 
     k = 2 * math.pi
@@ -54,7 +54,7 @@ def po_rtol(repeat):
 
 
 def mom_ppw(repeat, quick):
-    from emscatter.solvers import mom
+    from emscatter.solvers.mom import model as mom
     from emscatter.spectra import GaussianCorrelation
 
     k = 2 * math.pi

@@ -50,11 +50,11 @@ def _interleaved(fns: dict, repeat: int) -> dict:
 
 
 def _sigma0_only(rough, k, ti, out):
-    from emscatter.kernels import dispatch
-    from emscatter.solvers import spm as spm_solver
+    from emscatter.solvers.spm import compiled as spm_compiled
+    from emscatter.solvers.spm import model as spm_solver
 
     dphi = np.full(ti.size, math.pi)
-    if not dispatch.spm1_sigma0(rough, EPS, k, ti, ti, dphi, out):
+    if not spm_compiled.spm1_sigma0(rough, EPS, k, ti, ti, dphi, out):
         spm_solver._sigma0_first(rough, EPS, k, ti, ti, dphi, 0.0, out)
 
 
@@ -126,7 +126,7 @@ def main(argv=None) -> dict:
             }
 
         # where the time of one API call goes (who can make it faster)
-        from emscatter.solvers import spm as spm_solver
+        from emscatter.solvers.spm import model as spm_solver
 
         ti = THETA
         sig = np.empty((2, 2, ti.size))

@@ -43,8 +43,8 @@ def fit(sizes, times):
 
 
 def sigma0_series(kernels: str, quick: bool):
-    from emscatter.solvers import kirchhoff_go as go
-    from emscatter.solvers import spm
+    from emscatter.solvers.kirchhoff import go
+    from emscatter.solvers.spm import model as spm
     from emscatter.spectra import GaussianCorrelation
 
     os.environ["EMSCATTER_KERNELS"] = kernels
@@ -72,7 +72,7 @@ def sigma0_series(kernels: str, quick: bool):
 
 
 def mom_series(quick: bool):
-    from emscatter.solvers import mom
+    from emscatter.solvers.mom import model as mom
     from emscatter.spectra import GaussianCorrelation
 
     k = 2 * math.pi

@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from emscatter.solvers import spm
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 N = 1_000_000

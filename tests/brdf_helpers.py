@@ -78,7 +78,7 @@ def separable_shadowing() -> str:
     """The GO ``shadowing`` option for Mitsuba's separable Smith product ``G1(wi) G1(wo)``
     everywhere: ``"separable"`` where the solver knows it (the accuracy branch makes the
     default monostatic at exact backscatter), else ``"smith"`` (the separable product)."""
-    from emscatter.solvers.kirchhoff_common import check_shadowing
+    from emscatter.solvers.kirchhoff.common import check_shadowing
 
     try:
         check_shadowing("separable")

@@ -9,6 +9,52 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 # own EMSCATTER_CACHE_DIR: results and evaluation counts must come from this run's code.
 os.environ.setdefault("EMSCATTER_CACHE", "0")
 
+import shutil  # noqa: E402
+import tempfile  # noqa: E402
+
+import pytest  # noqa: E402
+
+#: Prefixes of what emscatter, its demo and its tests create in the temp dir.
+TEMP_PREFIXES = ("emscatter-", "radio-xml-")
+
+# Each test process (the pytest-xdist controller and every worker) gets a private temp dir,
+# inherited by the subprocesses it starts (TMPDIR): what the session finds there at the end was
+# left by this session's code, not by another worker or another program sharing /tmp.
+_SYSTEM_TMP = tempfile.gettempdir()
+_SESSION_TMP = tempfile.mkdtemp(prefix="pytest-session-tmp-", dir=_SYSTEM_TMP)
+os.environ["TMPDIR"] = _SESSION_TMP
+tempfile.tempdir = _SESSION_TMP
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(_SESSION_TMP, ignore_errors=True)
+
+
+def _temp_entries() -> set[str]:
+    try:
+        names = os.listdir(tempfile.gettempdir())
+    except OSError:
+        return set()
+    return {n for n in names if n.startswith(TEMP_PREFIXES)}
+
+
+@pytest.fixture(scope="session", autouse=True)
+def nothing_left_in_the_temp_dir():
+    """Fails the session if entries with emscatter's prefixes (:data:`TEMP_PREFIXES`) were
+    added to the temp dir (``tempfile.gettempdir()``, private to this process — see above)
+    between its start and its end. Only those names are compared, so pytest's own folders and
+    other libraries' files do not count."""
+    before = _temp_entries()
+    yield
+    added = sorted(_temp_entries() - before)
+    if added:
+        pytest.fail(
+            f"left in the temp dir by this test session: {added} (remove temporary files and "
+            "folders once used, e.g. with tempfile.TemporaryDirectory)",
+            pytrace=False,
+        )
+
+
 # Hypothesis profiles (issue 23), chosen once for every test module:
 # * "dev" (the default on a laptop): fresh random examples on every run, and the failures it
 #   finds kept in the local example database (.hypothesis/ at the repository root) and

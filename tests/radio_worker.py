@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 import tempfile
 import traceback
@@ -103,20 +104,23 @@ def check_xml_plugin():
     import emscatter.radio.material as m
     from emscatter.radio import scenes
 
-    d = Path(tempfile.mkdtemp(prefix="radio-xml-"))
-    scenes.write_ply(d / "floor.ply", scenes.quad([-5, -5, 0], [10, 0, 0], [0, 10, 0]))
-    (d / "scene.xml").write_text(
-        '<scene version="2.1.0">\n'
-        f'<bsdf type="{m.PLUGIN_NAME}" id="rough-floor">'
-        '<string name="medium" value="concrete"/>'
-        '<float name="rms_height" value="0.0004"/>'
-        '<float name="correlation_length" value="0.004"/>'
-        '<float name="thickness" value="0.2"/></bsdf>\n'
-        '<shape type="ply" id="floor"><string name="filename" value="floor.ply"/>'
-        '<ref id="rough-floor" name="bsdf"/></shape>\n</scene>\n'
-    )
-    scene = rt.load_scene(str(d / "scene.xml"), merge_shapes=False)
-    scene.frequency = 28e9
+    # The files live only until Sionna has read them (load_scene returns): nothing is left in
+    # the temp dir, also when loading fails.
+    with tempfile.TemporaryDirectory(prefix="radio-xml-") as tmp:
+        d = Path(tmp)
+        scenes.write_ply(d / "floor.ply", scenes.quad([-5, -5, 0], [10, 0, 0], [0, 10, 0]))
+        (d / "scene.xml").write_text(
+            '<scene version="2.1.0">\n'
+            f'<bsdf type="{m.PLUGIN_NAME}" id="rough-floor">'
+            '<string name="medium" value="concrete"/>'
+            '<float name="rms_height" value="0.0004"/>'
+            '<float name="correlation_length" value="0.004"/>'
+            '<float name="thickness" value="0.2"/></bsdf>\n'
+            '<shape type="ply" id="floor"><string name="filename" value="floor.ply"/>'
+            '<ref id="rough-floor" name="bsdf"/></shape>\n</scene>\n'
+        )
+        # a user's XML file through emscatter's loader: its own materials kept
+        scene = scenes.load(d / "scene.xml", 28e9)
     mat = scene.get("rough-floor")
     _add_devices(scene, (0, 0, 2.0), [(2.0, 0.5, 1.5)])
     paths = rt.PathSolver()(scene, max_depth=2, samples_per_src=50_000, diffuse_reflection=True)
@@ -324,6 +328,124 @@ def check_slab_convention():
         theirs = np.stack([np.asarray(dr.real(g)) + 1j * np.asarray(dr.imag(g)) for g in got])
         worst = max(worst, float(np.max(np.abs(to_sionna(ours) - theirs))))
     return {"max_abs_diff": worst}
+
+
+def _error(fn):
+    """``"Type: message"`` of what ``fn()`` raises, or ``None``."""
+    try:
+        fn()
+    except Exception as exc:  # the test asserts type and message
+        return f"{type(exc).__name__}: {exc}"
+    return None
+
+
+def check_inputs():
+    """Numbers of Sionna's own type, a user's XML scene file, bad scene arguments, and no
+    temporary files left when loading fails."""
+    import mitsuba as mi
+    import sionna.rt as rt
+
+    from emscatter.radio import scenes
+    from emscatter.radio.material import EmscatterRadioMaterial
+
+    out = {}
+    sionna_d = rt.RadioMaterial("sionna-own", relative_permittivity=2.0, thickness=0.05).thickness
+    out["sionna_thickness_type"] = type(sionna_d).__name__
+    for key, d in (("mi_float", mi.Float(0.1)), ("sionna_own", sionna_d),
+                   ("np_float32", np.float32(0.1)), ("np_int64", np.int64(1))):  # fmt: skip
+        out[key] = EmscatterRadioMaterial(f"t-{key}", medium="concrete", thickness=d).thickness
+    m = EmscatterRadioMaterial("c", eps_real=mi.Float(4.0), conductivity=mi.Float(0.5))
+    out["conductive"] = [m.medium.eps_real, m.medium.conductivity_s_per_m]
+    out["two_lanes"] = _error(
+        lambda: EmscatterRadioMaterial("x", medium="concrete", thickness=mi.Float([0.1, 0.2]))
+    )
+    out["medium_negative"] = _error(lambda: EmscatterRadioMaterial("x", medium=-3))
+    out["eps_real_negative"] = _error(
+        lambda: EmscatterRadioMaterial("x", eps_real=-3, conductivity=0.0)
+    )
+
+    made = []
+
+    def make(obj, medium, thickness):
+        made.append([obj, medium, thickness])
+        return EmscatterRadioMaterial(f"em-{obj}", medium=medium, thickness=thickness)
+
+    def leftovers():
+        return sorted(n for n in os.listdir(tempfile.gettempdir()) if n.startswith("emscatter-"))
+
+    with tempfile.TemporaryDirectory(prefix="radio-xml-") as tmp:
+        d = Path(tmp)
+        scenes.write_ply(d / "floor.ply", scenes.quad([-5, -5, 0], [10, 0, 0], [0, 10, 0]))
+        scenes.write_ply(d / "wall.ply", scenes.quad([5, -5, 0], [0, 10, 0], [0, 0, 3]))
+        (d / "user.xml").write_text(
+            '<scene version="2.1.0">\n'
+            '<bsdf type="itu-radio-material" id="itu-concrete"><string name="type" '
+            'value="concrete"/><float name="thickness" value="0.2"/></bsdf>\n'
+            '<bsdf type="radio-material" id="plain"><float name="relative_permittivity" '
+            'value="3.0"/></bsdf>\n'
+            '<shape type="ply" id="floor"><string name="filename" value="floor.ply"/>'
+            '<ref id="itu-concrete" name="bsdf"/></shape>\n'
+            '<shape type="ply" id="wall"><string name="filename" value="wall.ply"/>'
+            '<ref id="plain" name="bsdf"/></shape>\n</scene>\n'
+        )
+        xml = d / "user.xml"
+        # the plain material has no medium to hand to make_material: a clear error
+        out["xml_no_medium"] = _error(lambda: scenes.load(xml, 28e9, make))
+        made.clear()
+        sc = scenes.load(str(xml), 28e9, make, media={"wall": ("glass", 0.006)})
+        out["xml_made"] = sorted(made)
+        out["xml_materials"] = sorted(
+            type(obj.radio_material).__name__ for obj in sc.objects.values()
+        )
+        out["xml_frequency"] = float(sc.frequency[0])
+        kept = scenes.load(xml, 28e9)  # without make_material: the file's own materials
+        out["xml_kept"] = sorted(type(o.radio_material).__name__ for o in kept.objects.values())
+    out["xml_missing"] = _error(lambda: scenes.load(d / "gone.xml", 28e9, make))
+    out["bad_name"] = _error(lambda: scenes.load("garage", 28e9, make))
+
+    # a generated scene's folder is gone once loaded, and also when loading fails
+    before = leftovers()
+    scenes.load(scenes.plate(4.0), 28e9, make)
+
+    def broken(obj, medium, thickness):
+        raise RuntimeError("a material callback that fails")
+
+    out["broken"] = _error(lambda: scenes.load(scenes.plate(4.0), 28e9, broken))
+    out["left"] = sorted(set(leftovers()) - set(before))
+    return out
+
+
+def check_path_buffer():
+    """The rough room at 140 GHz (20 k rays, depth 2, ≈ 46 k candidates): Sionna's buffer at
+    one path per ray is full (warned), the default size is not, and two runs agree exactly."""
+    from emscatter.radio import indoor
+    from emscatter.radio.tables import TableOptions
+
+    opts = TableOptions(n_cos=65, n_cos_spm=9, n_theta=16, n_alpha=13, n_s=32)
+    setup = indoor.SETUPS["room"]
+    kw = {"samples": 20_000, "max_depth": 2, "cell_size": None, "table_options": opts}
+    out = {}
+    limit = indoor.MAX_PATHS_PER_RAY
+    indoor.MAX_PATHS_PER_RAY = 1  # the old sizing: one candidate per ray, never grown
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            small = indoor.run_scene(setup, "rough", 140e9, paths_per_ray=1, **kw)
+    finally:
+        indoor.MAX_PATHS_PER_RAY = limit
+    out["small_buffer"] = small["path_buffer"]
+    out["small_warnings"] = [
+        f"{w.category.__name__}: {w.message}" for w in caught if "buffer" in str(w.message)
+    ]
+    grown = indoor.run_scene(setup, "rough", 140e9, paths_per_ray=2, **kw)
+    out["grown_buffer"] = grown["path_buffer"]
+    runs = [indoor.run_scene(setup, "rough", 140e9, **kw) for _ in range(2)]
+    out["buffer"] = runs[0]["path_buffer"]
+    out["gain_db"] = [(10 * np.log10(r["path_gain"])).tolist() for r in runs]
+    out["spread"] = [r["delay_spread"].tolist() for r in runs]
+    out["grown_gain_db"] = (10 * np.log10(grown["path_gain"])).tolist()
+    out["small_gain_db"] = (10 * np.log10(small["path_gain"])).tolist()
+    return out
 
 
 CHECKS = {name[6:]: fn for name, fn in globals().items() if name.startswith("check_")}

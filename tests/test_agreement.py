@@ -13,7 +13,8 @@ import math
 import numpy as np
 import pytest
 
-from emscatter.solvers import kirchhoff_po, spm
+from emscatter.solvers.kirchhoff import po as kirchhoff_po
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 K = 2 * math.pi

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import emscatter as em
-from emscatter import dispatch
-from emscatter.solvers import kirchhoff_go as go
+from emscatter import method_resolution as dispatch
+from emscatter.solvers.kirchhoff import go
 from emscatter.solvers.select import ValidityError
 
 

@@ -12,7 +12,7 @@ import pytest
 from brdf_helpers import SEPARABLE, go_fr, random_directions
 from emscatter.brdf import analytic as A
 from emscatter.brdf import build_table, frames
-from emscatter.brdf.distributions import (
+from emscatter.brdf.analytic.distributions import (
     GGX,
     AshikhminShirleyDistribution,
     Beckmann,

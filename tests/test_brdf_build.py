@@ -13,7 +13,7 @@ from emscatter import api
 from emscatter.brdf import build_table, frames
 from emscatter.brdf.build import default_phi, default_phi_d, default_theta
 from emscatter.brdf.energy import reciprocal_energy_scale
-from emscatter.solvers import spm
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import GaussianCorrelation
 
 EPS = 4.0 + 0.3j
@@ -177,7 +177,7 @@ def test_build_errors_name_the_parameter():
 
 def test_adaptive_resolution_meets_its_target():
     from emscatter.brdf.analytic import cook_torrance
-    from emscatter.brdf.distributions import Beckmann
+    from emscatter.brdf.analytic.distributions import Beckmann
 
     rough = GaussianCorrelation(0.2e-6, 1.0e-6)  # m = 0.4
     t = build_table(

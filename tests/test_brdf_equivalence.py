@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from emscatter.brdf import equivalence as E
+from emscatter.brdf.analytic import equivalence as E
 
 
 def test_slope_from_surface():

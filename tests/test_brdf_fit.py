@@ -11,7 +11,7 @@ import pytest
 from brdf_helpers import SEPARABLE, mitsuba_fr, mitsuba_variant, random_directions
 from emscatter import materials
 from emscatter.brdf import build_table
-from emscatter.brdf.fit import fit_microfacet
+from emscatter.brdf.analytic.fit import fit_microfacet
 from emscatter.spectra import GaussianCorrelation
 
 WL = [0.45e-6, 0.55e-6, 0.65e-6]

@@ -199,7 +199,7 @@ def test_go_table_albedo_below_one_and_coherent_zero(go_table):
 
 def test_asymmetric_grid_is_reciprocal_within_interpolation_error():
     from emscatter.brdf.analytic import cook_torrance, table_from_function
-    from emscatter.brdf.distributions import Beckmann
+    from emscatter.brdf.analytic.distributions import Beckmann
 
     def ct(wi, wo, lam):
         return cook_torrance(wi, wo, Beckmann(0.4), eps=EPS)

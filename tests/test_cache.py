@@ -1,12 +1,16 @@
-"""emscatter.cache: keys, atomic entries, corruption, two processes, size limit, switches."""
+"""emscatter.cache: keys, atomic non-executable entries bound to their key, corruption, planted and
+swapped entries, private folder, settings checked up front, two processes, size limit, switches."""
 
 from __future__ import annotations
 
+import contextlib
+import math
 import os
 import subprocess
 import sys
 import textwrap
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -47,7 +51,7 @@ def test_second_call_is_read_from_disk_and_returns_a_fresh_copy(fresh_cache):
     b["e"][0] = 99.0  # a hit is a new object: changing it does not change the cache
     assert cache.cached("test", key, c)["e"][0] == 0.0
     assert a is value
-    assert len(list(fresh_cache.rglob("*.pkl"))) == 1
+    assert len(list(fresh_cache.rglob("*.npz"))) == 1
 
 
 def test_keys_tell_apart_every_input_bit_and_type():
@@ -78,12 +82,13 @@ def test_a_code_change_starts_a_fresh_cache(monkeypatch):
 def test_a_corrupted_entry_is_recomputed_never_returned(fresh_cache, damage):
     c = Counter(np.arange(1000.0))
     cache.cached("test", "k", c)
-    (path,) = fresh_cache.rglob("*.pkl")
+    (path,) = fresh_cache.rglob("*.npz")
     blob = bytearray(path.read_bytes())
     if damage == "truncate":
         blob = blob[: len(blob) // 2]
     elif damage == "flip":
-        blob[-100] ^= 0x01  # one bit inside the array data
+        at = blob.index(np.arange(1000.0).tobytes()) + 4000
+        blob[at] ^= 0x01  # one bit inside the array data
     elif damage == "garbage":
         blob = bytearray(b"not a cache entry" * 10)
     else:
@@ -91,12 +96,197 @@ def test_a_corrupted_entry_is_recomputed_never_returned(fresh_cache, damage):
     path.write_bytes(bytes(blob))
     before = cache.stats.corrupt
     c.value = np.arange(1000.0) * 2  # what a recomputation gives (proves it recomputed)
-    got = cache.cached("test", "k", c)
+    with pytest.warns(cache.CacheWarning, match="rejected the entry .*recomputing it"):
+        got = cache.cached("test", "k", c)
     assert c.calls == 2 and cache.stats.corrupt == before + 1
     np.testing.assert_array_equal(got, np.arange(1000.0) * 2)
     # the rewritten entry is sound again
     np.testing.assert_array_equal(cache.cached("test", "k", c), got)
     assert c.calls == 2
+
+
+def test_values_keep_their_types_and_bits(fresh_cache):
+    value = (
+        np.array([1 + 2j, np.nan - 0j]),
+        {"n": 3, "big": 2**70, "x": -0.0, "nan": float("nan"), "z": 1e-300 - 2.5j, "ok": True,
+         "none": None, "s": "λ", "raw": b"\x00\xff", "i64": np.int64(-7), "f32": np.float32(0.1),
+         "nested": [np.zeros((2, 0)), ("a", [1.5])], "rec": np.zeros(2, "i4,f8")},
+    )  # fmt: skip
+    c = Counter(value)
+    cache.cached("test", "types", c)
+    got = cache.cached("test", "types", c)
+    assert c.calls == 1 and type(got) is tuple
+    np.testing.assert_array_equal(got[0], value[0])
+    d = got[1]
+    assert d["n"] == 3 and type(d["n"]) is int and d["big"] == 2**70
+    assert math.copysign(1.0, d["x"]) == -1.0 and math.isnan(d["nan"])
+    assert d["z"] == 1e-300 - 2.5j and d["ok"] is True and d["none"] is None
+    assert d["s"] == "λ" and d["raw"] == b"\x00\xff"
+    assert type(d["i64"]) is np.int64 and d["i64"] == -7
+    assert type(d["f32"]) is np.float32 and d["f32"] == np.float32(0.1)
+    assert d["nested"][0].shape == (2, 0) and d["nested"][1] == ("a", [1.5])
+    assert d["rec"].dtype == np.dtype("i4,f8")
+    # the entry is a plain .npz: numpy reads it without pickles
+    (path,) = fresh_cache.rglob("*.npz")
+    with np.load(path, allow_pickle=False) as data:
+        assert {"header", "mac"} <= set(data.files)
+        assert not any(data[k].dtype.hasobject for k in data.files)
+
+
+@pytest.mark.parametrize(
+    "value", [np.array([object()]), object(), {1: "int key"}, np.ma.masked_array([1.0])]
+)
+def test_a_value_the_format_cannot_hold_is_computed_not_stored(fresh_cache, value):
+    before = cache.stats.unusable
+    c = Counter(value)
+    assert cache.cached("test", "odd", c) is value
+    assert cache.cached("test", "odd", c) is value
+    assert c.calls == 2 and cache.stats.unusable == before + 2
+    assert not list(fresh_cache.rglob("*.npz"))
+
+
+def test_an_entry_copied_over_another_keys_path_is_refused(fresh_cache):
+    """The issue's case: σ = 0.03 numbers must not come back for a σ = 0.02 run."""
+    k02 = {"surface": GaussianCorrelation(0.02, 0.5), "eps": 17 + 2j}
+    k03 = {"surface": GaussianCorrelation(0.03, 0.5), "eps": 17 + 2j}
+    cache.cached("emissivity", k03, lambda: np.full(4, 0.03))
+    c = Counter(np.full(4, 0.02))
+    cache.cached("emissivity", k02, c)
+    p02 = next(fresh_cache.rglob(f"{cache.key_of('emissivity', k02)}.npz"))
+    p03 = next(fresh_cache.rglob(f"{cache.key_of('emissivity', k03)}.npz"))
+    p02.write_bytes(p03.read_bytes())  # the swap: a sound entry (valid MAC) at the wrong path
+    before = cache.stats.mismatched
+    with pytest.warns(cache.CacheWarning, match="not of 'emissivity'.*another key's path"):
+        got = cache.cached("emissivity", k02, c)
+    assert c.calls == 2 and cache.stats.mismatched == before + 1
+    np.testing.assert_array_equal(got, np.full(4, 0.02))
+    np.testing.assert_array_equal(cache.cached("emissivity", k02, c), np.full(4, 0.02))
+    assert c.calls == 2  # rewritten under its own key
+
+
+class _Exploit:
+    """Unpickling this runs code: it writes the file ``marker``."""
+
+    def __init__(self, marker):
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        return (exec, (f"with open({self.marker!r}, 'w') as f: f.write('code ran')",))
+
+
+@pytest.mark.parametrize("where", ["legacy pkl path", "npz path", "object array", "data, no MAC"])
+def test_a_planted_entry_with_a_valid_checksum_is_refused_and_not_executed(
+    fresh_cache, tmp_path, where
+):
+    import hashlib
+    import pickle
+
+    marker = tmp_path / "pwned"
+    payload = pickle.dumps(_Exploit(marker))
+    pickle.loads(payload)  # the payload does run code when unpickled ...
+    assert marker.exists()
+    marker.unlink()
+    c = Counter(np.arange(3.0))
+    cache.cached("test", "k", c)  # creates the folder, its secret and the real entry
+    (path,) = fresh_cache.rglob("*.npz")
+    if where == "legacy pkl path":  # the former format: magic + SHA-256(payload) + pickle
+        path.with_suffix(".pkl").write_bytes(
+            b"EMSCACHE1\n" + hashlib.sha256(payload).digest() + payload
+        )
+        path.unlink()
+    elif where == "npz path":
+        path.write_bytes(b"EMSCACHE1\n" + hashlib.sha256(payload).digest() + payload)
+    else:  # a well-formed entry for this very key, with an array member the planter chose
+        key = cache.key_of("test", "k")
+        if where == "object array":
+            arrays = [np.array([_Exploit(marker)], dtype=object)]
+            secret = (fresh_cache / ".secret").read_bytes()  # even with the secret's MAC
+        else:
+            arrays = [np.full(3, 1e300)]  # wrong numbers, checksummed but not with the secret
+            secret = b"\0" * 32
+        header = cache._header("test", key, {"array": 0})
+        # an object array has no bytes to sign: the planter signs the header (with the secret)
+        mac = cache._mac(secret, header, [] if arrays[0].dtype.hasobject else arrays)
+        with open(path, "wb") as fh:
+            np.savez(fh, header=np.array(header.decode()), mac=np.array(mac), a0=arrays[0])
+    why = {"npz path": r"not an \.npz archive \(it starts with b'EMSC'\)",
+           "object array": "Object arrays cannot be loaded when allow_pickle=False",
+           "data, no MAC": "its MAC does not match"}.get(where)  # fmt: skip
+    with pytest.warns(cache.CacheWarning, match=why) if why else _no_warning():
+        got = cache.cached("test", "k", c)
+    assert not marker.exists()  # ... but reading the cache never did
+    assert c.calls == 2
+    np.testing.assert_array_equal(got, np.arange(3.0))
+    if where == "legacy pkl path":
+        assert cache.clear() == 2  # the new entry and the never-read legacy pickle
+
+
+@contextlib.contextmanager
+def _no_warning():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        yield
+
+
+@pytest.mark.parametrize(("mode", "who"), [(0o770, "the group"), (0o707, "others"),
+                                           (0o777, "the group and others")])  # fmt: skip
+def test_a_folder_others_can_write_to_is_refused_before_computing(fresh_cache, mode, who):
+    fresh_cache.mkdir()
+    os.chmod(fresh_cache, mode)
+    c = Counter(1.0)
+    with pytest.raises(
+        cache.CacheSecurityError, match=rf"{who} can write to it \(mode 0{mode:o}\).*chmod 700"
+    ) as err:
+        cache.cached("test", "k", c)
+    assert "EMSCATTER_CACHE_DIR" in str(err.value) and str(fresh_cache) in str(err.value)
+    assert c.calls == 0 and list(fresh_cache.iterdir()) == []
+    os.chmod(fresh_cache, 0o700)  # the fix the message gives
+    assert cache.cached("test", "k", c) == 1.0 and c.calls == 1
+
+
+def test_a_new_folder_and_its_secret_are_private(fresh_cache):
+    cache.cached("test", "k", lambda: 1)
+    assert fresh_cache.stat().st_mode & 0o777 == 0o700
+    secret = fresh_cache / ".secret"
+    assert secret.stat().st_mode & 0o777 == 0o600 and secret.stat().st_size == 32
+    os.chmod(secret, 0o644)
+    with pytest.raises(cache.CacheSecurityError, match="secret .*mode is 0644, not 0600"):
+        cache.cached("test", "k", lambda: 1)
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0, reason="needs chown")
+def test_a_folder_owned_by_someone_else_is_refused(fresh_cache):
+    fresh_cache.mkdir(mode=0o700)
+    os.chown(fresh_cache, 54321, -1)
+    with pytest.raises(cache.CacheSecurityError, match="belongs to uid 54321, not to you"):
+        cache.cached("test", "k", lambda: 1)
+
+
+@pytest.mark.parametrize(
+    ("var", "value", "allowed"),
+    [
+        ("EMSCATTER_CACHE_MAX_MB", "abc", "positive finite number of MiB"),
+        ("EMSCATTER_CACHE_MAX_MB", "-3", "positive finite number of MiB"),
+        ("EMSCATTER_CACHE_MAX_MB", "0", "positive finite number of MiB"),
+        ("EMSCATTER_CACHE_MAX_MB", "nan", "positive finite number of MiB"),
+        ("EMSCATTER_CACHE_MAX_MB", "inf", "positive finite number of MiB"),
+        ("EMSCATTER_CACHE", "maybe", "one of"),
+        ("EMSCATTER_CACHE_DIR", "relative/cache", "absolute folder path"),
+    ],
+)
+@pytest.mark.parametrize("state", ["cold", "warm"])
+def test_bad_settings_fail_up_front_warm_or_cold(
+    fresh_cache, monkeypatch, var, value, allowed, state
+):
+    c = Counter(np.ones(3))
+    if state == "warm":
+        cache.cached("test", "k", c)
+    monkeypatch.setenv(var, value)
+    with pytest.raises(ValueError, match=rf"{var} must be .*{allowed}.*got '{value}'"):
+        cache.cached("test", "k", c)
+    assert c.calls == (1 if state == "warm" else 0)  # nothing computed with bad settings
+    with pytest.raises(ValueError, match=var):
+        cache.settings()
 
 
 def test_switches_env_api_and_context(fresh_cache, monkeypatch):

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import emscatter as em
-from emscatter import dispatch, materials
+from emscatter import materials
+from emscatter import method_resolution as dispatch
 from emscatter.emissivity import energy_balance
 from emscatter.solvers.select import ValidityError, ValidityWarning
 
@@ -106,7 +107,7 @@ def test_auto_never_trades_for_a_method_further_outside_its_validity():
 
 
 def test_band_equals_separate_calls_and_runs_the_solver_once_per_frequency(monkeypatch):
-    from emscatter.solvers import spm
+    from emscatter.solvers.spm import model as spm
 
     rough = em.GaussianCorrelation(0.004, 0.05)
     f = np.array([1e9, 2e9, 1e9, 3e9])  # 1 GHz twice: 3 distinct frequencies
@@ -170,7 +171,7 @@ def test_a_duck_typed_material_and_a_material_name_work():
 
 
 def test_coherent_part_is_computed_only_when_read(monkeypatch):
-    from emscatter.solvers import spm
+    from emscatter.solvers.spm import model as spm
 
     seen = []
     real = spm._coherent

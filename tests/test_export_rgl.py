@@ -24,7 +24,7 @@ from emscatter.brdf.colour import spectrum_to_rgb_weights
 from emscatter.brdf.export_rgl import RglFormatError, read_rgl, write_rgl
 from emscatter.brdf.rgl_warp import estimate_alpha, marginal2d_sample
 from emscatter.brdf.source import BrdfFunction, as_brdf_source
-from emscatter.solvers import kirchhoff_go as go
+from emscatter.solvers.kirchhoff import go
 from emscatter.spectra import GaussianCorrelation
 from render_helpers import (
     ALPHA,

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import emscatter as em
-from emscatter.solvers import go_monostatic
-from emscatter.solvers import kirchhoff_go as go
+from emscatter.solvers.kirchhoff import go
+from emscatter.solvers.kirchhoff import go_backscatter as go_monostatic
 
 
 @pytest.mark.parametrize("shadowing", [False, True, "separable", "correlated"])

@@ -12,8 +12,10 @@ import pytest
 
 from emscatter import api
 from emscatter.fresnel import fresnel_cos
-from emscatter.solvers import iem, iem_crosspol, iem_jit
-from emscatter.solvers.spm2_crosspol import sigma0_22
+from emscatter.solvers.iem import compiled as iem_jit
+from emscatter.solvers.iem import crosspol as iem_crosspol
+from emscatter.solvers.iem import model as iem
+from emscatter.solvers.spm.crosspol import sigma0_22
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 K = 2 * math.pi

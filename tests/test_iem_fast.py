@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from emscatter.solvers import iem, iem_jit
+from emscatter.solvers.iem import compiled as iem_jit
+from emscatter.solvers.iem import model as iem
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 pytestmark = pytest.mark.skipif(
@@ -20,11 +21,11 @@ THETA = np.radians(np.linspace(0.0, 89.0, 37))
 EPS = (15 + 2j, 3.0, 80 + 20j, "pec")
 
 
-def _both(spec, dim, ks, kl, eps, *, transition=True, rtol=1e-12):
+def _both(spec, dim, ks, kl, eps, *, transition=True, rtol=1e-12, lower_q2=True):
     si, cs = np.sin(THETA), np.cos(THETA)
     K = 2.0 * kl * si
     pref = math.log(math.pi * kl * kl) if dim == 2 else math.log(0.5 * math.pi * kl)
-    kw = dict(transition=transition, rtol=rtol, max_terms=10**6)
+    kw = dict(transition=transition, rtol=rtol, max_terms=10**6, lower_q2=lower_q2)
     fast = iem_jit.backscatter(si, cs, eps, ks, K, pref, spec, dim, report=True, **kw)
     slow = iem_jit.backscatter(si, cs, eps, ks, K, pref, spec, dim, fast=False, **kw)
     return fast, slow
@@ -50,15 +51,26 @@ def test_fast_walk_equals_log_space_walk(spec, ks):
                     assert _rel(fast[1], slow[1]) < 1e-10, (dim, kl, eps, transition)
                     if not (ks == 3.0 and eps == 80 + 20j):
                         assert np.all(fast[4]), (dim, kl, eps, transition)
+    # the lower-medium terms with the upper-medium phase (complementary="aiem-upper"):
+    # bases 2kz and 0 instead of kz ± Re q₂
+    for eps in EPS:
+        fast, slow = _both(spec, 2, ks, 3.0, eps, lower_q2=False)
+        assert fast[3] == slow[3] == 0
+        assert _rel(fast[0], slow[0]) < 1e-10 and _rel(fast[1], slow[1]) < 1e-10, eps
 
 
 @pytest.mark.parametrize("spec", [iem_jit.GAUSSIAN, iem_jit.EXPONENTIAL], ids=["gauss", "exp"])
 def test_large_roughness_takes_the_log_space_path(spec):
     """Outside the double range of the linear walk (kσ ≫ 3) every angle of a dielectric falls
-    back, and the answer is the log-space one."""
+    back, and the answer is the log-space one: with the lower-medium phase ``Re q₂`` (bases
+    kz ± Re q₂) at kσ = 12 and 30; with the upper-medium phase (``lower_q2=False``, bases
+    2kz, 0) the walk stays in range longer — wherever it is taken it equals the log-space
+    walk."""
     for ks in (12.0, 30.0):
         fast, slow = _both(spec, 2, ks, 10.0, 15 + 2j)
         assert not np.any(fast[4])
+        assert _rel(fast[0], slow[0]) < 1e-10 and _rel(fast[1], slow[1]) < 1e-10
+        fast, slow = _both(spec, 2, ks, 10.0, 15 + 2j, lower_q2=False)
         assert _rel(fast[0], slow[0]) < 1e-10 and _rel(fast[1], slow[1]) < 1e-10
     fast, slow = _both(spec, 2, 12.0, 3.0, 3.0)  # mixed: some angles each way
     assert 0 < np.sum(fast[4]) < fast[4].size

@@ -5,6 +5,7 @@ physical optics, the compiled kernels against the numpy path, the series against
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -12,10 +13,12 @@ import pytest
 from scipy import special
 
 from emscatter.fresnel import fresnel_cos
-from emscatter.solvers import iem, iem_jit, iem_series
-from emscatter.solvers import iem_kernels as kern
-from emscatter.solvers import kirchhoff_common as kc
-from emscatter.solvers.kirchhoff_po import log_nfold
+from emscatter.solvers.iem import compiled as iem_jit
+from emscatter.solvers.iem import model as iem
+from emscatter.solvers.iem import series as iem_series
+from emscatter.solvers.iem import terms as kern
+from emscatter.solvers.kirchhoff import common as kc
+from emscatter.solvers.kirchhoff.po import log_nfold
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 K = 2 * math.pi
@@ -89,11 +92,20 @@ def test_reduced_coefficients_match_the_appendix():
 def test_backscatter_closed_forms_match_the_general_terms():
     th = np.radians(np.linspace(1.0, 85.0, 12))
     si, cs = np.sin(th), np.cos(th)
-    for eps in (15 + 2j, 3.0 + 0j, -20 + 1j):
+    for eps, phase in itertools.product((15 + 2j, 3.0 + 0j, -20 + 1j), ("aiem", "aiem-upper")):
         rh, rv = fresnel_cos(eps, cs)
-        (u_h, u_v), (gp_h, gp_v, a_p, gm_h, gm_v, a_m) = kern.backscatter_terms(si, cs, eps, rh, rv)
-        t = {n: F for n, F, _, _ in kern.complementary_terms(si, cs, si, cs, 0 * si, -1 + 0 * si,
-                                                               eps, rh, rv)}  # fmt: skip
+        (u_h, u_v), (gp_h, gp_v, a_p, gm_h, gm_v, a_m) = kern.backscatter_terms(
+            si, cs, eps, rh, rv, phase=phase
+        )
+        terms = kern.complementary_terms(si, cs, si, cs, 0 * si, -1 + 0 * si, eps, rh, rv,
+                                         phase=phase)  # fmt: skip
+        t = {n: F for n, F, _, _ in terms}
+        qph = {n: q for n, _, q, _ in terms}
+        # bases: kz ± (the lower-medium height phase): 2kz and 0 with the upper-medium phase
+        a = kern.branch_root(eps - si * si).real if phase == "aiem" else cs
+        np.testing.assert_allclose(a_p, cs + a, rtol=1e-12)
+        np.testing.assert_allclose(a_m, cs - a, atol=1e-12)
+        np.testing.assert_allclose(qph["Gdn_s"], -a, rtol=1e-12)
         np.testing.assert_allclose(u_h, 0.25 * (t["up_i"][0] + t["dn_s"][0]), rtol=1e-10)
         np.testing.assert_allclose(u_v, 0.25 * (t["up_i"][3] + t["dn_s"][3]), rtol=1e-10)
         np.testing.assert_allclose(gp_h, 0.25 * (t["Gdn_i"][0] + t["Gup_s"][0]), rtol=1e-10)

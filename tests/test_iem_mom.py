@@ -18,7 +18,8 @@ import warnings
 import numpy as np
 import pytest
 
-from emscatter.solvers import iem, mom
+from emscatter.solvers.iem import model as iem
+from emscatter.solvers.mom import model as mom
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 from emscatter.validity_maps import _points_per_wavelength
 

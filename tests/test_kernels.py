@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from emscatter import kernels
-from emscatter.kernels import dispatch
+from emscatter.solvers.kirchhoff import compiled as kirchhoff_compiled
+from emscatter.solvers.spm import compiled as spm_compiled
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 
 numba = pytest.importorskip("numba")
@@ -101,8 +102,8 @@ def test_vector_math_matches_numpy_and_scipy():
 @pytest.mark.parametrize("eps", ["pec", 17 + 2j, -20 + 3j, 2.0, 1.5 + 0.01j])
 @pytest.mark.parametrize("kind", [GaussianCorrelation, ExponentialCorrelation])
 def test_spm1_kernel_matches_numpy_reference(kind, eps, numpy_path):
-    from emscatter.kernels.spm import EXPONENTIAL, GAUSSIAN, spm1_sigma0
-    from emscatter.solvers.spm import _sigma0_first
+    from emscatter.solvers.spm.kernel import EXPONENTIAL, GAUSSIAN, spm1_sigma0
+    from emscatter.solvers.spm.model import _sigma0_first
 
     k = 2 * math.pi / 0.03
     rough = kind(0.1 / k, 2.0 / k)
@@ -117,7 +118,7 @@ def test_spm1_kernel_matches_numpy_reference(kind, eps, numpy_path):
 
 
 def test_spm_bistatic_same_with_and_without_kernels(monkeypatch):
-    from emscatter.solvers import spm
+    from emscatter.solvers.spm import model as spm
 
     rough = GaussianCorrelation(0.002, 0.02)
     ti, ts, dphi = _geometries(3000, seed=3)
@@ -134,8 +135,8 @@ def test_spm_bistatic_same_with_and_without_kernels(monkeypatch):
 )
 @pytest.mark.parametrize("eps", ["pec", 17 + 2j, -30 + 5j])
 def test_go_kernel_matches_numpy_reference(eps, shadowing, numpy_path):
-    from emscatter.kernels.go import go_sigma0
-    from emscatter.solvers import kirchhoff_go as go
+    from emscatter.solvers.kirchhoff import go
+    from emscatter.solvers.kirchhoff.go_kernel import go_sigma0
 
     k = 2 * math.pi
     rough = GaussianCorrelation(0.1, 1.0)
@@ -156,7 +157,7 @@ def test_go_kernel_matches_numpy_reference(eps, shadowing, numpy_path):
 def test_go_grid_kernel_matches_numpy_reference(eps, shadowing, monkeypatch):
     """A grid of directions (each direction's trigonometry and Λ computed once): the solver
     with the kernel equals its numpy path, σ⁰ and the coherent part."""
-    from emscatter.solvers import kirchhoff_go as go
+    from emscatter.solvers.kirchhoff import go
 
     rough = GaussianCorrelation(0.1, 1.0)
     hi = math.pi / 2
@@ -179,9 +180,9 @@ def test_go_grid_kernel_matches_numpy_reference(eps, shadowing, monkeypatch):
 def test_go_kernels_direction_correlated_shadowing_match_its_numpy_formula(eps, numpy_path):
     """accuracy's continuous default (1/(1 + max Λ + λ(ψ) min Λ), Ginneken et al. 1998) in the
     flat and the grid kernel, against that formula on the numpy reference's pieces."""
-    from emscatter.kernels.go import go_sigma0, go_sigma0_grid
-    from emscatter.solvers import kirchhoff_common as kc
-    from emscatter.solvers import kirchhoff_go as go
+    from emscatter.solvers.kirchhoff import common as kc
+    from emscatter.solvers.kirchhoff import go
+    from emscatter.solvers.kirchhoff.go_kernel import go_sigma0, go_sigma0_grid
 
     s2 = 0.02
     ti = np.linspace(0.0, 1.5, 9)[None, None, :]
@@ -220,18 +221,18 @@ def test_dispatch_honours_the_switch_and_covers_only_its_cases(monkeypatch):
     g = GaussianCorrelation(0.01, 0.1)
     monkeypatch.setenv("EMSCATTER_KERNELS", "numpy")
     assert kernels.backend() == "numpy"
-    assert not dispatch.spm1_sigma0(g, "pec", 60.0, x, x, x, out)
+    assert not spm_compiled.spm1_sigma0(g, "pec", 60.0, x, x, x, out)
     assert not out.any()
     monkeypatch.setenv("EMSCATTER_KERNELS", "numba")
     assert kernels.backend() == "numba"
-    assert dispatch.spm1_sigma0(g, "pec", 60.0, x, x, x, out) and out.any()
+    assert spm_compiled.spm1_sigma0(g, "pec", 60.0, x, x, x, out) and out.any()
     # not covered: anisotropic, power law, profiles, arrays of eps, huge azimuths
-    assert not dispatch.covered_spm1(GaussianCorrelation(0.01, 0.1, length_y=0.2), "pec")
-    assert not dispatch.covered_spm1(PowerLawCorrelation(0.01, 0.1, hurst=0.7), "pec")
-    assert not dispatch.covered_spm1(GaussianCorrelation(0.01, 0.1, dimension=1), "pec")
-    assert not dispatch.covered_spm1(g, np.array([3.0, 4.0]))
-    assert not dispatch.spm1_sigma0(g, "pec", 60.0, x, x, np.full(4, 2e6), out)
-    assert not dispatch.covered_go(2, 0.02, 0.03, "pec", "smith")
+    assert not spm_compiled.covered_spm1(GaussianCorrelation(0.01, 0.1, length_y=0.2), "pec")
+    assert not spm_compiled.covered_spm1(PowerLawCorrelation(0.01, 0.1, hurst=0.7), "pec")
+    assert not spm_compiled.covered_spm1(GaussianCorrelation(0.01, 0.1, dimension=1), "pec")
+    assert not spm_compiled.covered_spm1(g, np.array([3.0, 4.0]))
+    assert not spm_compiled.spm1_sigma0(g, "pec", 60.0, x, x, np.full(4, 2e6), out)
+    assert not kirchhoff_compiled.covered_go(2, 0.02, 0.03, "pec", "smith")
     monkeypatch.setenv("EMSCATTER_KERNELS", "fortran")
     with pytest.raises(ValueError, match="EMSCATTER_KERNELS.*fortran"):
         kernels.backend()
@@ -261,7 +262,8 @@ def test_auto_keeps_a_small_one_off_call_on_numpy():
 
 def test_kernels_package_is_light_and_compiles_nothing_at_import():
     code = (
-        "import sys, emscatter, emscatter.kernels, emscatter.kernels.dispatch; "
+        "import sys, emscatter, emscatter.kernels, emscatter.kernels.gate; "
+        "import emscatter.solvers.spm.compiled, emscatter.solvers.kirchhoff.compiled; "
         "print([m for m in ('numba', 'llvmlite') if m in sys.modules])"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -270,10 +272,10 @@ def test_kernels_package_is_light_and_compiles_nothing_at_import():
 
 def test_numba_cache_goes_to_the_configured_directory(tmp_path):
     code = (
-        "import numpy as np; from emscatter.kernels import dispatch; "
+        "import numpy as np; from emscatter.solvers.spm import compiled as spm_compiled; "
         "from emscatter.spectra import GaussianCorrelation as G; x = np.full(8, 0.3); "
         "o = np.empty((2, 2, 8)); "
-        "assert dispatch.spm1_sigma0(G(0.01, 0.1), 4.0, 60.0, x, x, x, o)"
+        "assert spm_compiled.spm1_sigma0(G(0.01, 0.1), 4.0, 60.0, x, x, x, o)"
     )
     env = {**__import__("os").environ, "EMSCATTER_NUMBA_CACHE_DIR": str(tmp_path)}
     env.pop("NUMBA_CACHE_DIR", None)
@@ -296,7 +298,7 @@ def test_numba_cache_goes_to_the_configured_directory(tmp_path):
     ids=["gauss-ks0.5", "gauss-ks3", "gauss-ks30", "exp-ks0.5", "gauss-1d", "exp-1d"],
 )
 def test_po_series_kernel_matches_numpy_reference(rough, monkeypatch):
-    from emscatter.solvers import kirchhoff_po as po
+    from emscatter.solvers.kirchhoff import po
 
     ti, ts, dphi = _geometries(4000, seed=4)
     if rough.dimension == 1:

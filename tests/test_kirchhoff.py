@@ -11,9 +11,8 @@ from scipy.integrate import trapezoid
 
 from emscatter.conventions import ConventionError
 from emscatter.fresnel import fresnel, fresnel_cos
-from emscatter.solvers import kirchhoff_common as kc
-from emscatter.solvers import kirchhoff_go as go
-from emscatter.solvers import kirchhoff_po as po
+from emscatter.solvers.kirchhoff import common as kc
+from emscatter.solvers.kirchhoff import go, po
 from emscatter.spectra import (
     ExponentialCorrelation,
     FractionalBrownian,

@@ -24,7 +24,7 @@ import math
 import numpy as np
 import pytest
 
-from emscatter.solvers import kirchhoff_go as go
+from emscatter.solvers.kirchhoff import go
 from emscatter.spectra import GaussianCorrelation
 
 mi = pytest.importorskip("mitsuba")

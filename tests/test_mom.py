@@ -13,8 +13,10 @@ import pytest
 from scipy import special
 
 from emscatter.fresnel import fresnel
-from emscatter.solvers import kirchhoff_po, mom, spm
-from emscatter.solvers.mom_kernels import hankel01, self_single, solve_fb, solve_lu
+from emscatter.solvers.kirchhoff import po as kirchhoff_po
+from emscatter.solvers.mom import model as mom
+from emscatter.solvers.mom.operators import hankel01, self_single, solve_fb, solve_lu
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import GaussianCorrelation
 from emscatter.surfaces.generate import generate_surface
 
@@ -311,7 +313,7 @@ def test_agrees_with_physical_optics_for_large_k_ell():
 def test_correlation_length_below_grid_spacing_fails_before_running():
     import math
 
-    from emscatter.solvers import mom
+    from emscatter.solvers.mom import model as mom
     from emscatter.spectra import GaussianCorrelation
 
     k = 2 * math.pi

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from emscatter import montecarlo
-from emscatter.solvers import mom
+from emscatter.solvers.mom import model as mom
 from emscatter.spectra import GaussianCorrelation
 
 

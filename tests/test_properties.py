@@ -9,9 +9,11 @@ every method (``auto``, ``spm``, ``go``, ``po``) through the public API. Laws:
   wherever the result is reported valid; wherever not, a flag (``energy_ok``/``angle_valid``)
   and a warning naming the angle in degrees;
 * ``auto`` is continuous across a method switch: on both sides of a validity limit the σ⁰
-  lobe (angles within 20 dB of its peak, the validity maps' metric) differs by no more than
-  the two methods' documented errors against the method of moments added
-  (validation/validity_maps/validity_pec.csv, largest error where each is valid);
+  lobe (angles within 20 dB of its peak, the validity maps' metric) and the backscatter σ⁰
+  (all four polarizations) differ by at most :data:`MAX_JUMP_DB` (0.5 dB; issue 20), also at
+  random roughness (measured-map edges included);
+* ``auto`` in backscatter on a rough dielectric: ``hv = vh > 0``; ``σhh ≤ σvv`` over the
+  Oh et al. (1992) box (xfail while the IEM's co-pol ratio is inverted);
 * every call answers within :data:`CALL_TIME_BOUND` seconds.
 
 Profiles (registered in ``tests/conftest.py``): ``dev`` (the default) runs the example counts
@@ -37,7 +39,7 @@ from hypothesis import assume, example, given, note, settings
 from hypothesis import strategies as st
 
 import emscatter as em
-from emscatter import dispatch
+from emscatter import method_resolution as dispatch
 from emscatter.emissivity import ENERGY_ATOL
 from emscatter.solvers.select import ValidityWarning
 
@@ -220,6 +222,17 @@ def _lobe_rms_db(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean((10 * np.log10(a[keep] / b[keep])) ** 2)))
 
 
+#: Largest σ⁰ change [dB] allowed across a switch (issue 20): auto blends the methods over a
+#: transition band (emscatter.solvers.select.blend_weights), so the answer is continuous.
+MAX_JUMP_DB = 0.5
+
+
+def _sides(param, limit, other):
+    for side in (1 - 1e-6, 1 + 1e-6):
+        ks, kl = (limit * side, other) if param == "k_sigma" else (other / 30, limit * side)
+        yield em.GaussianCorrelation(ks / K, kl / K)
+
+
 @settings(max_examples=examples("continuity"))
 @given(
     switch=st.sampled_from(SWITCHES),
@@ -227,13 +240,12 @@ def _lobe_rms_db(a: np.ndarray, b: np.ndarray) -> float:
     eps=st.sampled_from(["pec", 3.0, 17 + 2j]),
     theta_i=st.floats(math.radians(5), math.radians(50)),
 )
+# issue 20/23: auto jumped 2.86 dB (VV) / 0.93 dB (HH) from iem to go here
+@example(switch=("k_sigma", math.sqrt(10) / 2), other=7.5, eps=3.0, theta_i=0.8125)
 def test_auto_is_continuous_across_method_switches(switch, other, eps, theta_i):
-    param, limit = switch
     ts = np.clip(theta_i + np.radians(np.linspace(-20, 20, 17)), 0, math.radians(89))
     out = []
-    for side in (1 - 1e-6, 1 + 1e-6):
-        ks, kl = (limit * side, other) if param == "k_sigma" else (other / 30, limit * side)
-        rough = em.GaussianCorrelation(ks / K, kl / K)
+    for rough in _sides(*switch, other):
         res, _ = timed(
             em.bistatic,
             rough,
@@ -246,13 +258,108 @@ def test_auto_is_continuous_across_method_switches(switch, other, eps, theta_i):
         )
         out.append(res)
     a, b = out
-    assume(a.method != b.method)
-    assume(a.info["validity"]["roughness_valid"] and b.info["validity"]["roughness_valid"])
-    allowed = DOCUMENTED[a.method] + DOCUMENTED[b.method]
     for p in ("hh", "vv"):
         jump = _lobe_rms_db(a.pol(p), b.pol(p))
-        note(f"{a.method} -> {b.method} {p}: {jump:.3f} dB (allowed {allowed:.3f})")
-        assert jump <= allowed
+        note(f"{a.method} -> {b.method} {p}: {jump:.3f} dB")
+        assert jump <= MAX_JUMP_DB
+
+
+@pytest.mark.xfail(
+    strict=False,
+    reason="open: at kσ = 0.3, kℓ = 17.8, ε = 3, θi = 1 rad (Gaussian) backscatter hh still "
+    "steps 0.69 dB: the blend's ray search misses a region there (select.blend_weights)",
+)
+@settings(max_examples=examples("continuity"))
+@given(
+    switch=st.sampled_from(SWITCHES),
+    other=log_uniform(1.0, 300.0),
+    eps=st.sampled_from(["pec", 3.0, 17 + 2j]),
+    theta_i=st.floats(math.radians(5), math.radians(60)),
+)
+@example(switch=("k_sigma", math.sqrt(10) / 2), other=7.5, eps=3.0, theta_i=0.8125)
+@example(switch=("k_sigma", 0.3), other=5.0, eps=17 + 2j, theta_i=0.7)  # spm ↔ po/iem: hv
+def test_auto_backscatter_is_continuous_with_crosspol(switch, other, eps, theta_i):
+    """Backscatter, all polarizations (hv: SPM2 / IEM multiple scattering by branch)."""
+    out = []
+    for rough in _sides(*switch, other):
+        res, _ = timed(
+            em.backscatter, rough, eps, wavelength=1.0, theta_i=theta_i, out_of_range="ignore"
+        )
+        out.append(res.sigma0)
+    a, b = out
+    assume(np.all(a > 1e-30) and np.all(b > 1e-30))  # (Gaussian at large kℓ: underflow)
+    jump = np.abs(10 * np.log10(a / b))
+    note(f"jumps [dB] {jump.ravel()}")
+    assert np.all(jump <= MAX_JUMP_DB)
+
+
+@settings(max_examples=examples("continuity"))
+@given(
+    kind=st.sampled_from(["gaussian", "exponential"]),
+    ks=log_uniform(0.02, 30.0),
+    kl=log_uniform(0.5, 300.0),
+    eps=st.sampled_from(["pec", 3.0, 17 + 2j]),
+    axis=st.sampled_from([0, 1]),
+)
+def test_auto_backscatter_is_continuous_anywhere(kind, ks, kl, eps, axis):
+    """No switch is listed here: any roughness, a relative step of 1e-6 in kσ or kℓ (the
+    measured-map cell edges and tolerance switches included)."""
+    out = []
+    for side in (1 - 1e-6, 1 + 1e-6):
+        s, l_ = (ks * side, kl) if axis == 0 else (ks, kl * side)
+        rough = em.roughness(kind, sigma=s / K, length=l_ / K)
+        res, _ = timed(
+            em.backscatter, rough, eps, wavelength=1.0, theta_i=0.6, out_of_range="ignore"
+        )
+        out.append(res.sigma0)
+    a, b = out
+    assume(np.all(a > 1e-30) and np.all(b > 1e-30))
+    assert np.all(np.abs(10 * np.log10(a / b)) <= MAX_JUMP_DB)
+
+
+@settings(max_examples=examples("continuity"))
+@given(
+    kind=st.sampled_from(["gaussian", "exponential"]),
+    ks=log_uniform(0.01, 5.0),
+    kl=log_uniform(0.5, 20.0),
+    eps=st.tuples(st.floats(1.5, 80.0), st.floats(0.0, 10.0)).map(lambda t: complex(*t)),
+    theta=st.lists(st.floats(math.radians(5), math.radians(70)), min_size=1, max_size=3),
+)
+@example(kind="exponential", ks=0.13, kl=5.0, eps=15 + 2j, theta=[math.radians(40)])  # spm
+@example(kind="exponential", ks=0.5, kl=10.0, eps=15 + 2j, theta=[math.radians(40)])  # po
+def test_auto_backscatter_crosspol_of_rough_dielectrics(kind, ks, kl, eps, theta):
+    """Issue 20: auto gave hv = 0 in backscatter on the spm and po branches. A rough
+    dielectric depolarizes (second order): hv = vh > 0 on every branch."""
+    rough = em.roughness(kind, sigma=ks / K, length=kl / K)
+    res, _ = timed(
+        em.backscatter, rough, eps, wavelength=1.0, theta_i=np.array(theta), out_of_range="ignore"
+    )
+    hv, vh = res.sigma0[0, 1], res.sigma0[1, 0]
+    note(f"{res.method}: hv {10 * np.log10(hv)} dB")
+    np.testing.assert_allclose(hv, vh, rtol=1e-12)
+    assert np.all(hv > 0), (res.method, hv)
+
+
+@pytest.mark.xfail(
+    strict=False,
+    reason="the default IEM's co-pol ratio is inverted (HH > VV) at kσ ≳ 0.5 (issue 20; "
+    "fixed in solvers/iem*.py by another change): auto inherits it where it picks the IEM",
+)
+@settings(max_examples=examples("continuity"))
+@given(
+    kind=st.sampled_from(["gaussian", "exponential"]),
+    ks=st.floats(0.1, 6.0),
+    kl=st.floats(2.6, 19.7),
+    eps=st.tuples(st.floats(4.0, 25.0), st.floats(0.5, 5.0)).map(lambda t: complex(*t)),
+    theta=st.floats(math.radians(10), math.radians(70)),
+)
+def test_auto_backscatter_hh_below_vv_in_the_oh_box(kind, ks, kl, eps, theta):
+    """Oh, Sarabandi & Ulaby (IEEE TGRS 30, 370, 1992): over bare soils with kσ 0.1–6,
+    kℓ 2.6–19.7, moisture 0.09–0.31 (ε ≈ 4–25), θ 10–70°, p = σhh/σvv ≤ 1."""
+    rough = em.roughness(kind, sigma=ks / K, length=kl / K)
+    res, _ = timed(em.backscatter, rough, eps, wavelength=1.0, theta_i=theta, out_of_range="ignore")
+    note(res.method)
+    assert res.pol("hh") <= res.pol("vv") * (1 + 1e-9)
 
 
 def test_the_documented_errors_are_read():

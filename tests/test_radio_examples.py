@@ -124,3 +124,86 @@ def test_cli_radio_bad_arguments(argv, message, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "argv, named",
+    [
+        # the default frequencies (3.5, 28, 140 GHz) take Sionna's ITU metal box past 100 GHz
+        (["--scene", "box"], ["'metal' in scene 'box' at 140 GHz", "1–100 GHz"]),
+        (["--scene", "all", "--frequencies-ghz", "28,140"], ["'metal' in scene 'box' at 140 GHz"]),
+        (
+            ["--frequencies-ghz", "500"],
+            [
+                "'concrete' in scene 'room' at 500 GHz",
+                "1–100 GHz, 110–330 GHz",
+                "'plasterboard'",
+                "'wood'",
+                "100–400 GHz",
+            ],
+        ),  # fmt: skip
+    ],
+)
+def test_cli_radio_out_of_band_is_an_error_before_any_work(argv, named, tmp_path, capsys):
+    import time
+
+    from emscatter.cli import main
+
+    out = tmp_path / "radio"
+    t0 = time.perf_counter()
+    assert main(["radio", *argv, "--out", str(out)]) == 2
+    assert time.perf_counter() - t0 < 10  # checked before Sionna starts or a table is built
+    err = capsys.readouterr().err
+    assert err.startswith("emscatter radio: error: materials outside their ITU-R P.2040 bands")
+    assert all(n in err for n in named), err
+    assert "--extrapolate" in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_cli_radio_extrapolate_does_not_apply_to_the_plate(tmp_path, capsys):
+    from emscatter.cli import main
+
+    assert main(["radio", "--plate", "--extrapolate", "--out", str(tmp_path / "p")]) == 2
+    assert "--extrapolate applies to the indoor scenes, not to --plate" in capsys.readouterr().err
+    assert not (tmp_path / "p").exists()
+
+
+@needs_sionna
+def test_cli_radio_quick_twice_gives_identical_csvs(tmp_path):
+    # 140 GHz, rough room: ≈ 46 k candidate paths for 20 k rays (the buffer used to overflow
+    # and drop paths in thread order: −111.0 vs −137.1 dB between two runs at 500 GHz)
+    runs = [tmp_path / "a", tmp_path / "b"]
+    for out in runs:
+        _run(["-m", "emscatter.cli", "radio", "--quick", "--frequencies-ghz", "140",
+              "--out", str(out)])  # fmt: skip
+    for name in ("indoor_receivers.csv", "indoor_summary.csv"):
+        assert (runs[0] / name).read_bytes() == (runs[1] / name).read_bytes(), name
+    import json
+
+    run = json.loads((runs[0] / "indoor_run.json").read_text())
+    assert run["settings"]["extrapolate"] is False and run["extrapolated"] == []
+    rough = [b for b in run["path_buffers"] if b["kind"] == "rough"]
+    assert rough and all(not b["full"] and b["stored"] > 20_000 for b in rough)
+    rows = _rows(runs[0] / "indoor_receivers.csv")
+    assert {r["extrapolated_media"] for r in rows} == {"none"}
+
+
+@needs_sionna
+def test_cli_radio_extrapolate_is_recorded_in_the_outputs(tmp_path):
+    proc = _run(["-m", "emscatter.cli", "radio", "--scene", "box", "--quick", "--frequencies-ghz",
+                 "28,140", "--extrapolate", "--out", str(tmp_path)])  # fmt: skip
+    assert "extrapolating 'metal' (box) to 140 GHz" in proc.stdout
+    rows = _rows(tmp_path / "indoor_receivers.csv")
+    by_f = {r["frequency_ghz"]: r["extrapolated_media"] for r in rows}
+    assert by_f == {"28": "none", "140": "metal"}
+    summ = {
+        r["frequency_ghz"]: r["extrapolated_media"] for r in _rows(tmp_path / "indoor_summary.csv")
+    }
+    assert summ == {"28": "none", "140": "metal"}
+    import json
+
+    run = json.loads((tmp_path / "indoor_run.json").read_text())
+    assert run["settings"]["extrapolate"] is True
+    assert run["extrapolated"] == [
+        {"scene": "box", "medium": "metal", "frequency_ghz": 140.0, "bands_ghz": [[1.0, 100.0]]}
+    ]

@@ -100,3 +100,53 @@ def test_tables_only_for_used_materials_and_solved_frequencies():
     assert step3 == step2
     assert r["used"]["unused-mat"] is False and r["unused_tables"] == []
     assert all(p > 0 for p in r["points"])
+
+
+def test_inputs_user_xml_and_nothing_left_in_the_temp_dir():
+    r = _ok(_run("inputs"), "inputs")
+    # Sionna's own radio_material.thickness is an mi.Float: accepted as a number (float32)
+    assert r["sionna_thickness_type"] == "Float"
+    assert r["mi_float"] == pytest.approx(0.1, rel=1e-7)
+    assert r["sionna_own"] == pytest.approx(0.05, rel=1e-7)
+    assert r["np_float32"] == pytest.approx(0.1, rel=1e-7) and r["np_int64"] == 1.0
+    assert r["conductive"] == [4.0, 0.5]
+    # not one number: refused, naming the parameter, the value and what is allowed
+    assert r["two_lanes"].startswith("ValueError: thickness must be a positive number")
+    assert "[0.1, 0.2]" in r["two_lanes"] and "None for a half-space" in r["two_lanes"]
+    # medium=-3 is refused as eps_real=-3 is
+    assert r["medium_negative"].startswith("ValueError: medium: a permittivity must have Re ε > 0")
+    assert "got -3" in r["medium_negative"] and "got -3" in r["eps_real_negative"]
+    # a user's XML file: ITU media (and thickness) from the file, others from media=
+    assert "objects ['wall']" in r["xml_no_medium"] and "media={name:" in r["xml_no_medium"]
+    assert r["xml_made"] == [["floor", "concrete", pytest.approx(0.2, rel=1e-7)],
+                             ["wall", "glass", 0.006]]  # fmt: skip
+    assert r["xml_materials"] == ["EmscatterRadioMaterial"] * 2
+    assert r["xml_frequency"] == 28e9
+    assert r["xml_kept"] == ["ITURadioMaterial", "RadioMaterial"]
+    assert r["xml_missing"].startswith("FileNotFoundError: scene: no XML scene file at")
+    assert "gone.xml" in r["xml_missing"]
+    assert "or the path of a Mitsuba/Sionna XML scene file (*.xml); got 'garage'" in r["bad_name"]
+    # the generated scene's folder is removed once loaded, and when loading fails
+    assert r["broken"] == "RuntimeError: a material callback that fails"
+    assert r["left"] == []
+
+
+def test_path_buffer_sized_for_the_candidates_and_runs_reproducible():
+    r = _ok(_run("path_buffer"), "path_buffer")
+    # the old sizing (one candidate per ray) is full at 140 GHz in the rough room: warned,
+    # and it loses power (rx2: −93.43 dB against −92.74 dB with every candidate kept)
+    assert r["small_buffer"] == {"cap": 20_000, "stored": 20_000, "full": True}
+    assert len(r["small_warnings"]) == 1
+    assert r["small_warnings"][0].startswith("PathBufferWarning: room at 140 GHz (rough)")
+    assert "buffer was full" in r["small_warnings"][0]
+    # ≈ 46 k candidates for 20 k rays: the default 10 per ray keeps them all
+    assert r["buffer"]["full"] is False and 40_000 < r["buffer"]["stored"] < 60_000
+    # a buffer that was full is grown and the run repeated: the same result as the default
+    assert r["grown_buffer"]["full"] is False
+    assert r["grown_buffer"]["stored"] == r["buffer"]["stored"]
+    assert r["grown_gain_db"] == r["gain_db"][0]
+    # same seed, same numbers, bit for bit (the issue measured −92.745 dB at rx2 with a
+    # 10× cap; the default candidate generator gave −94.4 / −99.3 / −98.8 dB with a full one)
+    assert r["gain_db"][0] == r["gain_db"][1] and r["spread"][0] == r["spread"][1]
+    assert r["gain_db"][0][2] == pytest.approx(-92.74, abs=0.01)
+    assert all(s < g for s, g in zip(r["small_gain_db"], r["gain_db"][0], strict=True))

@@ -11,6 +11,13 @@ import pytest
 
 import emscatter as em
 from emscatter import materials
+from emscatter.coherent import (
+    ament_factor,
+    boithias_factor,
+    coherent_amplitude,
+    kirchhoff_transmission_factor,
+    rayleigh_parameter,
+)
 from emscatter.conventions import ConventionError, wavenumber
 from emscatter.fresnel import fresnel
 from emscatter.radio import (
@@ -34,15 +41,9 @@ from emscatter.radio.tables import (
     lobe_coordinates,
     lobe_directions,
 )
-from emscatter.solvers import kirchhoff_common, spm
-from emscatter.solvers.coherent import (
-    ament_factor,
-    boithias_factor,
-    coherent_amplitude,
-    kirchhoff_transmission_factor,
-    rayleigh_parameter,
-)
+from emscatter.solvers.kirchhoff import common as kirchhoff_common
 from emscatter.solvers.select import ValidityError
+from emscatter.solvers.spm import model as spm
 
 SMALL = TableOptions(n_cos=33, n_cos_spm=9, n_theta=12, n_alpha=13, n_s=32)
 EPS = 5.24 + 0.6j
@@ -294,3 +295,50 @@ def test_ply_round_trip_and_room(tmp_path):
     assert xml.count('type="radio-material"') == len(room.meshes)
     with pytest.raises(ValueError, match="face indices"):
         scenes.Mesh(np.zeros((3, 3)), [[0, 1, 3]])
+
+
+# ------------------------------------------------------------------ numbers of any numeric type
+def test_numpy_numbers_are_accepted_wherever_a_number_is():
+    assert MaterialSpec(medium="concrete", thickness=np.float32(0.2)).thickness == pytest.approx(
+        0.2, rel=1e-7
+    )
+    assert MaterialSpec(medium="concrete", thickness=np.int64(1)).thickness == 1.0
+    m = resolve_medium(eps_real=np.float32(4.0), conductivity=np.int64(0))
+    assert m.eps(frequency=1e9) == 4.0
+    assert resolve_medium(np.float32(4.0)).eps(frequency=1e9) == 4.0
+    # np.int64 grid sizes give the same options (the same cache key) as ints
+    assert TableOptions(n_cos=np.int64(33), n_theta=np.int32(12)) == TableOptions(
+        n_cos=33, n_theta=12
+    )
+    spec = MaterialSpec(surface=em.GaussianCorrelation(sigma=0.2e-3, length=5e-3),
+                        medium="concrete", options=SMALL)  # fmt: skip
+    # 28 GHz is exact in float32: a np.float32 frequency gives the very same tables
+    a, b = spec.tables(28e9), spec.tables(np.float32(28e9))
+    assert b.frequency == 28e9
+    np.testing.assert_array_equal(a.lobe, b.lobe)
+
+
+@pytest.mark.parametrize("value", [-0.1, 0, 0.0, math.nan, math.inf, "0.1", True, 1j])
+def test_a_bad_thickness_is_refused_before_any_table(value):
+    # MaterialSpec(thickness=-0.1).tables(28e9) used to build tables for a negative slab
+    with pytest.raises(ValueError) as info:
+        MaterialSpec(medium="concrete", thickness=value).tables(28e9)
+    msg = str(info.value)
+    assert msg.startswith("thickness must be a positive number of metres")
+    assert repr(value) in msg and "None for a half-space" in msg
+
+
+@pytest.mark.parametrize("value", [-3, -3.0, 0, -3 + 1j, np.float32(-3)])
+def test_a_non_positive_permittivity_is_refused_like_eps_real(value):
+    with pytest.raises(ValueError) as info:
+        resolve_medium(value)
+    msg = str(info.value)
+    assert "Re ε > 0" in msg and repr(value) in msg and "medium='metal'" in msg
+    # the same rule as eps_real
+    with pytest.raises(ValueError, match="eps_real must be > 0"):
+        resolve_medium(eps_real=-3, conductivity=0.0)
+
+
+def test_a_boolean_is_not_a_medium():
+    with pytest.raises(TypeError, match="medium must be an ITU-R P.2040 name.*got True"):
+        resolve_medium(True)

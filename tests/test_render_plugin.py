@@ -226,7 +226,7 @@ def test_compact_lobe_wastes_no_samples():
     no samples, yet the sampled albedo is the table's (the ring around the support keeps every
     direction with f > 0 reachable)."""
     from emscatter.brdf.analytic import cook_torrance, table_from_function
-    from emscatter.brdf.distributions import SeedDistribution
+    from emscatter.brdf.analytic.distributions import SeedDistribution
 
     use_variant("llvm_ad_rgb")
     dist = SeedDistribution("uniform", a=0.1)

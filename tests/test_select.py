@@ -47,7 +47,7 @@ def test_rank_methods_angles_prefer_the_method_valid_there():
 
 
 def test_unsupported_method_is_ranked_last(monkeypatch):
-    from emscatter.solvers import spm
+    from emscatter.solvers.spm import model as spm
 
     def broken(*a, **kw):
         raise ValueError("cannot take this roughness")

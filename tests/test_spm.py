@@ -14,7 +14,7 @@ import pytest
 from emscatter.conventions import ConventionError
 from emscatter.fresnel import fresnel
 from emscatter.scattering import Scattering
-from emscatter.solvers import spm
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 
 K = 2 * np.pi  # wavelength 1 m: k·x = x in wavelengths·2π

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from emscatter import solvers
-from emscatter.solvers import kirchhoff_po as po
+from emscatter.solvers.kirchhoff import po
 from emscatter.spectra import ExponentialCorrelation
 from emscatter.surfaces.generate import generate_surface
 from emscatter.validation.tapered import TaperedExponential, tapered_from

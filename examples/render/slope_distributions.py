@@ -16,7 +16,7 @@ import mitsuba as mi
 import numpy as np
 
 from emscatter.brdf.analytic import cook_torrance, table_from_function
-from emscatter.brdf.distributions import Beckmann, SeedDistribution
+from emscatter.brdf.analytic.distributions import Beckmann, SeedDistribution
 from emscatter.materials import metal
 from emscatter.render import mitsuba as em_mi
 from emscatter.render import scenes

@@ -19,6 +19,7 @@ See ``README.md`` for conventions and the command-line tool (``emscatter --help`
 from __future__ import annotations
 
 from . import constants, fresnel
+from ._version import __version__
 from .api import backscatter, bistatic, emissivity
 from .conventions import ConventionError, PlausibilityWarning
 from .fresnel import PEC
@@ -31,8 +32,6 @@ from .spectra import (
     PowerLawCorrelation,
     roughness,
 )
-
-__version__ = "0.1.0"
 
 __all__ = [
     "bistatic",

@@ -24,6 +24,15 @@ import math
 
 import numpy as np
 
+from emscatter.method_resolution import (
+    angle_policy,
+    angles_deg,
+    blend_weights,
+    call_report,
+    rank_methods,
+    validity_report,
+)
+
 from . import cache, solvers
 from .conventions import (
     broadcast_angles,
@@ -33,18 +42,11 @@ from .conventions import (
     check_finite,
     wavenumber,
 )
-from .dispatch import (
-    angle_policy,
-    angles_deg,
-    call_report,
-    rank_methods,
-    validity_report,
-)
 from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
 from .frequency import Group, as_eps_or_material, eps_at, frequency_groups
 from .fresnel import is_pec
 from .scattering import Scattering
-from .solvers import select
+from .solvers import auto_crosspol, select
 from .spectra import Roughness, check_roughness
 
 __all__ = ["bistatic", "backscatter", "emissivity", "resolve_method"]
@@ -128,15 +130,26 @@ def _solver_entry(module):
 
 # ----------------------------------------------------------------------------- bistatic
 def _bistatic_one(
-    rough, eps, k, angles, method, out_of_range, options, monostatic=False, depth=0
+    rough, eps, k, angles, method, out_of_range, options, monostatic=False, depth=0, picked=False
 ) -> Scattering:
     """One frequency: resolve the method, run the solver, apply the validity policies
     (``monostatic``: the angles are the backscatter ones, told to a solver entry that asks;
     ``depth``: frames between the public function's caller and the usual call path, so that
-    warnings point at the user's line — 1 from a band's :func:`_bistatic_groups`)."""
+    warnings point at the user's line — 1 from a band's :func:`_bistatic_groups`; ``picked``:
+    ``method`` is one of ``auto``'s blend). ``method="auto"``: the blend of
+    :func:`emscatter.method_resolution.blend_weights` (one method away from every switch, else
+    :func:`_bistatic_blend`), with the backscatter cross-pol of
+    :mod:`emscatter.solvers.auto_crosspol` added to a closed-form branch."""
     ti, ts, ps, pi_ = angles
-    name = rank_methods(rough, k, eps=eps)[0][0] if method == "auto" else method
-    opts = _map_options(name, options, method == "auto")  # before any warning
+    if method == "auto":
+        blend = blend_weights(rough, k, eps=eps)
+        if len(blend["weights"]) > 1:
+            return _bistatic_blend(
+                rough, eps, k, angles, blend, out_of_range, options, monostatic, depth
+            )
+        method, picked = next(iter(blend["weights"])), True
+    name = method
+    opts = _map_options(name, options, picked)  # before any warning
     name, module, report, make_nan = resolve_method(
         rough, k, name, out_of_range, eps, theta_i=ti, stacklevel=6 + depth
     )  # warnings point at the caller of bistatic/backscatter
@@ -151,6 +164,13 @@ def _bistatic_one(
     info = {**result.info, "validity": report}
     info.pop("coherent", None)
     sigma0 = result.sigma0
+    if picked:  # auto's closed-form branches: the backscatter cross-pol they lack
+        hv, how = auto_crosspol.supplement(name, rough, eps, k, ti, ts, ps, pi_)
+        if hv is not None:
+            sigma0 = np.array(sigma0, dtype=float)
+            sigma0[0, 1] += hv
+            sigma0[1, 0] += hv
+            info["crosspol_added"] = how
     if lazy:
 
         def coherent():  # the specular geometry: depends on θi, φi, ε only
@@ -190,6 +210,52 @@ def _bistatic_one(
         theta_s=result.theta_s,
         phi_s=result.phi_s,
         phi_i=result.phi_i,
+        k=k,
+        dimension=rough.dimension,
+        info=info,
+    )
+
+
+def _bistatic_blend(rough, eps, k, angles, blend, out_of_range, options, monostatic, depth):
+    """``method="auto"`` near a switch: ``Σ wₘ σ⁰ₘ`` (and the same combination of the
+    coherent parts) over the blend's methods, each run and checked as when ``auto`` picks it
+    alone; ``method`` is ``"iem+go"`` (decreasing weight), ``info["blend"]`` the weights and
+    switches, ``info["validity"]`` valid when every blended method is (reasons name it)."""
+    weights = blend["weights"]
+    parts = []
+    for name in weights:  # (a loop: warnings point at the caller, one frame deeper)
+        res = _bistatic_one(
+            rough, eps, k, angles, name, out_of_range, options, monostatic, depth + 1, True
+        )
+        parts.append((name, res))
+    sigma0 = sum(weights[n] * res.sigma0 for n, res in parts)
+
+    def coherent():
+        return sum(weights[n] * np.asarray(res.coherent) for n, res in parts)
+
+    reports = [(n, res.info["validity"]) for n, res in parts]
+    report = {
+        "valid": all(r.get("valid", False) for _, r in reports),
+        "roughness_valid": all(r.get("roughness_valid", False) for _, r in reports),
+        "reasons": [f"{n}: {why}" for n, r in reports for why in r.get("reasons", [])],
+        "by_method": dict(reports),
+    }
+    first = parts[0][1]
+    info = {"validity": report, "blend": blend, "by_method": {n: r.info for n, r in parts}}
+    blanks = [r.info["out_of_range"] for _, r in parts if "out_of_range" in r.info]
+    if blanks:
+        info["out_of_range"] = np.logical_or.reduce(
+            [np.broadcast_to(b, sigma0.shape[2:]) for b in blanks]
+        )
+    eager = all(res.coherent_computed for _, res in parts)
+    return Scattering(
+        sigma0=sigma0,
+        coherent=coherent() if eager else coherent,
+        method=_merge_methods(weights),
+        theta_i=first.theta_i,
+        theta_s=first.theta_s,
+        phi_s=first.phi_s,
+        phi_i=first.phi_i,
         k=k,
         dimension=rough.dimension,
         info=info,

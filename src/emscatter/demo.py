@@ -38,7 +38,7 @@ DEMO_SCHEMA = "emscatter.demo/1"
 def _meta(figure: str, **inputs) -> dict:
     """What a demo CSV needs to be reproduced: the inputs (every demo figure uses the seed's
     ε = 17 + 2i at λ = 1 m), the version, the command."""
-    from . import __version__
+    from ._version import __version__
 
     common = {
         "eps": {"re": FIG53_EPS.real, "im": FIG53_EPS.imag},
@@ -123,7 +123,7 @@ def surface_report(
         )
         save_figure(fig, png)
     if json_path:
-        from . import __version__
+        from ._version import __version__
 
         inputs = dict(
             kind=kind,

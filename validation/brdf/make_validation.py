@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from emscatter.brdf import build_table
-from emscatter.brdf import equivalence as E
+from emscatter.brdf.analytic import equivalence as E
 from emscatter.io import save_figure, write_csv
 from emscatter.spectra import GaussianCorrelation
 
@@ -172,7 +172,7 @@ def equivalences():
         "# The seed's roughness equivalences (chapter 3, §3.2) reproduced",
         "",
         "Made by `PYTHONPATH=src .venv/bin/python validation/brdf/make_validation.py`",
-        "(functions in `emscatter.brdf.equivalence`).",
+        "(functions in `emscatter.brdf.analytic.equivalence`).",
         "",
         f"**Fit criterion** (the seed's §3.2.2 made precise): {E.FIT_CRITERION}.",
         "Distributions compared: Beckmann/Ward `exp(−tan²γ/m²)/cos⁴γ` (Table 3.1 × 4m²),",

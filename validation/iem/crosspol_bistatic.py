@@ -26,8 +26,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from emscatter.io import atomic_path, save_figure  # noqa: E402
-from emscatter.solvers import iem  # noqa: E402
-from emscatter.solvers.spm2_crosspol import sigma0_22  # noqa: E402
+from emscatter.solvers.iem import model as iem
+from emscatter.solvers.spm.crosspol import sigma0_22  # noqa: E402
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation  # noqa: E402
 
 HERE = Path(__file__).resolve().parent

@@ -25,7 +25,7 @@ import numpy as np
 
 from emscatter import api
 from emscatter.io import atomic_path
-from emscatter.solvers import iem
+from emscatter.solvers.iem import model as iem
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 K = 2 * math.pi

@@ -37,7 +37,9 @@ import numpy as np  # noqa: E402
 from emscatter import api  # noqa: E402
 from emscatter.fresnel import reflectivity  # noqa: E402
 from emscatter.io import save_figure  # noqa: E402
-from emscatter.solvers import iem, kirchhoff_po, spm  # noqa: E402
+from emscatter.solvers.iem import model as iem
+from emscatter.solvers.kirchhoff import po as kirchhoff_po
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation  # noqa: E402
 
 HERE = Path(__file__).resolve().parent

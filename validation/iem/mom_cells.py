@@ -21,7 +21,10 @@ from pathlib import Path
 import numpy as np
 
 from emscatter.io import atomic_path
-from emscatter.solvers import iem, kirchhoff_po, mom, spm
+from emscatter.solvers.iem import model as iem
+from emscatter.solvers.kirchhoff import po as kirchhoff_po
+from emscatter.solvers.mom import model as mom
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 from emscatter.validity_maps import _bin_means, _points_per_wavelength, _sigma0_error
 

@@ -1,6 +1,6 @@
 """SPM2 coherent reflectivity against its spectral cutoff k_max, and against the MoM.
 
-Part 1 (table): r_coh (second-order SPM, :func:`emscatter.solvers.spm.coherent_reflectivity`)
+Part 1 (table): r_coh (second-order SPM, :func:`emscatter.solvers.spm.model.coherent_reflectivity`)
 for exponential and power-law (H = 0.7) spectra, 2-D surfaces and 1-D profiles, over a lossy
 soil (ε = 17 + 2i), a lossless dielectric (ε = 3) and a perfect conductor, for
 k_max/k ∈ {2, 5, 10, 100, 1e3, 1e4} and the previous hidden default (support Kℓ = 2e4).
@@ -29,7 +29,8 @@ from pathlib import Path
 import numpy as np
 
 import emscatter as em
-from emscatter.solvers import mom, spm
+from emscatter.solvers.mom import model as mom
+from emscatter.solvers.spm import model as spm
 from emscatter.spectra import ExponentialCorrelation, PowerLawCorrelation
 
 HERE = Path(__file__).resolve().parent

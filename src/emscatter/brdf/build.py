@@ -9,9 +9,15 @@ reflectivity is computed once per wavelength on the θi nodes only; the solvers'
 part is skipped inside the big call where they offer ``coherent=False`` (SPM's second-order
 quadrature).
 
+Warnings: the solvers run with ``out_of_range="ignore"`` under ``"warn"``, and the table
+warns once per cause when it is built — one :class:`~emscatter.solvers.select.ValidityWarning`
+per solver and failed check, at the caller's line, naming the wavelengths and the θ nodes and
+advising only what :func:`build_table` accepts (``out_of_range="raise"`` / ``"ignore"``). Any
+other warning raised inside is passed on once per distinct message, also at the caller's line.
+
 Geometric optics: its σ⁰ is the stationary-phase limit of the *whole* Kirchhoff intensity,
 so adding the Kirchhoff coherent term would count the specular energy twice
-(:mod:`emscatter.solvers.kirchhoff_go`); GO tables have ``coherent = 0`` and say so in
+(:mod:`emscatter.solvers.kirchhoff.go`); GO tables have ``coherent = 0`` and say so in
 ``metadata["coherent"]``.
 """
 
@@ -20,13 +26,17 @@ from __future__ import annotations
 import inspect
 import math
 import numbers
+import re
+import warnings
 
 import numpy as np
 
 from .. import api, materials
+from ..constants import SPEED_OF_LIGHT
 from ..conventions import check_positive
 from ..fresnel import check_eps
 from ..scattering import Scattering
+from ..solvers import select
 from ..spectra import check_roughness
 from . import frames, grid
 from .energy import apply_energy_remedy
@@ -200,7 +210,72 @@ def build_table(
     if energy not in ("rescale", "off"):
         raise ValueError(f"energy must be 'rescale' or 'off', got {energy!r}")
     if out_of_range == "nan":
-        raise ValueError("out_of_range='nan' cannot build a table (NaN values); use 'warn'")
+        raise ValueError(
+            "out_of_range='nan' cannot build a table (a table holds no NaN); use 'warn' "
+            "(the default), 'raise' or 'ignore'"
+        )
+    if out_of_range not in OUT_OF_RANGE:
+        raise ValueError(f"out_of_range must be one of {OUT_OF_RANGE}, got {out_of_range!r}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table, reports = _build(
+            rough,
+            material,
+            wl,
+            method,
+            resolution,
+            theta,
+            phi,
+            anisotropic,
+            polarized,
+            energy,
+            out_of_range,
+            tol,
+            tol_floor,
+            options,
+        )
+    if out_of_range == "warn":
+        for message in validity_messages(reports):
+            warnings.warn(message, select.ValidityWarning, stacklevel=2)
+    _pass_on(caught, stacklevel=3)
+    return table
+
+
+#: The ``out_of_range`` policies a table takes (``"nan"`` would put NaN in the table).
+OUT_OF_RANGE = ("warn", "raise", "ignore")
+
+
+def _pass_on(caught, *, stacklevel: int) -> None:
+    """Warn again, once per (category, message), every warning recorded while building."""
+    seen = set()
+    for w in caught:
+        key = (w.category, str(w.message))
+        if key in seen:
+            continue
+        seen.add(key)
+        warnings.warn(w.message, w.category, stacklevel=stacklevel)
+
+
+def _build(
+    rough,
+    material,
+    wl,
+    method,
+    resolution,
+    theta,
+    phi,
+    anisotropic,
+    polarized,
+    energy,
+    out_of_range,
+    tol,
+    tol_floor,
+    options,
+):
+    """The table and ``[(wavelength [m], solver, validity report), ...]`` of its fill calls;
+    the solvers run with ``out_of_range="ignore"`` when the policy is ``"warn"`` (the table
+    warns once per cause instead, :func:`validity_messages`)."""
+    policy = "ignore" if out_of_range == "warn" else out_of_range
     if not (isinstance(resolution, tuple | list) and len(resolution) == 2):
         raise ValueError(f"resolution must be (n_theta, n_phi), got {resolution!r}")
     aniso = (not rough.is_isotropic) if anisotropic is None else bool(anisotropic)
@@ -227,37 +302,45 @@ def build_table(
         "adaptive": False,
     }
     if tol is not None:
-        theta_ax, phi_ax, resolution_report = _adaptive(
-            rough, setups, aniso, tol, tol_floor, out_of_range, options
-        )
+        with _at_wavelength(None):
+            theta_ax, phi_ax, resolution_report = _adaptive(
+                rough, setups, aniso, tol, tol_floor, policy, options
+            )
     values, pol_values, coh = [], [], []
     per_wl = []
+    reports = []
     for lam, eps, name in setups:
-        f, fp, info = fill(
-            rough, eps, float(lam), name, theta_ax, phi_ax, out_of_range, options, polarized
-        )
+        with _at_wavelength(lam):
+            f, fp, info = fill(
+                rough, eps, float(lam), name, theta_ax, phi_ax, policy, options, polarized
+            )
+            coh.append(
+                _coherent(
+                    rough,
+                    eps,
+                    float(lam),
+                    name,
+                    theta_ax,
+                    phi_ax if aniso else None,
+                    policy,
+                    options,
+                )
+            )
         values.append(f)
         pol_values.append(fp)
-        coh.append(
-            _coherent(
-                rough,
-                eps,
-                float(lam),
-                name,
-                theta_ax,
-                phi_ax if aniso else None,
-                out_of_range,
-                options,
-            )
-        )
         validity = info.get("validity", {})
+        reports.append((float(lam), name, validity))
         per_wl.append(
             {
                 "wavelength": float(lam),
                 "solver": name,
                 "eps": [float(np.real(eps)), float(np.imag(eps))] if eps != "pec" else "pec",
                 "valid": bool(validity.get("valid", True)),
-                "reasons": list(validity.get("reasons", [])),
+                "reasons": list(
+                    dict.fromkeys(
+                        [*validity.get("reasons", []), *validity.get("angle_reasons", [])]
+                    )
+                ),
             }
         )
     coh = np.stack(coh, axis=1)  # (2, n_wl, ...)
@@ -293,8 +376,84 @@ def build_table(
         **grid_kw,
     )
     if energy == "rescale":
-        return apply_energy_remedy(table)
-    return _record_albedo(table, "off")
+        return apply_energy_remedy(table), reports
+    return _record_albedo(table, "off"), reports
+
+
+class _at_wavelength:
+    """Re-raise a :class:`~emscatter.solvers.select.ValidityError` (``out_of_range="raise"``)
+    with the wavelength it happened at (``None``: during the adaptive refinement)."""
+
+    def __init__(self, lam):
+        self.lam = lam
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, exc, tb):
+        if kind is not None and issubclass(kind, select.ValidityError):
+            where = "refining the grid (tol=)" if self.lam is None else _lam_text(self.lam)
+            raise select.ValidityError(
+                f"build_table at {where}: {exc} (out_of_range='warn' builds the table anyway "
+                "and warns, 'ignore' only records)"
+            ) from None
+        return False
+
+
+def _lam_text(lam: float) -> str:
+    """``"λ = 550 nm"`` for light, ``"λ = 0.0107 m (28 GHz)"`` for radio."""
+    if lam < 1e-5:
+        return f"λ = {lam * 1e9:.4g} nm"
+    from ..materials.core import format_frequency
+
+    return f"λ = {lam:.4g} m ({format_frequency(SPEED_OF_LIGHT / lam)})"
+
+
+_ANGLE_REASON = re.compile(
+    r"^(?P<check>[^:]+): fails for (?P<range>θi (?:∈ \[[^\]]*\]|= [^(]*?)) "
+    r"\((?P<n>\d+) of (?P<m>\d+) angles\); (?P<why>.*)$"
+)
+
+
+def validity_messages(reports) -> list[str]:
+    """One warning text per (solver, failed check) over every wavelength of a table.
+
+    ``reports``: ``[(wavelength [m], solver, validity report), ...]`` from the fill calls.
+    Each text names the solver, the check, the wavelengths with the θ nodes where it fails and
+    the requirement with its worst value, and the policies :func:`build_table` takes."""
+    causes: dict[tuple[str, str], list] = {}
+    for lam, name, rep in reports:
+        angle_reasons = list(rep.get("angle_reasons", []))
+        for text in dict.fromkeys([*rep.get("reasons", []), *angle_reasons]):
+            m = _ANGLE_REASON.match(text) if text in angle_reasons else None
+            check = m["check"] if m else text.split(":", 1)[0]
+            causes.setdefault((name, check.strip()), []).append((lam, text, m))
+    out = []
+    for (name, check), items in causes.items():
+        if all(m is not None for _, _, m in items):
+            where = ", ".join(
+                f"{_lam_text(lam)} for {m['range']} ({m['n']} of {m['m']} θ nodes)"
+                for lam, _, m in items
+            )
+            worst = max(items, key=lambda it: int(it[2]["n"]))
+            why = f"{worst[2]['why']} ({_lam_text(worst[0])})"
+        else:
+            where = ", ".join(_lam_text(lam) for lam, _, _ in items)
+            whys = [text.split(":", 1)[-1].strip() for _, text, _ in items]
+            if len(items) == 1:
+                why = whys[0]
+            else:  # the value differs per wavelength: each one
+                why = "; ".join(
+                    f"{_lam_text(lam)}: {w}"
+                    for (lam, _, _), w in zip(items[:4], whys, strict=False)
+                ) + (f"; and {len(items) - 4} more" if len(items) > 4 else "")
+        out.append(
+            f"build_table: method {name!r} is outside its validity ({check}) at {where}: {why}. "
+            "The table holds the values as computed (metadata['per_wavelength'] keeps the "
+            "reasons); out_of_range='raise' stops instead, 'ignore' records without warning, "
+            "or choose another method="
+        )
+    return out
 
 
 def _record_albedo(table: BrdfTable, remedy: str) -> BrdfTable:
@@ -383,7 +542,7 @@ def _surface_params(rough) -> dict:
 
 
 def _version() -> str:
-    from .. import __version__
+    from .._version import __version__
 
     return __version__
 

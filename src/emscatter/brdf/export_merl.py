@@ -15,6 +15,20 @@ Channels: a single-wavelength table is grey; a three-wavelength table gives (R, 
 λ_B)`` [m] (interpolated in the table) or ``rgb_weights`` (3 × n_wl, e.g. render's
 ``emscatter.brdf.colour.spectrum_to_rgb_weights``). The coherent delta lobe cannot be
 represented in MERL bins and is not written.
+
+The format has no checksum and is read by other programs (Mitsuba, the MERL tools), so
+:func:`read_merl` checks instead what any MERL BRDF must satisfy, and rejects a file that
+fails (:class:`MerlFormatError` naming the file and what is wrong): the 12-byte header states
+``(90, 90, 180)``; the file is exactly ``12 + 8 × 3·90·90·180`` bytes; every value is finite
+and ``≥ 0``; and every ``f_r`` is at most :data:`MERL_F_MAX` = 10⁷ sr⁻¹ — the most an
+energy-conserving BRDF can hold over a MERL bin: the smallest bin's outgoing cone (θh bin 0,
+``θh < (1/90)² π/2``, so ``wo`` within 2θh ≈ 3.9·10⁻⁴ rad of the mirror direction) spans
+≈ 4.8·10⁻⁷ sr, and ``f_r cosθo Ω ≤ 1`` gives ``f_r ≲ 2·10⁶ sr⁻¹``. A directional-albedo check
+is not made: nearest-bin sums over the tiny near-specular bins misestimate narrow lobes by
+orders of magnitude. Damage of a double's sign or exponent (what a flipped or overwritten byte
+in its upper two bytes does) fails these checks; a change of low mantissa bits is harmless
+and cannot be seen. The measured database marks unmeasured bins with negative values: pass
+``allow_negative=True`` to read such files as they are.
 """
 
 from __future__ import annotations
@@ -32,6 +46,7 @@ from .table import BrdfTable
 __all__ = [
     "MERL_SHAPE",
     "MERL_SCALES",
+    "MERL_F_MAX",
     "MerlFormatError",
     "MerlBrdf",
     "write_merl",
@@ -43,6 +58,8 @@ __all__ = [
 MERL_SHAPE = (90, 90, 180)
 MERL_SCALES = np.array([1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0])
 _HEADER = 12
+#: Largest ``f_r`` [1/sr] a MERL bin of an energy-conserving BRDF can hold (module docstring).
+MERL_F_MAX = 1.0e7
 
 
 class MerlFormatError(ValueError):
@@ -178,28 +195,58 @@ def write_merl_raw(raw: np.ndarray, path: str | os.PathLike) -> Path:
     return Path(path)
 
 
-def read_merl(path: str | os.PathLike) -> MerlBrdf:
-    """Read a MERL ``.binary`` file; :class:`MerlFormatError` for truncated or foreign files."""
+def _where(mask: np.ndarray) -> str:
+    c, ih, idd, ip = (int(i[0]) for i in np.nonzero(mask))
+    return f"channel {'RGB'[c]}, bin (θh {ih}, θd {idd}, φd {ip})"
+
+
+def read_merl(path: str | os.PathLike, *, allow_negative: bool = False) -> MerlBrdf:
+    """Read a MERL ``.binary`` file; :class:`MerlFormatError` naming the file and what is
+    wrong for a truncated, foreign or damaged one (checks: module docstring).
+
+    ``allow_negative``: accept negative values (the measured database's marks of unmeasured
+    bins; kept as they are in ``raw``); by default they are an error, as nothing emscatter
+    writes has them."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such MERL file: {str(path)!r}")
     data = path.read_bytes()
+    name = repr(str(path))
     if len(data) < _HEADER:
         raise MerlFormatError(
-            f"{str(path)!r} is not a MERL BRDF: {len(data)} bytes, shorter than the 12-byte header"
+            f"{name} is not a MERL BRDF: {len(data)} bytes, shorter than the 12-byte header"
         )
     dims = tuple(int(d) for d in np.frombuffer(data[:_HEADER], dtype="<i4"))
     if dims != MERL_SHAPE:
         raise MerlFormatError(
-            f"{str(path)!r} is not a MERL BRDF: header dimensions {dims}, expected {MERL_SHAPE}"
+            f"{name} is not a MERL BRDF: header dimensions {dims}, expected {MERL_SHAPE}"
         )
     n = 3 * int(np.prod(MERL_SHAPE))
     want = _HEADER + 8 * n
     if len(data) != want:
         what = "truncated" if len(data) < want else "longer than a MERL BRDF"
-        raise MerlFormatError(f"{str(path)!r} is {what}: {len(data)} bytes, expected {want}")
+        raise MerlFormatError(f"{name} is {what}: {len(data)} bytes, expected {want}")
     raw = np.frombuffer(data[_HEADER:], dtype="<f8").reshape(3, *MERL_SHAPE).copy()
-    if not np.all(np.isfinite(raw)):
-        raise MerlFormatError(f"{str(path)!r} holds NaN or inf values")
+    bad = ~np.isfinite(raw)
+    if bad.any():
+        raise MerlFormatError(
+            f"{name} is damaged: {int(bad.sum())} values are NaN or inf (first at {_where(bad)})"
+        )
+    if not allow_negative:
+        neg = raw < 0
+        if neg.any():
+            raise MerlFormatError(
+                f"{name} is damaged: {int(neg.sum())} values are negative (first "
+                f"{raw[neg][0]:.3g} at {_where(neg)}); a BRDF is >= 0 (measured-database files "
+                "mark unmeasured bins so: read them with allow_negative=True)"
+            )
+    f = raw * MERL_SCALES[:, None, None, None]
+    big = f > MERL_F_MAX
+    if big.any():
+        raise MerlFormatError(
+            f"{name} is damaged: {int(big.sum())} values exceed {MERL_F_MAX:g} 1/sr, more than "
+            f"an energy-conserving BRDF can hold in a MERL bin (largest {f.max():.3g} 1/sr, "
+            f"first at {_where(big)})"
+        )
     raw.setflags(write=False)
     return MerlBrdf(raw=raw)

@@ -4,15 +4,23 @@ The file (``numpy.savez_compressed``, no pickles) holds every array field of the
 its own name (``wavelengths``, ``theta_i``, ``theta_o``, ``values``, ``phi_d`` or
 ``phi_i``/``phi_o``, ``coherent``, ``coherent_polarized``, optionally ``polarized``), plus
 ``format`` = ``"emscatter-brdf"``, ``format_version`` and ``metadata_json`` (the metadata
-dict as JSON: solver, surface, material, units, version, energy flags, ...). Written
-atomically (:func:`emscatter.io.atomic_path`).
+dict as JSON: solver, surface, material, units, version, energy flags, ...), and
+``checksum`` = SHA-256 (hex) of every other member (name, dtype, shape and bytes, in name
+order). Written atomically (:func:`emscatter.io.atomic_path`).
+
+On read, a file that is not a readable ``.npz`` (truncated, foreign, damaged compressed data:
+the zip CRC-32 and the SHA-256 both fail) or whose checksum does not match its members is
+rejected with a ``ValueError`` naming the file and what is wrong; so is one whose arrays break
+the table's physical checks (finite, ``f_r ≥ 0``, coherent reflectivity in ``[0, 1]``, axes
+in range; :class:`~.table.BrdfTable`). Files written before the checksum existed have none:
+they are read with the physical checks only.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +33,17 @@ __all__ = ["write_npz", "read_npz", "NPZ_FORMAT"]
 NPZ_FORMAT = "emscatter-brdf"
 _ARRAYS = ("wavelengths", "theta_i", "theta_o", "values", "phi_d", "phi_i", "phi_o",
            "coherent", "coherent_polarized", "polarized")  # fmt: skip
+_CHECKSUM = "checksum"
+
+
+def _checksum(members: dict[str, np.ndarray]) -> str:
+    """SHA-256 (hex) of the members (name, dtype, shape, bytes), in name order."""
+    h = hashlib.sha256()
+    for name in sorted(members):
+        a = np.ascontiguousarray(members[name])
+        h.update(f"{name}:{a.dtype.str}:{a.shape};".encode())
+        h.update(a.reshape(-1).view(np.uint8))
+    return h.hexdigest()
 
 
 def write_npz(table: BrdfTable, path: str | os.PathLike, *, compress: bool = True) -> Path:
@@ -37,44 +56,66 @@ def write_npz(table: BrdfTable, path: str | os.PathLike, *, compress: bool = Tru
     arrays = {k: getattr(table, k) for k in _ARRAYS if getattr(table, k) is not None}
     meta = json.dumps(table.metadata, default=_jsonable, allow_nan=False)
     save = np.savez_compressed if compress else np.savez
+    members = {
+        "format": np.array(NPZ_FORMAT),
+        "format_version": np.array(FORMAT_VERSION),
+        "metadata_json": np.array(meta),
+        **{k: np.asarray(v) for k, v in arrays.items()},
+    }
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        save(
-            fh,
-            format=np.array(NPZ_FORMAT),
-            format_version=np.array(FORMAT_VERSION),
-            metadata_json=np.array(meta),
-            **arrays,
-        )
+        save(fh, **members, **{_CHECKSUM: np.array(_checksum(members))})
     return path
 
 
 def read_npz(path: str | os.PathLike) -> BrdfTable:
-    """Read a table written by :func:`write_npz`; clear errors for other files."""
+    """Read a table written by :func:`write_npz`; a ``ValueError`` naming the file and what is
+    wrong for a foreign, truncated or damaged file (module docstring)."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such BRDF file: {str(path)!r}")
-    try:
-        data = np.load(path, allow_pickle=False)
-    except (ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
-        raise ValueError(f"{str(path)!r} is not a readable .npz file ({exc})") from None
-    with data:
-        keys = set(data.files)
-        if "format" not in keys or str(data["format"]) != NPZ_FORMAT:
-            raise ValueError(
-                f"{str(path)!r} is not an emscatter BRDF table (no format={NPZ_FORMAT!r} entry)"
-            )
-        version = int(data["format_version"])
-        if version > FORMAT_VERSION:
-            raise ValueError(
-                f"{str(path)!r} has table format version {version}; this emscatter reads up to "
-                f"{FORMAT_VERSION} — upgrade emscatter"
-            )
-        missing = {"wavelengths", "theta_i", "theta_o", "values", "metadata_json"} - keys
-        if missing:
-            raise ValueError(f"{str(path)!r} lacks the entries {sorted(missing)}")
+    name = repr(str(path))
+    with open(path, "rb") as fh:  # ours to close, whatever np.load makes of the bytes
         try:
-            fields = {k: np.array(data[k]) for k in _ARRAYS if k in keys}
-            metadata = json.loads(str(data["metadata_json"]))
-        except (ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
-            raise ValueError(f"{str(path)!r} is damaged ({exc})") from None
-    return BrdfTable(metadata=metadata, **fields)
+            data = np.load(fh, allow_pickle=False)
+        except Exception as exc:  # noqa: BLE001 — any damage of the archive: one clear error
+            raise ValueError(
+                f"{name} is not a readable .npz file (truncated, damaged or another format: {exc})"
+            ) from None
+        if not isinstance(data, np.lib.npyio.NpzFile):
+            raise ValueError(f"{name} is a bare .npy array, not an emscatter BRDF table (.npz)")
+        with data:
+            try:
+                members = {k: np.array(data[k]) for k in data.files}
+            except Exception as exc:  # noqa: BLE001 — zlib, CRC, zip flags, npy header...
+                raise ValueError(f"{name} is damaged: {type(exc).__name__}: {exc}") from None
+    fmt = members.get("format")
+    if fmt is None or fmt.dtype.kind != "U" or str(fmt) != NPZ_FORMAT:
+        raise ValueError(f"{name} is not an emscatter BRDF table (no format={NPZ_FORMAT!r} entry)")
+    stored = members.pop(_CHECKSUM, None)
+    if stored is not None and str(stored) != _checksum(members):
+        raise ValueError(
+            f"{name} is damaged: its SHA-256 checksum does not match its contents (the file "
+            "was altered or corrupted after it was written)"
+        )
+    missing = {"format_version", "wavelengths", "theta_i", "theta_o", "values",
+               "metadata_json"} - set(members)  # fmt: skip
+    if missing:
+        raise ValueError(f"{name} lacks the entries {sorted(missing)}")
+    try:
+        version = int(members["format_version"])
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} has an unreadable format_version entry") from None
+    if version > FORMAT_VERSION:
+        raise ValueError(
+            f"{name} has table format version {version}; this emscatter reads up to "
+            f"{FORMAT_VERSION} — upgrade emscatter"
+        )
+    try:
+        metadata = json.loads(str(members["metadata_json"]))
+    except ValueError as exc:
+        raise ValueError(f"{name} is damaged: its metadata is not JSON ({exc})") from None
+    fields = {k: members[k] for k in _ARRAYS if k in members}
+    try:
+        return BrdfTable(metadata=metadata, **fields)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{name} is damaged: {exc}") from None

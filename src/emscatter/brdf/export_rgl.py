@@ -28,6 +28,24 @@ nodes whose mirror direction falls below the horizon are filled from their valid
 Directions are in the renderer frame (normal +z, both pointing away from the surface, mirror
 at φo = φi + π); ``f_r`` [1/sr]. Wavelengths are metres at this module's interface and
 nanometres inside the file.
+
+Reading (:func:`read_rgl`): the format is fixed by Mitsuba and has no checksum, so a file is
+checked for what ``measured`` needs and what any BRDF satisfies, and rejected
+(:class:`RglFormatError`, naming the file and what is wrong) when it fails: the field table
+lies inside the file, every field lies after it, no two overlap, and the file ends with its
+last field (at most 7 bytes of alignment after it); the fields have the dtypes and shapes
+``measured`` reads; ``theta_i`` rises within ``[0, π/2]``, ``phi_i`` within ``[−π, π]``,
+``wavelengths`` are positive and rising; every float field is finite; ``ndf``, ``vndf`` and
+``luminance`` are ``≥ 0``, ``sigma > 0``; the stored values are ``≥ 0`` (the writer clips
+out-of-gamut RGB to 0); every ``vndf`` and ``luminance`` slice
+has mass (``measured`` normalizes them into sample warps); ``jacobian`` is 0 or 1; and the
+mean stored value over each incident node's sample square — the directional albedo
+``∫ f_r cosθo dωo`` when ``jacobian = 1``, since the warp maps the uniform square onto
+``D_wi(m)`` and ``dωo = 4 (wi·m) dωm`` — is at most :data:`RGL_ALBEDO_MAX` = 10⁶. That bound
+is loose on purpose: the node mean is exact only when the proxy distribution fits the lobe
+(``≈ 0.93`` for the gold GO table of the tests, whose albedo is 0.92–0.93), and a badly fitted
+proxy (e.g. a Lambertian stored with α = 0.05) gives means of ~10⁴; a damaged float32 exponent
+gives 10²⁰ and more.
 """
 
 from __future__ import annotations
@@ -55,7 +73,14 @@ from .rgl_warp import (
 )
 from .source import BrdfFunction, as_brdf_source
 
-__all__ = ["BrdfFunction", "RglFormatError", "read_rgl", "read_tensor_file", "write_rgl"]
+__all__ = [
+    "BrdfFunction",
+    "RGL_ALBEDO_MAX",
+    "RglFormatError",
+    "read_rgl",
+    "read_tensor_file",
+    "write_rgl",
+]
 
 _MAGIC = b"tensor_file\0"
 _DTYPES = {
@@ -72,6 +97,9 @@ _DTYPES = {
     11: np.float64,
 }
 _CODES = {np.dtype(v): k for k, v in _DTYPES.items()}
+_ALIGN = 8
+#: Largest accepted mean stored value over an incident node's sample square (module docstring).
+RGL_ALBEDO_MAX = 1.0e6
 
 
 class RglFormatError(ValueError):
@@ -318,7 +346,8 @@ def _write_tensor_file(path: Path, fields: dict[str, np.ndarray], align: int = 8
 
 
 def read_tensor_file(path) -> dict[str, np.ndarray]:
-    """All fields of a Mitsuba tensor file, as numpy arrays (raises :class:`RglFormatError`)."""
+    """All fields of a Mitsuba tensor file, as numpy arrays (raises :class:`RglFormatError`
+    for a foreign, truncated or inconsistent file: module docstring)."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -331,10 +360,16 @@ def read_tensor_file(path) -> dict[str, np.ndarray]:
         if (major, minor) != (1, 0):
             raise RglFormatError(f"{path}: tensor file version {major}.{minor}, expected 1.0")
         at = len(_MAGIC) + 6
-        out = {}
+        table = []
         for _ in range(count):
             (nlen,) = struct.unpack_from("<H", raw, at)
-            name = raw[at + 2 : at + 2 + nlen].decode()
+            label = raw[at + 2 : at + 2 + nlen]
+            try:
+                name = label.decode()
+            except UnicodeDecodeError:
+                raise RglFormatError(
+                    f"{path} is damaged: field name {label!r} is not text"
+                ) from None
             at += 2 + nlen
             ndim, code, offset = struct.unpack_from("<HBQ", raw, at)
             at += 11
@@ -342,17 +377,37 @@ def read_tensor_file(path) -> dict[str, np.ndarray]:
             at += 8 * ndim
             if code not in _DTYPES:
                 raise RglFormatError(f"{path}: field {name!r} has unknown type code {code}")
-            dt = np.dtype(_DTYPES[code]).newbyteorder("<")
-            size = int(np.prod(shape)) * dt.itemsize
-            if offset + size > len(raw):
-                raise RglFormatError(
-                    f"{path} is truncated: field {name!r} needs bytes {offset}..{offset + size}, "
-                    f"the file has {len(raw)}"
-                )
-            arr = np.frombuffer(raw, dtype=dt, count=int(np.prod(shape)), offset=offset)
-            out[name] = arr.astype(dt.newbyteorder("="), copy=True).reshape(shape)
+            if name in (t[0] for t in table):
+                raise RglFormatError(f"{path} is damaged: field {name!r} appears twice")
+            table.append((name, shape, np.dtype(_DTYPES[code]).newbyteorder("<"), offset))
     except struct.error:
         raise RglFormatError(f"{path} is truncated inside its field table") from None
+    out, spans = {}, []
+    for name, shape, dt, offset in table:
+        count_ = math.prod(shape)
+        size = count_ * dt.itemsize
+        if offset + size > len(raw):
+            raise RglFormatError(
+                f"{path} is truncated: field {name!r} needs bytes {offset}..{offset + size}, "
+                f"the file has {len(raw)}"
+            )
+        if offset < at:
+            raise RglFormatError(
+                f"{path} is damaged: field {name!r} starts at byte {offset}, inside the field "
+                f"table (which ends at {at})"
+            )
+        spans.append((offset, offset + size, name))
+        arr = np.frombuffer(raw, dtype=dt, count=count_, offset=offset)
+        out[name] = arr.astype(dt.newbyteorder("="), copy=True).reshape(shape)
+    spans.sort()
+    for (_, end, a), (start, _, b) in zip(spans, spans[1:], strict=False):
+        if start < end:
+            raise RglFormatError(f"{path} is damaged: fields {a!r} and {b!r} overlap")
+    last = max((end for _, end, _ in spans), default=at)
+    if len(raw) - last >= _ALIGN:
+        raise RglFormatError(
+            f"{path} is longer than its fields: {len(raw)} bytes, the last field ends at {last}"
+        )
     return out
 
 
@@ -404,7 +459,57 @@ def read_rgl(path) -> dict[str, np.ndarray]:
             raise RglFormatError(
                 f"{path}: field {name!r} is {got.dtype} of shape {got.shape}, expected {want}"
             )
-    for name in ("ndf", "sigma", "vndf", "luminance", data_key):
+    for name in ("theta_i", "phi_i", "ndf", "sigma", "vndf", "luminance", data_key):
         if not np.all(np.isfinite(f[name])):
             raise RglFormatError(f"{path}: field {name!r} holds NaN or inf")
+    _check_physics(path, f, data_key)
     return f
+
+
+def _check_physics(path, f: dict[str, np.ndarray], data_key: str) -> None:
+    """The value checks of :func:`read_rgl` (module docstring)."""
+
+    def fail(what: str):
+        raise RglFormatError(f"{path} is damaged: {what}")
+
+    eps = 1e-6
+    th, ph = f["theta_i"].astype(float), f["phi_i"].astype(float)
+    if th.size == 0 or th.min() < -eps or th.max() > math.pi / 2 + eps or np.any(np.diff(th) <= 0):
+        fail(f"theta_i must rise within [0, π/2] [rad], got {np.array2string(th, precision=4)}")
+    if ph.size == 0 or ph.min() < -math.pi - eps or ph.max() > math.pi + eps:
+        fail(f"phi_i must lie within [−π, π] [rad], got {np.array2string(ph, precision=4)}")
+    if np.any(np.diff(ph) <= 0):
+        fail(f"phi_i must rise, got {np.array2string(ph, precision=4)}")
+    if "wavelengths" in f:
+        wl = f["wavelengths"].astype(float)
+        if not (np.all(np.isfinite(wl)) and np.all(wl > 0) and np.all(np.diff(wl) > 0)):
+            fail(f"wavelengths must be positive and rising [nm], got {wl}")
+    for name in ("ndf", "vndf", "luminance"):
+        if np.any(f[name] < 0):
+            fail(f"field {name!r} has negative values (least {f[name].min():.3g}); it is a density")
+    if np.any(f["sigma"] <= 0):
+        fail(f"field 'sigma' must be > 0 (a projected area), least {f['sigma'].min():.3g}")
+    data = f[data_key].astype(float)
+    if np.any(data < 0):
+        fail(
+            f"field {data_key!r} has {int((data < 0).sum())} negative values (least "
+            f"{data.min():.3g}); a BRDF is >= 0"
+        )
+    for name in ("vndf", "luminance"):
+        mass = f[name].astype(float).sum(axis=(-2, -1))
+        if np.any(mass <= 0):
+            j = tuple(int(i[0]) for i in np.nonzero(mass <= 0))
+            fail(f"field {name!r} has an empty slice at (φi, θi) node {j}: no sample warp")
+    if int(f["jacobian"][0]) not in (0, 1):
+        fail(f"field 'jacobian' must be 0 or 1, got {int(f['jacobian'][0])}")
+    n = data.shape[-1]
+    w = np.full(n, 1.0 / (n - 1)) if n > 1 else np.ones(1)
+    if n > 1:
+        w[[0, -1]] *= 0.5
+    albedo = np.einsum("...ij,i,j->...", data, w, w)  # trapezoid mean over the sample square
+    if albedo.max() > RGL_ALBEDO_MAX:
+        j = tuple(int(i[0]) for i in np.nonzero(albedo == albedo.max()))
+        fail(
+            f"the mean stored value over the sample square (the directional albedo) reaches "
+            f"{albedo.max():.3g} at (φi, θi, channel) node {j}, above {RGL_ALBEDO_MAX:g}"
+        )

@@ -1,7 +1,7 @@
 """Tabulated BRDFs in the renderer frame: :class:`BrdfTable`.
 
 Layout (the interface the Mitsuba plugin, the exporters and the radio bridge rely on; changes
-are announced in ``/work/notes/brdf.md``). All angles [rad] in the *renderer frame*
+are announced in ``docs/brdf.md``). All angles [rad] in the *renderer frame*
 (:mod:`emscatter.brdf.frames`: ``wi``, ``wo`` point away from the surface, normal ``+z``,
 tangent ``+x``, mirror direction at ``φo = φi + π``); wavelengths [m]; BRDF values [1/sr].
 
@@ -247,7 +247,11 @@ class BrdfTable:
         ti, pi_, to, po = (a.reshape(-1) for a in (ti, pi_, to, po))
         for name, a in (("theta_i", ti), ("phi_i", pi_), ("theta_o", to), ("phi_o", po)):
             if not np.all(np.isfinite(a)):
-                raise ValueError(f"{name} must be finite [rad]")
+                bad = a[~np.isfinite(a)][0]
+                raise ValueError(
+                    f"{name} must be finite angles [rad], got {bad} "
+                    f"({int(np.sum(~np.isfinite(a)))} of {a.size} values)"
+                )
         scalar, cols, mat = self._wavelength_weights(wavelength, wavelength_out_of_range)
         vals = self._grid_values(pol)[cols]
         if self.isotropic:
@@ -304,6 +308,13 @@ class BrdfTable:
         ti, pi_ = np.broadcast_arrays(np.asarray(theta_i, float), np.asarray(phi_i, float))
         shape = ti.shape
         ti, pi_ = ti.reshape(-1), pi_.reshape(-1)
+        for name, a in (("theta_i", ti), ("phi_i", pi_)):
+            if not np.all(np.isfinite(a)):
+                bad = a[~np.isfinite(a)][0]
+                raise ValueError(
+                    f"{name} must be finite angles [rad], got {bad} "
+                    f"({int(np.sum(~np.isfinite(a)))} of {a.size} values)"
+                )
         scalar, cols, mat = self._wavelength_weights(wavelength, wavelength_out_of_range)
         if pol is None:
             vals = self.coherent

@@ -23,7 +23,7 @@ import warnings
 __all__ = ["main", "build_parser", "command_modules"]
 
 #: Modules of this package that are not commands.
-_NOT_COMMANDS = {"args"}
+_NOT_COMMANDS = {"args", "paths"}
 _NUMBER_LIKE = re.compile(r"^-(\d|\.\d|inf|nan)", re.IGNORECASE)
 
 
@@ -58,7 +58,7 @@ def command_modules() -> tuple[list, dict[str, str]]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser with every command found by :func:`command_modules`."""
-    from .. import __version__
+    from .._version import __version__
     from .args import HelpFormatter
 
     p = Parser(

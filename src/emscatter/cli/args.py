@@ -9,7 +9,8 @@ what was given and what is allowed. Degrees at this edge, radians inside; SI uni
   ``--wavelength`` [m], with the "did you mean GHz?" hint for implausible values;
 * :func:`parse_eps` — a complex permittivity (``17+2j``, ``17+2i``) or ``pec``;
 * :class:`Number` / :class:`Integer` — a number within a range (``Number(low=0, unit="m")``);
-* :class:`OutputPath` — a file the command will write: checked before anything is computed;
+* :class:`OutputPath` / :class:`OutputFolder` — from :mod:`.paths` (every output path is
+  checked there, before anything is computed);
 * :func:`add_roughness_args` / :func:`roughness_from_args` — ``--kind --sigma --length ...``;
 * :func:`add_command` — a sub-command parser with the shared help formatter.
 """
@@ -18,12 +19,11 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-from pathlib import Path
 
 import numpy as np
 
 from ..conventions import fmt  # a number as a person writes it (0.5, 1e+09, (17+2j))
+from .paths import OutputFolder, OutputPath, check_output_path  # noqa: F401 - re-exported
 
 __all__ = [
     "HelpFormatter",
@@ -38,6 +38,8 @@ __all__ = [
     "add_frequency_args",
     "frequency_kwargs",
     "OutputPath",
+    "OutputFolder",
+    "check_output_path",
     "given_options",
     "reject_unless",
     "FREQUENCY_RANGE",
@@ -192,7 +194,10 @@ def parse_eps(text: str):
     if t == "pec":
         return "pec"
     try:
-        value = complex(t.replace("i", "j"))
+        try:  # "inf", "nan" first: "i" → "j" would turn them into names
+            value = complex(t)
+        except ValueError:
+            value = complex(t.replace("i", "j"))
     except ValueError:
         if t[:1].isalpha():
             from ..materials import as_material
@@ -278,56 +283,6 @@ def frequency_kwargs(args) -> dict:
     return {"wavelength": lam if lam is not None else args._default_wavelength}
 
 
-class OutputPath:
-    """``type=`` for a file the command writes. Checked at parse time (before any work):
-    not a folder, its folder creatable and writable, and (``suffixes``) a known extension.
-    Returns a :class:`pathlib.Path`. Missing folders are created when the file is written."""
-
-    def __init__(self, *, suffixes: tuple[str, ...] = ()):
-        self.suffixes = suffixes
-
-    def __call__(self, text: str) -> Path:
-        path = Path(text).expanduser()
-        problem = check_output_path(path, self.suffixes)
-        if problem:
-            raise argparse.ArgumentTypeError(f"cannot write {text!r}: {problem}")
-        return path
-
-
-def check_output_path(path: Path, suffixes: tuple[str, ...] = (), *, folder: bool = False):
-    """``None`` when ``path`` can be written, else one line saying why and what to do."""
-    if not str(path):
-        return "the path is empty; give a file name"
-    if path.exists() and path.is_dir() and not folder:
-        return "it is a folder; give a file name inside it"
-    if folder and path.exists() and not path.is_dir():
-        return "it is an existing file, not a folder; give a folder path"
-    if suffixes and not folder and path.suffix.lower() not in suffixes:
-        return f"unknown extension {path.suffix or '(none)'!r}; use one of {', '.join(suffixes)}"
-    parent = path if folder else path.parent
-    existing = parent
-    while not existing.exists():
-        if existing.is_symlink():
-            return f"{str(existing)!r} is a broken link; remove it or choose another folder"
-        existing = existing.parent
-    if not existing.is_dir():
-        return f"{str(existing)!r} is a file, not a folder; choose another folder"
-    if not os.access(existing, os.W_OK | os.X_OK):
-        return f"folder {str(existing)!r} is not writable; choose another folder or fix its rights"
-    return None
-
-
-class OutputFolder(OutputPath):
-    """``type=`` for a folder the command writes into (created when missing)."""
-
-    def __call__(self, text: str) -> Path:
-        path = Path(text).expanduser()
-        problem = check_output_path(path, folder=True)
-        if problem:
-            raise argparse.ArgumentTypeError(f"cannot write into {text!r}: {problem}")
-        return path
-
-
 def add_roughness_args(p, *, sigma: float = 0.03, length: float = 1.0) -> None:
     """``--kind --sigma --length --length-y --hurst --profile``."""
     p.add_argument(
@@ -395,4 +350,21 @@ def reject_unless(args, condition: bool, options: tuple[str, ...], why: str) -> 
     an option is honoured or rejected, never ignored."""
     used = sorted(given_options(args) & set(options))
     if used and not condition:
-        raise ValueError(f"{', '.join(used)} {'applies' if len(used) == 1 else 'apply'} {why}")
+        shown = []
+        for opt in used:
+            value = getattr(args, opt.lstrip("-").replace("-", "_"), None)
+            text = "" if value is None or isinstance(value, bool) else f" {_shown(value)}"
+            shown.append(f"{opt}{text}")
+        verb = "applies" if len(used) == 1 else "apply"
+        raise ValueError(
+            f"{', '.join(used)} {verb} {why} (got {', '.join(shown)}); drop it or change the "
+            "other options"
+        )
+
+
+def _shown(value) -> str:
+    if isinstance(value, np.ndarray):
+        return ",".join(fmt(float(v)) for v in value.ravel()[:8])
+    if isinstance(value, float):
+        return fmt(value)
+    return str(value)

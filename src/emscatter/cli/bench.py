@@ -30,10 +30,31 @@ def _run_all_path():
     return path
 
 
+def _bench_names(path) -> list[str]:
+    """The benchmark names of ``run_all.py`` (its ``BENCHES``), read without running it."""
+    import ast
+
+    tree = ast.parse(path.read_text())
+    for node in tree.body:
+        target = getattr(node, "target", None) or (getattr(node, "targets", None) or [None])[0]
+        if getattr(target, "id", None) == "BENCHES" and isinstance(node.value, ast.Dict):
+            return [k.value for k in node.value.keys if isinstance(k, ast.Constant)]
+    return []
+
+
 def run(a) -> int:
     import subprocess
     import sys
 
+    from .args import reject_unless
+
     path = _run_all_path()
+    reject_unless(a, not a.list, ("--quick",), "to a run, not to --list")
+    if a.list and a.names:
+        raise ValueError(f"--list takes no benchmark names, got {' '.join(a.names)}")
+    known = _bench_names(path)
+    unknown = [n for n in a.names if n not in known]
+    if known and unknown:
+        raise ValueError(f"unknown benchmark(s) {unknown}; choose from {', '.join(known)}")
     cmd = [sys.executable, str(path), *a.names] + ["--quick"] * a.quick + ["--list"] * a.list
     return subprocess.call(cmd)

@@ -4,6 +4,11 @@ Formats from the output's extension (or ``--format``): ``.npz`` (the table with 
 metadata), ``.binary`` (MERL), ``.bsdf`` (RGL, Mitsuba's ``measured``; the render bridge's
 exporter). ``--fit`` also fits a Beckmann/GGX microfacet model and prints (or writes) the
 Mitsuba dict — the quick path when a dict is all you need.
+
+Every input is checked before the table is built: the output paths (:mod:`.paths`), the
+format against the extension, the material at every wavelength, the method name, and options
+that do not apply (``--fit-json`` without ``--fit``, ``--rgl-channels`` for a non-RGL file,
+``--n-theta``/``--n-phi`` with ``--tol``) are errors, never ignored.
 """
 
 from __future__ import annotations
@@ -13,13 +18,14 @@ import argparse
 from .args import (
     Integer,
     Number,
-    OutputPath,
     add_command,
     add_roughness_args,
     fmt,
     parse_eps,
+    reject_unless,
     roughness_from_args,
 )
+from .paths import OutputPath, check_format
 
 FORMATS = {".npz": "npz", ".binary": "merl", ".bsdf": "rgl"}
 
@@ -61,6 +67,40 @@ def _wavelengths_nm(text: str):
     return vals
 
 
+def _method_choices() -> list[str]:
+    from ..solvers import available
+
+    return ["auto", *available()]
+
+
+def check_inputs(a) -> tuple[str, object, object]:
+    """``(format, roughness, wavelengths [m])`` once every input is checked (nothing computed
+    yet): ValueError naming the option, the value and what is allowed."""
+    import numpy as np
+
+    from ..brdf.build import material_eps
+
+    fmt_name = check_format(a.output, a.format, FORMATS, "output")
+    reject_unless(a, a.fit is not None, ("--fit-json",), "only with --fit (beckmann or ggx)")
+    reject_unless(a, fmt_name == "rgl", ("--rgl-channels",), "to RGL .bsdf output only")
+    reject_unless(
+        a,
+        a.tol is None,
+        ("--n-theta", "--n-phi"),
+        "to a fixed grid only; --tol refines the grid by itself (drop one of them)",
+    )
+    rough = roughness_from_args(a)
+    if rough.dimension != 2:
+        raise ValueError("--profile describes a 1-D profile; a BRDF table needs a 2-D surface")
+    wl = np.asarray(a.wavelengths_nm, float) * 1e-9
+    for lam in wl:
+        try:
+            material_eps(a.material, float(lam))
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"--material {a.material!s} at {fmt(lam * 1e9)} nm: {exc}") from None
+    return fmt_name, rough, wl
+
+
 def register(subparsers) -> None:
     p = add_command(
         subparsers,
@@ -86,7 +126,13 @@ def register(subparsers) -> None:
         default="450,550,650",
         help="wavelengths [nm]: 'a,b,c' or 'start:stop:count'",
     )
-    p.add_argument("--method", default="auto", help="solver name or 'auto'")
+    p.add_argument(
+        "--method",
+        type=str.lower,
+        default="auto",
+        choices=_method_choices(),
+        help="solver, or auto (the best valid one per wavelength)",
+    )
     p.add_argument("--n-theta", type=Integer(low=2, high=2000), default=90, help="θ nodes")
     p.add_argument("--n-phi", type=Integer(low=4, high=4000), default=180, help="Δφ (or φ) nodes")
     p.add_argument(
@@ -113,7 +159,11 @@ def register(subparsers) -> None:
         choices=["warn", "raise", "ignore"],
         help="what to do outside the method's validity",
     )
-    p.add_argument("--format", choices=sorted(set(FORMATS.values())), help="override the suffix")
+    p.add_argument(
+        "--format",
+        choices=sorted(set(FORMATS.values())),
+        help="the format, which must match the extension (npz: .npz, merl: .binary, rgl: .bsdf)",
+    )
     p.add_argument(
         "--rgl-channels",
         default="spectral",
@@ -130,15 +180,9 @@ def register(subparsers) -> None:
 
 
 def run(a) -> int:
-    import numpy as np
-
     from ..brdf import build_table
 
-    fmt_name = a.format or FORMATS[a.output.suffix.lower()]
-    rough = roughness_from_args(a)
-    if rough.dimension != 2:
-        raise ValueError("--profile describes a 1-D profile; a BRDF table needs a 2-D surface")
-    wl = np.asarray(a.wavelengths_nm, float) * 1e-9
+    fmt_name, rough, wl = check_inputs(a)
     table = build_table(
         rough,
         a.material,
@@ -187,7 +231,8 @@ def export(table, path, fmt_name: str, *, rgl_channels: str = "spectral"):
 def _fit(table, distribution: str, json_path) -> None:
     import json
 
-    from ..brdf.fit import fit_microfacet
+    from emscatter.brdf.analytic.fit import fit_microfacet
+
     from ..io import write_json
 
     fit = fit_microfacet(table, distribution=distribution)

@@ -30,6 +30,7 @@ from .args import (
     reject_unless,
     roughness_from_args,
 )
+from .paths import check_distinct
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SCHEMA = "emscatter.curves/1"
@@ -106,8 +107,12 @@ def register(subparsers) -> None:
         help="emissivity only: absolute quadrature tolerance (default: 0.0001)",
     )
     c.add_argument("--png", type=OutputPath(suffixes=FIGURE_SUFFIXES), help="figure file")
-    c.add_argument("--csv", type=OutputPath(), help="CSV file (with a metadata header)")
-    c.add_argument("--json", type=OutputPath(), help="JSON file (inputs, result, columns)")
+    c.add_argument(
+        "--csv", type=OutputPath(suffixes=(".csv",)), help="CSV file (with a metadata header)"
+    )
+    c.add_argument(
+        "--json", type=OutputPath(suffixes=(".json",)), help="JSON file (inputs, result, columns)"
+    )
     c.add_argument(
         "--from",
         dest="from_file",
@@ -125,6 +130,7 @@ def _check_consistent(a) -> None:
         a, q == "bistatic", ("--theta-s-deg", "--phi-s-deg"), "to --quantity bistatic only"
     )
     reject_unless(a, q == "emissivity", ("--tol",), "to --quantity emissivity only")
+    check_distinct({"--png": a.png, "--csv": a.csv, "--json": a.json})
 
 
 def _inputs(a, rough) -> dict:
@@ -323,6 +329,19 @@ def _compute(a, rough):
     return cols, fig, res.method, report
 
 
+def _check_material(a) -> None:
+    """A material name for ``--eps`` must be defined at the frequency: checked before the
+    solver runs, naming the option."""
+    if not isinstance(a.eps, str) or a.eps == "pec":
+        return
+    from ..materials import eps_at
+
+    try:
+        eps_at(str(a.eps), **frequency_kwargs(a))
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"--eps {a.eps}: {exc}") from None
+
+
 def _summary(report: dict) -> dict:
     out = {"valid": bool(report.get("valid", False)), "reasons": list(report.get("reasons", []))}
     if report.get("angle_reasons"):
@@ -331,7 +350,7 @@ def _summary(report: dict) -> dict:
 
 
 def run(a) -> int:
-    from .. import __version__
+    from .._version import __version__
     from ..io import jsonable, save_figure, write_csv, write_json
 
     if a.from_file:
@@ -344,6 +363,7 @@ def run(a) -> int:
         a.phi_s_deg = 0.0 if a.phi_s_deg is None else a.phi_s_deg
     a.tol = 1e-4 if a.tol is None else a.tol
     rough = roughness_from_args(a)
+    _check_material(a)
     cols, fig, method, report = _compute(a, rough)
     inputs = _inputs(a, rough)
     meta = {

@@ -54,6 +54,15 @@ def register(subparsers) -> None:
         default=0.1,
         help="radio-map cell size [m]",
     )
+    r.add_argument(
+        "--extrapolate",
+        action="store_true",
+        help=(
+            "allow materials outside their ITU-R P.2040 bands (e.g. ITU metal, 1–100 GHz, at "
+            "140 GHz) with the documented extrapolation, recorded in the CSV and JSON outputs; "
+            "without it such a run is an error before anything is computed"
+        ),
+    )
     r.add_argument("--quick", action="store_true", help="few rays, coarse maps and tables")
     r.add_argument("--plate", action="store_true", help="run the large-plate cross-check")
     r.add_argument("--out", type=OutputFolder(), default="out/radio", help="output folder")
@@ -64,6 +73,10 @@ def run(a) -> int:
     from pathlib import Path
 
     out = Path(a.out)
+    if a.plate and a.extrapolate:
+        raise ValueError(
+            "--extrapolate applies to the indoor scenes, not to --plate (its media are in band)"
+        )
     if a.plate:
         from ..radio import demo
 
@@ -74,7 +87,20 @@ def run(a) -> int:
     from ..radio.tables import TableOptions
 
     names = SCENES if a.scene == "all" else (a.scene,)
-    kw = {"samples": a.samples, "cell_size": a.cell_size, "max_depth": a.max_depth}
+    # Every medium against its ITU-R P.2040 bands before any ray is traced (OutOfBandError,
+    # naming medium, frequency and bands, unless --extrapolate).
+    extrapolated = indoor.check_bands(names, a.frequencies_ghz, extrapolate=a.extrapolate)
+    for e in extrapolated:
+        print(
+            f"extrapolating {e['medium']!r} ({e['scene']}) to {e['frequency_ghz']:g} GHz, outside "
+            "its ITU-R P.2040 bands (recorded in the outputs)"
+        )
+    kw = {
+        "samples": a.samples,
+        "cell_size": a.cell_size,
+        "max_depth": a.max_depth,
+        "extrapolate": a.extrapolate,
+    }
     if a.quick:
         kw.update(samples=min(a.samples, 20_000), cell_size=max(a.cell_size, 0.5), max_depth=2)
         kw["table_options"] = TableOptions(n_cos=65, n_cos_spm=9, n_theta=16, n_alpha=13, n_s=32)

@@ -1,9 +1,13 @@
-"""``emscatter surface``: generate a surface, draw it and its spectrum, measure it."""
+"""``emscatter surface``: generate a surface, draw it and its spectrum, measure it.
+
+Options that do not apply to ``--kind`` are errors (``--hurst`` for gaussian/exponential,
+``--length`` for fbm); output paths are checked before the surface is generated."""
 
 from __future__ import annotations
 
-from .args import Integer, Number, OutputPath, add_command
+from .args import Integer, Number, add_command, reject_unless
 from .curves import FIGURE_SUFFIXES
+from .paths import OutputPath, check_distinct
 
 
 def register(subparsers) -> None:
@@ -46,13 +50,18 @@ def register(subparsers) -> None:
     s.add_argument("--periodic", action="store_true", help="periodic FFT synthesis")
     s.add_argument("--profile", action="store_true", help="1-D profile")
     s.add_argument("--png", type=OutputPath(suffixes=FIGURE_SUFFIXES), help="figure file")
-    s.add_argument("--json", type=OutputPath(), help="statistics as JSON")
+    s.add_argument("--json", type=OutputPath(suffixes=(".json",)), help="statistics as JSON")
     s.set_defaults(func=run)
 
 
 def run(a) -> int:
     from ..demo import surface_report
 
+    reject_unless(
+        a, a.kind in ("fbm", "power-law"), ("--hurst",), "to --kind fbm or power-law only"
+    )
+    reject_unless(a, a.kind != "fbm", ("--length",), "to stationary kinds only (not --kind fbm)")
+    check_distinct({"--png": a.png, "--json": a.json})
     stats = surface_report(
         kind=a.kind,
         hurst=a.hurst,

@@ -149,14 +149,50 @@ def as_material(value, *, extrapolate: bool = False) -> Material:
             names = []
         if text in names:
             return metal(text, extrapolate=extrapolate)
-        raise ValueError(
-            f"unknown material {value!r}: use 'pec', an ITU-R P.2040 name {available_itu()}, "
-            f"a natural medium {sorted(NATURAL_MEDIA)} "
-            f"or a Mitsuba metal {names or '(Mitsuba not installed)'}"
-        )
+        number = _as_number_text(text)
+        if number is not None:
+            raise TypeError(
+                f"eps={value!r} is a string; pass a complex number instead: eps={number!r} "
+                "(a string names a material such as 'concrete' or 'Au', or 'pec')"
+            )
+        raise ValueError(_unknown_material(value, names))
     raise TypeError(
         f"eps must be a complex permittivity, 'pec', a material name or a "
         f"emscatter.materials.Material, got {type(value).__name__}"
+    )
+
+
+def _as_number_text(text: str):
+    """The complex number a string like ``"17+2j"``, ``"17+2i"`` or ``"(4)"`` spells, else None."""
+    t = text.strip().lower().replace(" ", "").replace("i", "j")
+    if not t or not (t[0].isdigit() or t[0] in "+-.("):
+        return None
+    try:
+        z = complex(t)
+    except ValueError:
+        return None
+    return z.real if z.imag == 0 else z
+
+
+def _unknown_material(value, metals: list[str]) -> str:
+    """ "unknown material" with the closest names (not every name: there are ~90)."""
+    import difflib
+
+    itu_names = list(available_itu())
+    every = ["pec", *itu_names, *NATURAL_MEDIA, *metals]
+    lower = {n.lower(): n for n in every}
+    close = difflib.get_close_matches(str(value).strip().lower(), list(lower), n=3, cutoff=0.6)
+    hint = f"; did you mean {', '.join(repr(lower[c]) for c in close)}?" if close else ""
+    where = (
+        f"{len(metals)} Mitsuba metals (materials.available_metals())"
+        if metals
+        else "the Mitsuba metals (Mitsuba not installed)"
+    )
+    return (
+        f"unknown material {value!r}: use 'pec', one of {len(itu_names)} ITU-R P.2040 names "
+        f"(materials.available_itu(), e.g. 'concrete'), a natural medium "
+        f"{sorted(NATURAL_MEDIA)} or one of {where}, e.g. 'Au'; a "
+        f"permittivity is a complex number (eps=17+2j), not a string{hint}"
     )
 
 

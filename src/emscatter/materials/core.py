@@ -20,6 +20,7 @@ from (``source``) and over which band it is defined (``band`` [Hz]); outside it 
 from __future__ import annotations
 
 import math
+import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
@@ -103,6 +104,14 @@ def _format_point(f: float) -> str:
     if f > 1e13:
         return f"λ = {SPEED_OF_LIGHT / f * 1e9:.4g} nm ({format_frequency(f)})"
     return f"{format_frequency(f)} (λ = {SPEED_OF_LIGHT / f:.4g} m)"
+
+
+def unit_hint(f: float) -> str:
+    """``" — did you mean 28 GHz (28e9 Hz)?"`` for a frequency below 1 MHz (a GHz value given
+    in Hz, as in ``frequency=28``); ``""`` otherwise. Frequencies are in Hz."""
+    if 0 < f < 1e6:
+        return f" — did you mean {f:g} GHz ({f * 1e9:g} Hz)? frequency is in Hz"
+    return ""
 
 
 def _omega(frequency) -> np.ndarray:
@@ -227,7 +236,8 @@ class Material(ABC):
             lo, hi = self.band
             raise OutOfBandError(
                 f"material {self.name!r} ({self.source or 'no source given'}) is defined for "
-                f"{_format_band(lo, hi)}, got {_format_point(bad)}. Ways out: give the "
+                f"{_format_band(lo, hi)}, got {_format_point(bad)}{unit_hint(bad)}. Ways out: "
+                "give the "
                 "permittivity at that frequency yourself (a number or materials.Constant), "
                 "or build the material with extrapolate=True (documented extrapolation)."
             )
@@ -318,10 +328,16 @@ class Drude(Material):
     def from_conductivity(cls, conductivity: float, collision_rate: float, eps_inf=1.0, **kw):
         """From the DC conductivity σ₀ [S/m] and the collision rate γ [rad/s]:
         ``ωp² = σ₀ γ / ε₀``."""
-        if not (isinstance(conductivity, int | float) and conductivity > 0):
-            raise ValueError(f"conductivity must be > 0 [S/m], got {conductivity!r}")
-        wp = math.sqrt(conductivity * collision_rate / EPSILON_0)
-        return cls(wp, collision_rate, eps_inf, **kw)
+        for name, v, unit in (
+            ("conductivity", conductivity, "S/m"),
+            ("collision_rate", collision_rate, "rad/s"),
+        ):
+            if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v):
+                raise TypeError(f"{name} must be a finite number > 0 [{unit}], got {v!r}")
+            if v <= 0:
+                raise ValueError(f"{name} must be > 0 [{unit}], got {float(v):g}")
+        wp = math.sqrt(float(conductivity) * float(collision_rate) / EPSILON_0)
+        return cls(wp, float(collision_rate), eps_inf, **kw)
 
     def _eps(self, f):
         w = _omega(f)

@@ -20,7 +20,14 @@ import math
 
 import numpy as np
 
-from .core import Material, OutOfBandError, _format_band, eps_from_conductivity, format_frequency
+from .core import (
+    Material,
+    OutOfBandError,
+    _format_band,
+    eps_from_conductivity,
+    format_frequency,
+    unit_hint,
+)
 
 __all__ = ["ITU_P2040", "ItuMaterial", "itu", "available_itu"]
 
@@ -136,7 +143,8 @@ class ItuMaterial(Material):
             bands = ", ".join(_format_band(lo, hi) for lo, hi in self.bands)
             raise OutOfBandError(
                 f"ITU-R P.2040 material {self.name!r} is defined for {bands}, got "
-                f"{format_frequency(bad)}. Ways out: give the permittivity yourself (eps=... or "
+                f"{format_frequency(bad)}{unit_hint(bad)}. Ways out: give the permittivity "
+                "yourself (eps=... or "
                 "materials.Constant / eps_from_conductivity(eps_real, sigma, f)), or "
                 f"materials.itu({self.name!r}, extrapolate=True) to extend the nearest band's "
                 "power law (an extrapolation beyond the measured range)."

@@ -27,7 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .convention import from_sionna, sionna_eps_conductivity, sionna_permittivity, to_sionna
-from .medium import ConductiveMedium, resolve_medium
+from .medium import ConductiveMedium, check_thickness, real_number, resolve_medium
 from .slab import slab_coefficients
 from .tables import (
     EnergyWarning,
@@ -73,12 +73,17 @@ class MaterialSpec:
     out_of_range: str = "warn"
     options: TableOptions | None = None
 
+    def __post_init__(self):
+        # checked where it enters (a wrong thickness would otherwise surface only in Sionna)
+        object.__setattr__(self, "thickness", check_thickness(self.thickness))
+
     def material(self):
         """The :class:`~emscatter.materials.Material` (checks the inputs)."""
         return resolve_medium(self.medium, eps_real=self.eps_real, conductivity=self.conductivity)
 
     def tables(self, frequency: float, label: str = "material") -> RadioTables:
         """The tables at ``frequency`` [Hz] (raises out of the medium's band)."""
+        frequency = real_number("frequency", frequency)
         eps = complex(self.material().eps(frequency=frequency))
         return build_tables(
             self.surface,

@@ -14,14 +14,28 @@ Per receiver: the path gain ``Σ|a|²`` and the RMS delay spread of the power-de
 scene a radio map (path gain on a horizontal plane). ``rough − flat`` isolates what roughness
 does; ``rough − sionna`` is what replacing the constant-``S`` model changes.
 
-Media outside their ITU-R P.2040 band (the ITU metal stops at 100 GHz) use the documented
-extrapolation of :func:`emscatter.materials.itu` (``extrapolate=True``) in all three sets.
+A medium outside its ITU-R P.2040 bands (the ITU metal stops at 100 GHz: Sionna's ``box`` at
+140 GHz) is an :class:`~emscatter.materials.OutOfBandError` naming the medium, the frequency and
+the bands, raised by :func:`check_bands` before anything is computed — unless
+``extrapolate=True``, which uses the documented extrapolation of :func:`emscatter.materials.itu`
+in all three sets and records each extrapolated medium in the results (``"extrapolated"``).
+
+Path buffer: Sionna keeps at most ``max_num_paths_per_src`` candidate paths per source and
+drops the rest — in thread order with its default candidate generator, so a full buffer made a
+run irreproducible (rough materials: 20 k rays give ≈ 46 k candidates at depth 2).
+:func:`run_scene` sizes it at :data:`PATHS_PER_RAY` candidates per ray, enlarges it (×4, up to
+:data:`MAX_PATHS_PER_RAY`) and reruns when it was filled, and warns
+(:class:`PathBufferWarning`) if it is still full. It uses Sionna's deterministic candidate
+generator (``PathSolver(deterministic=True)``: candidates kept and de-duplicated in ray order)
+and sums path powers in float64 in a fixed (sorted) order, so the same seed gives the same
+numbers, bit for bit.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import warnings
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -35,9 +49,26 @@ __all__ = [
     "SceneSetup",
     "SETUPS",
     "medium_at",
+    "check_bands",
     "material_factory",
     "run_scene",
+    "PathBufferWarning",
+    "PATHS_PER_RAY",
+    "MAX_PATHS_PER_RAY",
 ]
+
+#: Candidate paths kept per ray at first (Sionna's cap ``max_num_paths_per_src`` = this × the
+#: rays per source): the quick rough room (20 k rays, depth 2) needs ≈ 2.3 per ray; a cap of
+#: 10 per ray gave the same path gain three times in a row (issue 23: −92.745 dB).
+PATHS_PER_RAY = 10
+#: The largest cap tried (per ray) before :class:`PathBufferWarning`.
+MAX_PATHS_PER_RAY = 160
+
+
+class PathBufferWarning(UserWarning):
+    """Sionna's path buffer was full: candidate paths were dropped, so path gains and delay
+    spreads miss part of the power."""
+
 
 #: Sionna's constant scattering coefficient for the "sionna" set (Degli-Esposti et al. 2007
 #: report S ≈ 0.2–0.4 for building walls at UHF; one value for every material and frequency).
@@ -97,16 +128,64 @@ SETUPS = {
 }
 
 
-def medium_at(name: str, frequency: float):
-    """The ITU medium, extrapolated (documented) where the frequency is out of its band."""
+def medium_at(name: str, frequency: float, *, extrapolate: bool = False):
+    """The ITU medium at ``frequency`` [Hz]: :class:`~emscatter.materials.OutOfBandError`
+    (naming the medium, the frequency and its bands) out of its bands, or with
+    ``extrapolate=True`` the documented extrapolation there."""
     mat = materials.itu(name)
     if np.all(mat.in_band(frequency)):
         return mat
+    if not extrapolate:
+        mat.eps(frequency=frequency)  # raises OutOfBandError with the medium's bands
     return materials.itu(name, extrapolate=True)
 
 
-def material_factory(kind: str, frequency: float, *, s: float = DEFAULT_S, table_options=None):
-    """``make_material(object, medium, thickness)`` for :func:`emscatter.radio.scenes.load`."""
+def scene_media(name: str) -> dict:
+    """``object → (ITU medium, thickness)`` of the setup ``name`` (:data:`SETUPS`)."""
+    if name not in SETUPS:
+        raise ValueError(f"scene must be one of {sorted(SETUPS)}, got {name!r}")
+    scene = SETUPS[name].scene
+    return scenes.SIONNA_SCENES[scene] if isinstance(scene, str) else scene.media
+
+
+def check_bands(names, frequencies, *, extrapolate: bool = False) -> list[dict]:
+    """Every medium of the scenes ``names`` checked at every frequency [Hz] before anything is
+    computed: ``[{"scene", "medium", "frequency_ghz", "bands_ghz"}, ...]`` for those out of
+    their ITU-R P.2040 bands — an :class:`~emscatter.materials.OutOfBandError` listing them all
+    unless ``extrapolate=True`` (then the list says what was extrapolated)."""
+    out = []
+    for name in names:
+        for medium in sorted({m for m, _ in scene_media(name).values()}):
+            mat = materials.itu(medium)
+            for f in frequencies:
+                if not np.all(mat.in_band(f)):
+                    bands = [(lo / 1e9, hi / 1e9) for lo, hi in mat.bands]
+                    out.append({"scene": name, "medium": medium, "frequency_ghz": f / 1e9,
+                                "bands_ghz": bands})  # fmt: skip
+    if out and not extrapolate:
+        what = "; ".join(
+            f"{e['medium']!r} in scene {e['scene']!r} at {e['frequency_ghz']:g} GHz (ITU-R P.2040 "
+            "bands " + ", ".join(f"{lo:g}–{hi:g} GHz" for lo, hi in e["bands_ghz"]) + ")"
+            for e in out
+        )
+        raise materials.OutOfBandError(
+            f"materials outside their ITU-R P.2040 bands: {what}. Pick frequencies inside the "
+            "bands, or extrapolate=True (CLI: --extrapolate) to use the documented "
+            "extrapolation (recorded in the outputs)"
+        )
+    return out
+
+
+def material_factory(
+    kind: str,
+    frequency: float,
+    *,
+    s: float = DEFAULT_S,
+    table_options=None,
+    extrapolate: bool = False,
+):
+    """``make_material(object, medium, thickness)`` for :func:`emscatter.radio.scenes.load`
+    (``extrapolate``: see :func:`medium_at`)."""
     import sionna.rt as rt
 
     from .material import EmscatterRadioMaterial
@@ -115,7 +194,7 @@ def material_factory(kind: str, frequency: float, *, s: float = DEFAULT_S, table
         raise ValueError(f"kind must be 'sionna', 'flat' or 'rough', got {kind!r}")
 
     def make(obj, medium, thickness):
-        med = medium_at(medium, frequency)
+        med = medium_at(medium, frequency, extrapolate=extrapolate)
         if kind == "sionna":
             er, sig = med.eps_real_and_conductivity(frequency)
             return rt.RadioMaterial(
@@ -174,31 +253,74 @@ def run_scene(
     s: float = DEFAULT_S,
     table_options=None,
     seed: int = 1,
+    extrapolate: bool = False,
+    paths_per_ray: int = PATHS_PER_RAY,
 ) -> dict:
     """Path gain [linear] and RMS delay spread [s] per receiver, and (if ``cell_size``) a radio
-    map of path gain [linear] (NaN where no ray arrived)."""
+    map of path gain [linear] (NaN where no ray arrived).
+
+    ``paths_per_ray`` sizes Sionna's path buffer (module docstring); ``"path_buffer"`` in the
+    result says how large it was (``"cap"`` per source), how many candidates it kept
+    (``"stored"``) and whether it was ``"full"`` (then a :class:`PathBufferWarning` was
+    given)."""
     import sionna.rt as rt
 
     scene = scenes.load(
-        setup.scene, frequency, material_factory(kind, frequency, s=s, table_options=table_options)
+        setup.scene,
+        frequency,
+        material_factory(
+            kind, frequency, s=s, table_options=table_options, extrapolate=extrapolate
+        ),
     )
     add_devices(scene, setup)
-    paths = rt.PathSolver()(
-        scene,
-        max_depth=max_depth,
-        samples_per_src=int(samples),
-        max_num_paths_per_src=int(samples),
-        diffuse_reflection=True,
-        refraction=True,
-        seed=seed,
-    )
-    re, im = (np.asarray(x.numpy()) for x in paths.a)
+    samples = int(samples)
+    per_ray = max(int(paths_per_ray), 1)
+    while True:
+        # deterministic: candidates kept and de-duplicated in ray order, not thread order
+        solver = rt.PathSolver(deterministic=True)
+        counter = _count_candidates(solver)
+        cap = per_ray * samples
+        paths = solver(
+            scene,
+            max_depth=max_depth,
+            samples_per_src=samples,
+            max_num_paths_per_src=cap,
+            diffuse_reflection=True,
+            refraction=True,
+            seed=seed,
+        )
+        stored = counter.get("stored")
+        full = stored is not None and stored >= cap * counter["sources"]
+        if not full or per_ray >= MAX_PATHS_PER_RAY:
+            break
+        per_ray = min(4 * per_ray, MAX_PATHS_PER_RAY)
+    if full:
+        warnings.warn(
+            f"{setup.name} at {frequency / 1e9:g} GHz ({kind}): Sionna's path buffer was full "
+            f"({cap} candidate paths per source for {samples} rays, depth {max_depth}): the "
+            "candidates beyond it were dropped, so path gains and delay spreads miss part of "
+            "the power. Use fewer rays (samples), a smaller max_depth, or paths_per_ray > "
+            f"{per_ray}.",
+            PathBufferWarning,
+            stacklevel=2,
+        )
+    re, im = (np.asarray(x.numpy(), dtype=np.float64) for x in paths.a)
     power = (re**2 + im**2)[:, 0, 0, 0, :]  # [rx, path]
-    tau = np.asarray(paths.tau.numpy())
+    tau = np.asarray(paths.tau.numpy(), dtype=np.float64)
     tau = tau[:, 0, 0, 0, :] if tau.ndim == 5 else tau[:, 0, :]
+    # The solver returns paths in thread order: sort each receiver's paths (by delay, then
+    # power) so that the float64 sums below do not depend on it.
+    order = np.lexsort((power, tau), axis=-1)
+    power = np.take_along_axis(power, order, axis=-1)
+    tau = np.take_along_axis(tau, order, axis=-1)
     gain = power.sum(axis=1)
     spread = np.array([delay_spread(power[i], tau[i]) for i in range(power.shape[0])])
-    out = {"path_gain": gain, "delay_spread": spread, "num_paths": int(power.shape[1])}
+    out = {
+        "path_gain": gain,
+        "delay_spread": spread,
+        "num_paths": int(power.shape[1]),
+        "path_buffer": {"cap": cap, "stored": stored, "full": bool(full)},
+    }
     if cell_size:
         rm = rt.RadioMapSolver()(
             scene,
@@ -220,6 +342,33 @@ def run_scene(
         if getattr(m, "active_tables", None) is not None and m.is_used
     ]
     return out
+
+
+def _count_candidates(solver) -> dict:
+    """Wraps this solver's candidate generator (Sionna RT 2.x, ``PathSolver._candidate_generator``)
+    to record how many candidate paths its buffer kept (``"stored"``, all sources, read before
+    the image method drops invalid ones) and the number of ``"sources"``; ``{}`` after the call
+    if this Sionna has no such generator (the buffer cannot be checked)."""
+    rec: dict = {}
+    gen = getattr(solver, "_candidate_generator", None)
+    if gen is None or not callable(gen):
+        return rec
+
+    def counting(*args, **kwargs):
+        import drjit as dr
+
+        buf = gen(*args, **kwargs)
+        counter = getattr(buf, "paths_counter", None)
+        if counter is not None:
+            if hasattr(counter, "numpy"):  # a Dr.Jit UInt: evaluates the candidate kernels
+                dr.eval(counter)
+                counter = np.asarray(counter.numpy()).max()
+            rec["stored"] = int(counter)
+            rec["sources"] = int(dr.width(kwargs["src_positions"]))
+        return buf
+
+    solver._candidate_generator = counting
+    return rec
 
 
 def mi_point(p):
@@ -247,25 +396,41 @@ def compare(
     cell_size: float = 0.1,
     max_depth: int = 3,
     table_options=None,
+    extrapolate: bool = False,
     progress=print,
 ) -> dict:
     """Every scene × frequency × material set (module docstring): ``{"rows": [...] per
-    receiver, "maps": {(scene, f, kind): path gain map}}``."""
-    rows, maps = [], {}
+    receiver, "maps": {(scene, f, kind): path gain map}, "extrapolated": [...],
+    "path_buffers": [...], "settings": {...}}``.
+
+    Every medium is checked against its ITU-R P.2040 bands first (:func:`check_bands`): out of
+    band is an :class:`~emscatter.materials.OutOfBandError` before any ray is traced, unless
+    ``extrapolate=True``; each row's ``"extrapolated_media"`` names the media extrapolated
+    there (``"none"``)."""
+    if not isinstance(extrapolate, bool):
+        raise TypeError(f"extrapolate must be True or False, got {extrapolate!r}")
+    names, frequencies = tuple(names), tuple(float(f) for f in frequencies)
+    extrapolated = check_bands(names, frequencies, extrapolate=extrapolate)
+    rows, maps, buffers = [], {}, []
     for name in names:
         setup = SETUPS[name]
         for f in frequencies:
+            here = sorted({e["medium"] for e in extrapolated
+                           if e["scene"] == name and e["frequency_ghz"] == f / 1e9})  # fmt: skip
             for kind in KINDS:
                 r = run_scene(
                     setup, kind, f, samples=samples, max_depth=max_depth, cell_size=cell_size,
-                    map_samples=map_samples, table_options=table_options,
+                    map_samples=map_samples, table_options=table_options, extrapolate=extrapolate,
                 )  # fmt: skip
                 maps[(name, f, kind)] = r["radio_map"]
+                buffers.append({"scene": name, "frequency_ghz": f / 1e9, "kind": kind,
+                                **r["path_buffer"]})  # fmt: skip
                 for i, (g, ds) in enumerate(zip(r["path_gain"], r["delay_spread"], strict=True)):
                     rows.append(
                         {"scene": name, "frequency_ghz": f / 1e9, "kind": kind, "rx": i,
                          "path_gain_db": 10 * math.log10(g) if g > 0 else -math.inf,
-                         "delay_spread_ns": ds * 1e9}
+                         "delay_spread_ns": ds * 1e9,
+                         "extrapolated_media": " ".join(here) or "none"}
                     )  # fmt: skip
                 if progress:
                     progress(
@@ -273,7 +438,23 @@ def compare(
                         + ", ".join(f"{10 * math.log10(g):.1f}" for g in r["path_gain"] if g > 0)
                         + " dB"
                     )
-    return {"rows": rows, "maps": maps}
+    settings = {
+        "scenes": list(names),
+        "frequencies_ghz": [f / 1e9 for f in frequencies],
+        "samples": int(samples),
+        "map_samples": map_samples,
+        "cell_size_m": cell_size,
+        "max_depth": int(max_depth),
+        "table_options": None if table_options is None else asdict(table_options),
+        "extrapolate": extrapolate,
+    }
+    return {
+        "rows": rows,
+        "maps": maps,
+        "extrapolated": extrapolated,
+        "path_buffers": buffers,
+        "settings": settings,
+    }
 
 
 def summarize(rows: list) -> list:
@@ -284,6 +465,9 @@ def summarize(rows: list) -> list:
     for scene, f in sorted({(r["scene"], r["frequency_ghz"]) for r in rows}):
         rxs = sorted({r["rx"] for r in rows if r["scene"] == scene})
         entry = {"scene": scene, "frequency_ghz": f}
+        extra = {r.get("extrapolated_media", "none") for r in rows
+                 if r["scene"] == scene and r["frequency_ghz"] == f}  # fmt: skip
+        entry["extrapolated_media"] = " ".join(sorted(extra))
         for ref in ("flat", "sionna"):
             rough = [key[(scene, f, "rough", i)] for i in rxs]
             other = [key[(scene, f, ref, i)] for i in rxs]
@@ -300,8 +484,10 @@ def summarize(rows: list) -> list:
 
 
 def write_outputs(result: dict, out_dir, stem: str = "indoor") -> list:
-    """``<stem>_receivers.csv``, ``<stem>_summary.csv``, ``<stem>_maps_<scene>.png`` (radio map
-    of the rough set and its differences per frequency) and ``<stem>_vs_frequency.png``."""
+    """``<stem>_receivers.csv``, ``<stem>_summary.csv``, ``<stem>_run.json`` (the settings,
+    the media extrapolated out of their bands, the path-buffer use), ``<stem>_maps_<scene>.png``
+    (radio map of the rough set and its differences per frequency) and
+    ``<stem>_vs_frequency.png``."""
     from pathlib import Path
 
     import matplotlib
@@ -309,7 +495,7 @@ def write_outputs(result: dict, out_dir, stem: str = "indoor") -> list:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..io import save_figure, write_csv
+    from ..io import save_figure, write_csv, write_json
 
     out = Path(out_dir)
     rows = result["rows"]
@@ -325,6 +511,12 @@ def write_outputs(result: dict, out_dir, stem: str = "indoor") -> list:
     written.append(
         write_csv(out / f"{stem}_summary.csv", cols, [np.array([r[c] for r in summ]) for c in cols])
     )
+    run = {
+        "settings": result.get("settings", {}),
+        "extrapolated": result.get("extrapolated", []),
+        "path_buffers": result.get("path_buffers", []),
+    }
+    written.append(write_json(out / f"{stem}_run.json", run))
     maps = result["maps"]
     for scene in sorted({k[0] for k in maps}):
         setup = SETUPS[scene]

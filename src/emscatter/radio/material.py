@@ -63,7 +63,7 @@ from sionna.rt.utils import (
 from .. import solvers
 from ..spectra import ExponentialCorrelation, GaussianCorrelation
 from .convention import sionna_permittivity, to_sionna
-from .medium import resolve_medium
+from .medium import check_thickness, resolve_medium
 from .tables import TableOptions, build_tables, check_policy, check_surface
 
 __all__ = ["EmscatterRadioMaterial", "PLUGIN_NAME"]
@@ -213,15 +213,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             method = kw.get("method", "auto")
         super().__init__(props)
         self._medium = resolve_medium(medium, eps_real=eps_real, conductivity=conductivity)
-        if thickness is not None:
-            if not (
-                isinstance(thickness, int | float) and math.isfinite(thickness) and thickness > 0
-            ):
-                raise ValueError(
-                    f"thickness must be a positive number of metres, or None for a half-space; "
-                    f"got {thickness!r}"
-                )
-            thickness = float(thickness)
+        thickness = check_thickness(thickness)
         self._thickness = thickness
         self._surface = None if surface is None else check_surface(surface)
         self._sigma = 0.0 if surface is None else float(surface.sigma)

@@ -4,7 +4,7 @@ What Sionna RT computes with the emscatter material is compared with what emscat
 without Sionna:
 
 * **specular** — the image path: ``|a|² = |r_coh,p(θ)|² (λ / 4πL)²`` with ``L = r₁ + r₂`` and
-  ``r_coh`` from :func:`emscatter.solvers.coherent.coherent_amplitude` at the exact incidence
+  ``r_coh`` from :func:`emscatter.coherent.coherent_amplitude` at the exact incidence
   angle (the material interpolates a table; Sionna works in float32);
 * **diffuse** — the bistatic radar equation integrated over the plate,
   ``P_r / P_t = ∫ λ² σ⁰_qp(θi, θs, φ) / ((4π)³ r₁² r₂²) dA`` (isotropic antennas of unit gain),
@@ -67,7 +67,7 @@ class PlateCase:
 def specular_prediction(case: PlateCase) -> dict:
     """Image-path gain per co-polarization (``"VV"`` → v, ``"HH"`` → h) [linear], and the
     method used."""
-    from ..solvers.coherent import coherent_amplitude
+    from ..coherent import coherent_amplitude
 
     k = wavenumber(frequency=case.frequency)
     lam = SPEED_OF_LIGHT / case.frequency

@@ -7,10 +7,12 @@
   floor, a ceiling board, a wooden table and a glass pane;
 * Sionna's own ``box`` and ``floor_wall`` scenes (:data:`SIONNA_SCENES`).
 
-:func:`load` loads any of them with Sionna, sets the frequency *before* the materials are
-attached (so a material whose band excludes Sionna's default 3.5 GHz can be used) and gives each
-object the material a callback makes for it; the scene's own materials (the XML's placeholders,
-or Sionna's ITU materials) are removed, so that none of them is frequency-updated later.
+:func:`load` loads any of them, or a user's Mitsuba/Sionna XML scene file, with Sionna, sets
+the frequency *before* the materials are attached (so a material whose band excludes Sionna's
+default 3.5 GHz can be used) and gives each object the material a callback makes for it; the
+scene's own materials (the XML's placeholders, or Sionna's ITU materials) are removed, so that
+none of them is frequency-updated later. Generated scenes go to a temporary directory that is
+removed once Sionna has read it.
 """
 
 from __future__ import annotations
@@ -208,34 +210,68 @@ def furnished_room() -> SceneSpec:
     return SceneSpec(meshes, media, notes={"size": (lx, ly, lz)})
 
 
-def load(scene, frequency: float, make_material, *, workdir=None):
+def load(scene, frequency: float, make_material=None, *, workdir=None, media=None):
     """A Sionna scene at ``frequency`` [Hz] with each object's material from
     ``make_material(object_name, medium, thickness) -> RadioMaterialBase``.
 
-    ``scene`` is a :class:`SceneSpec`, or the name of one of :data:`SIONNA_SCENES`.
-    Generated scenes are written under ``workdir`` (a temporary directory by default).
+    ``scene`` is one of
+
+    * a :class:`SceneSpec` — written as PLY + XML under ``workdir``, or, by default, under a
+      temporary directory that is removed as soon as Sionna's ``load_scene`` has read it (also
+      when loading fails or is interrupted): nothing is left in the temp dir;
+    * the name of one of :data:`SIONNA_SCENES` (``"box"``, ``"floor_wall"``);
+    * the path of a Mitsuba/Sionna XML scene file (``*.xml``, ``str`` or :class:`os.PathLike`),
+      loaded with ``sionna.rt.load_scene``. Without ``make_material`` the scene keeps its own
+      materials (only the frequency is set). With it, each object's ``(medium, thickness)``
+      comes from ``media`` (object name → ``(medium, thickness [m] or None)``) or, for objects
+      without an entry, from the object's ITU material in the XML (``itu_type``, thickness).
+
+    ``media`` (optional) overrides the media of any scene, object by object.
     """
     import sionna.rt as rt
 
-    if isinstance(scene, str):
-        if scene not in SIONNA_SCENES:
-            raise ValueError(
-                f"scene must be one of {sorted(SIONNA_SCENES)} or a SceneSpec, got {scene!r}"
-            )
+    if isinstance(scene, SceneSpec):
+        if workdir is not None:
+            sc = rt.load_scene(os.fspath(write_scene(Path(workdir), scene)), merge_shapes=False)
+        else:
+            # Sionna has read every file once load_scene returns: remove them right away.
+            with tempfile.TemporaryDirectory(prefix="emscatter-radio-") as tmp:
+                sc = rt.load_scene(os.fspath(write_scene(Path(tmp), scene)), merge_shapes=False)
+        base = dict(scene.media)
+    elif isinstance(scene, str) and scene in SIONNA_SCENES:
         sc = rt.load_scene(getattr(rt.scene, scene), merge_shapes=False)
-        media = SIONNA_SCENES[scene]
+        base = dict(SIONNA_SCENES[scene])
+    elif isinstance(scene, str | os.PathLike) and Path(scene).suffix.lower() == ".xml":
+        path = Path(scene)
+        if not path.is_file():
+            raise FileNotFoundError(
+                f"scene: no XML scene file at {os.fspath(path)!r} (a Mitsuba/Sionna scene "
+                "file, e.g. exported from Blender with Mitsuba's add-on)"
+            )
+        sc = rt.load_scene(os.fspath(path), merge_shapes=False)
+        if make_material is None:
+            sc.frequency = frequency
+            return sc
+        base = _xml_media(sc)
     else:
-        d = (
-            Path(workdir)
-            if workdir is not None
-            else Path(tempfile.mkdtemp(prefix="emscatter-radio-"))
+        raise ValueError(
+            f"scene must be a SceneSpec, one of Sionna's scenes {sorted(SIONNA_SCENES)}, or the "
+            f"path of a Mitsuba/Sionna XML scene file (*.xml); got {scene!r}"
         )
-        xml = write_scene(d, scene)
-        sc = rt.load_scene(os.fspath(xml), merge_shapes=False)
-        media = scene.media
-    missing = sorted(set(sc.objects) - set(media))
+    if make_material is None:
+        raise ValueError(
+            "make_material is required for a generated or built-in scene: a callable "
+            "(object_name, medium, thickness) -> radio material (e.g. "
+            "emscatter.radio.indoor.material_factory('rough', frequency))"
+        )
+    if media is not None:
+        base.update(media)
+    missing = sorted(name for name in sc.objects if base.get(name) is None)
     if missing:
-        raise ValueError(f"objects {missing} of the scene have no medium in {sorted(media)}")
+        raise ValueError(
+            f"objects {missing} of the scene have no medium; give media={{name: (medium, "
+            f"thickness)}} for them (known: {sorted(k for k, v in base.items() if v)})"
+        )
     # The scene's own materials are updated at every frequency change even once unused, so an
     # ITU one out of its band (Sionna's metal box at 140 GHz) would fail: swap in loss-free
     # neutral materials, drop the originals, set the frequency, then attach the real ones.
@@ -245,7 +281,22 @@ def load(scene, frequency: float, make_material, *, workdir=None):
     sc.remove(original)
     sc.frequency = frequency
     for name, obj in sc.objects.items():
-        medium, thickness = media[name]
+        medium, thickness = base[name]
         obj.radio_material = make_material(name, medium, thickness)
     sc.remove([f"neutral-{name}" for name in sc.objects])
     return sc
+
+
+def _xml_media(sc) -> dict:
+    """``object → (medium, thickness)`` from the materials of a loaded XML scene: ITU materials
+    give their ``itu_type``, emscatter materials their medium; others ``None`` (unknown)."""
+    out = {}
+    for name, obj in sc.objects.items():
+        mat = obj.radio_material
+        itu_type = getattr(mat, "itu_type", None)
+        medium = itu_type if itu_type is not None else getattr(mat, "medium", None)
+        thickness = getattr(mat, "thickness", None)
+        if thickness is not None and not isinstance(thickness, float | int):
+            thickness = float(np.asarray(thickness).ravel()[0])
+        out[name] = None if medium is None else (medium, thickness)
+    return out

@@ -14,7 +14,7 @@ Rough faces (both faces carry the same roughness statistics — a wall modelled 
 hit from either side, and each side is "the front" for the rays that hit it):
 
 * the wave reflected outside the front face is emscatter's coherent reflection
-  ``r_coh`` (:func:`emscatter.solvers.coherent.coherent_amplitude`: the chosen solver's coherent
+  ``r_coh`` (:func:`emscatter.coherent.coherent_amplitude`: the chosen solver's coherent
   power with its mean-field phase);
 * each crossing of a rough face keeps the Kirchhoff mean field
   ``χ_t = exp(−σ²(k₁z − k₂z)²/2)`` (``t t′ → (1 − r²) χ_t²``);

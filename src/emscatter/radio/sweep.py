@@ -27,9 +27,9 @@ import warnings
 
 import numpy as np
 
+from ..coherent import ament_factor, boithias_factor, coherent_amplitude
 from ..conventions import wavenumber
 from ..fresnel import fresnel
-from ..solvers.coherent import ament_factor, boithias_factor, coherent_amplitude
 from .medium import resolve_medium
 
 __all__ = ["sweep", "write_outputs", "DEFAULT_WALL"]

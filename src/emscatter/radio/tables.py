@@ -3,7 +3,7 @@
 For one surface, one medium and one frequency:
 
 * **coherent** — the front face's complex coherent reflection ``r_coh,p`` (h, v) on a grid
-  uniform in ``cosθi`` (:func:`emscatter.solvers.coherent.coherent_amplitude`), stored with
+  uniform in ``cosθi`` (:func:`emscatter.coherent.coherent_amplitude`), stored with
   the flat Fresnel coefficient beside it: the material evaluates Fresnel (and the slab) exactly
   per ray and interpolates only the smooth roughness correction ``r_coh − r_Fresnel``;
 * **lobe** — ``σ⁰_qp(θi, θs, φs) / (4π cosθi)`` [1/sr] for the four pairs ``hh, hv, vh, vv``
@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import inspect
 import math
+import numbers
 import time
 import warnings
 from collections import OrderedDict
@@ -37,6 +38,7 @@ from ..conventions import wavenumber
 from ..emissivity import lobe_width
 from ..fresnel import fresnel_cos
 from ..spectra import Roughness, check_roughness
+from .medium import real_number
 
 __all__ = [
     "TableOptions",
@@ -89,10 +91,17 @@ class TableOptions:
     def __post_init__(self):
         for name in ("n_cos", "n_cos_spm", "n_theta", "n_alpha", "n_s"):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 4:
+            if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Integral) or v < 4:
                 raise ValueError(f"TableOptions.{name} must be an integer >= 4, got {v!r}")
-        if not 10.0 <= float(self.theta_max_deg) < 90.0:
+            object.__setattr__(self, name, int(v))  # np.int64 too; one key for the cache
+        for name in ("theta_max_deg", "energy_tolerance", "energy_warn_below_deg"):
+            object.__setattr__(self, name, real_number(f"TableOptions.{name}", getattr(self, name)))
+        if not 10.0 <= self.theta_max_deg < 90.0:
             raise ValueError(f"theta_max_deg must be in [10, 90), got {self.theta_max_deg!r}")
+        if self.energy_tolerance < 0:
+            raise ValueError(
+                f"TableOptions.energy_tolerance must be >= 0, got {self.energy_tolerance!r}"
+            )
 
 
 @dataclass
@@ -254,7 +263,7 @@ def _coherent_on_grid(rough, eps, k, method, cos_nodes, fres, n_spm):
     and the correction ``r_coh − r_Fresnel`` is carried to the grid by a cubic spline."""
     from scipy.interpolate import CubicSpline
 
-    from ..solvers.coherent import coherent_amplitude
+    from ..coherent import coherent_amplitude
 
     def amp(c):
         th = np.arccos(np.clip(c, 1e-4, 1.0))

@@ -237,3 +237,99 @@ def enforce(name: str, report: dict, out_of_range: str, *, stacklevel: int = 3) 
     if out_of_range == "warn":
         warnings.warn(msg, ValidityWarning, stacklevel=stacklevel)
     return out_of_range == "nan"
+
+
+# ----------------------------------------------------------------------------- blending
+#: Half-width of auto's transition band, as a factor on the deciding parameter (kσ or kℓ):
+#: within a factor :data:`BLEND_FACTOR` of a switch the two methods are blended.
+BLEND_FACTOR = 1.25
+_PROBES = 4  # probes per ray (a region narrower than δ/4 between them can be missed)
+_BISECT = 12  # bisection steps locating a switch (its position to δ/4096)
+
+
+def _scaled(roughness, log_s: float, log_l: float):
+    """``roughness`` with σ scaled by ``e^log_s`` and both correlation lengths by ``e^log_l``."""
+    p = roughness._params()
+    fs, fl = math.exp(log_s), math.exp(log_l)
+    p.update(sigma=p["sigma"] * fs, length=p["length"] * fl)
+    if p.get("length_y") is not None:
+        p["length_y"] = p["length_y"] * fl
+    if roughness.dimension == 1:
+        p["length_y"] = None
+    return type(roughness)(**p)
+
+
+def _smooth(t: float) -> float:
+    """C¹ step on [0, 1]: 0 → 0, 1 → 1."""
+    t = min(max(t, 0.0), 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
+    """The methods ``method="auto"`` blends for this roughness and their weights.
+
+    ``auto``'s choice (:func:`rank_methods`, first) is piecewise constant over
+    ``(log kσ, log kℓ)``: it switches where a validity limit is crossed (SPM's ``kσ ≤ 0.3``
+    and slope, GO's stationary phase ``(2kσ)² ≥ 10`` and ``kℓ ≥ 6``, PO's ``kℓ`` and slope,
+    the IEM's ``kσ ≤ 3`` and slope), where two out-of-range methods' excesses cross, and at
+    the edges of the measured correction (map cells, the 1 dB tolerance; :mod:`.measured`).
+    Between methods that disagree (up to ~3 dB, e.g. IEM → GO at ``kσ = √10/2``) a hard
+    switch is a jump in σ⁰. So within a factor :data:`BLEND_FACTOR` of a switch, along either
+    parameter, σ⁰ is the linear combination ``Σ wₘ σ⁰ₘ``: the method of the side the roughness
+    is on has raw weight 1, each other method met within the band ``s((1 − dₘ/δ))`` (``dₘ``
+    the distance to its region along the kσ or kℓ axis in log units, ``δ = ln BLEND_FACTOR``,
+    ``s`` a C¹ step), normalized: ``½ : ½`` at a switch, pure a factor ``BLEND_FACTOR`` away
+    (three regions at a corner share likewise). Linear (not dB) because σ⁰ integrates
+    linearly: the blend's hemispherical reflectivity is the same convex combination of the
+    methods' ones, so a blend of two energy-conserving answers conserves energy. The
+    switches are found numerically (the pick at
+    ``± ln BLEND_FACTOR`` on each axis, bisection to the switch), so they need no list kept in
+    step with the criteria: a new limit or map blends like the others.
+
+    Returns ``{"weights": {name: w}, "switches": [...]}`` (weights sum to 1, names in
+    decreasing weight; each switch: parameter, value of kσ or kℓ at the switch, methods on
+    both sides). Roughness without a size scaling (not a :class:`~emscatter.spectra.Roughness`)
+    gets its pick with weight 1."""
+    methods = tuple(methods)
+
+    def pick(ls: float, ll: float) -> str:
+        r = roughness if ls == 0.0 and ll == 0.0 else _scaled(roughness, ls, ll)
+        return rank_methods(r, k, eps=eps, methods=methods)[0][0]
+
+    p0 = pick(0.0, 0.0)
+    if not hasattr(roughness, "_params"):
+        return {"weights": {p0: 1.0}, "switches": []}
+    d = math.log(BLEND_FACTOR)
+    nearest: dict[str, tuple[float, str, float]] = {}  # other method -> (distance, axis, at)
+    for axis in (0, 1):
+        at = lambda t, a=axis: pick(t, 0.0) if a == 0 else pick(0.0, t)  # noqa: E731
+        for sign in (1.0, -1.0):
+            lo, m_lo = 0.0, p0
+            for j in range(1, _PROBES + 1):  # probes along the ray catch narrow regions too
+                hi = sign * d * j / _PROBES
+                if at(hi) == m_lo:
+                    lo = hi
+                    continue
+                for _ in range(_BISECT):  # m_lo at lo, another at hi: to the first change
+                    mid = 0.5 * (lo + hi)
+                    if at(mid) == m_lo:
+                        lo = mid
+                    else:
+                        hi = mid
+                m_lo, lo = at(hi), sign * d * j / _PROBES
+                if m_lo != p0 and (m_lo not in nearest or abs(hi) < nearest[m_lo][0]):
+                    nearest[m_lo] = (abs(hi), ("k_sigma", "k_l")[axis], hi)
+                m_lo = at(lo)
+    raw = {p0: 1.0}
+    switches = []
+    for other, (dist, name, pos) in nearest.items():
+        r = _smooth(1.0 - dist / d)
+        if r > 0.0:
+            raw[other] = r
+            base = k * (roughness.sigma if name == "k_sigma" else roughness.length)
+            switches.append({"parameter": name, "at": base * math.exp(pos),
+                             "methods": (p0, other)})  # fmt: skip
+    total = sum(raw.values())
+    weights = {n: r / total for n, r in raw.items()}
+    order = sorted(weights, key=lambda n: -weights[n])
+    return {"weights": {n: weights[n] for n in order}, "switches": switches}

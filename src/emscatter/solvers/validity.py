@@ -243,7 +243,7 @@ def cutoff_slope_variances(rough: Roughness, k_max: float) -> tuple[float, float
         closed = _isotropic_closed(rough, float(k_max))
         if closed is not None:
             return closed
-    from .spm_second_order import _gl, _segment_nodes  # fixed Gauss–Legendre rules
+    from emscatter.solvers.quadrature import _gl, _segment_nodes  # fixed Gauss–Legendre rules
 
     x, w = _segment_nodes(0.0, float(k_max), 200)
     if rough.dimension == 1:

@@ -38,9 +38,10 @@ def mom_emissivity(
     Returns ``{"h": {...}, "v": {...}}`` with ``mom``, ``mom_se``, ``spm``, ``fresnel`` (flat
     surface), ``difference`` (MoM − SPM), and the MoM discretization.
     """
+    from emscatter.solvers.mom import model as mom
+
     from .. import emissivity
     from ..fresnel import fresnel
-    from ..solvers import mom
 
     rough = rough_of(k_sigma, k_l)
     ti = math.radians(theta_i_deg)

@@ -3,7 +3,7 @@
 For a grid of roughness cells ``(kσ, kℓ)`` (Gaussian ``exp(−x²/ℓ²)`` or exponential
 ``exp(−|x|/ℓ)`` correlation, 1-D profiles, 2-D scattering problem), a fixed incidence ``θi``
 and a permittivity, every approximation is compared with the Monte Carlo method of moments
-(:func:`emscatter.solvers.mom.bistatic`, the exact reference). The run has two stages:
+(:func:`emscatter.solvers.mom.model.bistatic`, the exact reference). The run has two stages:
 
 1. **references** (:func:`references`): the MoM σ⁰ on signed ``θs ∈ [−60°, 60°]`` every 1°,
    its standard errors and the coherent/incoherent reflectivities of every cell, written to a
@@ -13,8 +13,8 @@ and a permittivity, every approximation is compared with the Monte Carlo method 
 
 Approximations (rows ``method``):
 
-* ``spm1`` — first-order SPM incoherent σ⁰ (:mod:`emscatter.solvers.spm`);
-* ``po`` — Kirchhoff physical optics σ⁰ (:mod:`emscatter.solvers.kirchhoff_po`);
+* ``spm1`` — first-order SPM incoherent σ⁰ (:mod:`emscatter.solvers.spm.model`);
+* ``po`` — Kirchhoff physical optics σ⁰ (:mod:`emscatter.solvers.kirchhoff.po`);
 * ``go`` — Kirchhoff geometric optics σ⁰ with Smith shadowing and the slope ``auto`` would use
   (for the exponential: its spectrum below ``2k``, :mod:`emscatter.solvers.validity`);
 * ``go_surface`` (exponential maps) — GO with the full slope of the map's surface;
@@ -208,12 +208,12 @@ def cell_slope(ks: float, kl: float, correlation: str = "gaussian", taper: float
 def _points_per_wavelength(
     ks: float, kl: float, correlation: str = "gaussian", taper: float = 2.5, eps="pec"
 ) -> float:
-    """Points per wavelength *in the denser medium* (as :func:`emscatter.solvers.mom.bistatic`
+    """Points per wavelength *in the denser medium* (as :func:`emscatter.solvers.mom.model.bistatic`
     counts them): ≥ 10 and ≥ 8 along the arc at 3 rms slopes (the fields), and the geometry
     in free-space units divided by the index: Gaussian ≥ 5 points per correlation length;
     tapered exponential ``π/dx ≥ 3 × 1.3 K_c`` (its spectrum is below 1e-10 beyond
     ``1.3 K_c``), i.e. ``7.8·taper`` points per free-space wavelength."""
-    from ..solvers.mom_solve import _n_eff
+    from emscatter.solvers.mom.solve import _n_eff
 
     m = cell_slope(ks, kl, correlation, taper)
     arc = 8.2 * math.sqrt(1 + 9 * m * m)
@@ -261,7 +261,7 @@ def _sigma0_error(mom_bins, se_bins, approx_bins) -> dict:
 # ----------------------------------------------------------------------------- stage 1: MoM
 def mom_reference(ks: float, kl: float, cfg: MapConfig, index: tuple[int, int] = (0, 0)) -> dict:
     """The MoM reference of one cell (JSON-able dict; ``status`` says if it was skipped)."""
-    from ..solvers import mom
+    from emscatter.solvers.mom import model as mom
 
     t0 = time.perf_counter()
     rough = surface_of(ks, kl, cfg.correlation, cfg.taper)
@@ -407,8 +407,11 @@ def map_methods(cfg: MapConfig) -> tuple[str, ...]:
 def _approximations(rough, nominal, cfg: MapConfig) -> tuple[dict, float]:
     """σ⁰ (2, n) of every approximation on the map angles for the cell's surface ``rough``,
     and SPM2's coherent reflectivity; ``go`` with the slope auto would use for ``nominal``."""
+    from emscatter.solvers.kirchhoff import go as kirchhoff_go
+    from emscatter.solvers.kirchhoff import po as kirchhoff_po
+    from emscatter.solvers.spm import model as spm
+
     from .. import solvers
-    from ..solvers import kirchhoff_go, kirchhoff_po, spm
     from ..solvers.validity import wave_slope_variances
 
     _, _, ts, ps = _angles(cfg)

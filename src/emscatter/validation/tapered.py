@@ -14,7 +14,7 @@ the first-order scattering sees: the taper is below 2e-4 at the maps' largest Br
 wavenumber 1.21 k) and smooth, so that a grid of ``dx ≤ π/(3·1.3 K_c)`` resolves it; and
 **every approximation is evaluated on this same spectrum**: SPM (its spectrum), GO (its
 finite slope), SPM2 (its support), PO and the IEM (their n-fold spectra ``w_n`` of ``ρⁿ``,
-tabulated here and used through :func:`emscatter.solvers.kirchhoff_po.log_nfold`'s hook).
+tabulated here and used through :func:`emscatter.solvers.kirchhoff.po.log_nfold`'s hook).
 
 :class:`TaperedExponential` is a 1-D :class:`~emscatter.spectra.ExponentialCorrelation`
 subclass (so a model's nominal exponential parameters — e.g. the IEM's nominal slope σ/ℓ —
@@ -115,7 +115,7 @@ class TaperedExponential(ExponentialCorrelation):
 
     def log_nfold_table(self):
         """``f(n, s) = log(w_n/ℓ)`` at the scaled wavenumber ``s = |q_x| ℓ`` (the hook of
-        :func:`emscatter.solvers.kirchhoff_po.log_nfold`; :func:`_nfold_function`)."""
+        :func:`emscatter.solvers.kirchhoff.po.log_nfold`; :func:`_nfold_function`)."""
         return _nfold_function(float(self.cut))
 
 

@@ -1,0 +1,239 @@
+"""Method resolution for the public API: validity reports (cached), ranking, per-angle policy.
+
+* :func:`validity_report` — one solver's ``check_validity`` for a roughness and ``k``, with
+  ``eps`` and ``theta_i`` passed when the solver accepts them (BOARD interface 1), cached per
+  input so that repeated calls for the same roughness integrate nothing twice.
+* :func:`rank_methods` — ``select.rank_methods`` (BOARD interface 2) when the solvers package
+  provides it, else the same answer built from today's ``select.select_method``: best first,
+  each with its report.
+* :func:`angle_policy` — the caller's ``out_of_range`` policy applied per incidence angle:
+  ``"warn"`` names the angles in degrees (and values), ``"nan"`` blanks those angles only,
+  ``"raise"`` raises :class:`~emscatter.solvers.select.ValidityError`, ``"ignore"`` records.
+
+Roughness-level validity (the whole call) keeps :func:`emscatter.solvers.select.enforce`.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import math
+import warnings
+from collections import OrderedDict
+
+import numpy as np
+
+from emscatter import solvers
+from emscatter.conventions import fmt
+from emscatter.fresnel import is_pec
+from emscatter.solvers import select
+
+__all__ = [
+    "validity_report", "angle_report", "call_report", "rank_methods", "angle_policy",
+    "angles_deg", "blend_weights",
+]  # fmt: skip
+
+_CACHE: OrderedDict = OrderedDict()
+_CACHE_SIZE = 512
+_UNCACHEABLE = object()
+
+
+def _key_of(value):
+    """A hashable key for eps / theta_i / option values, or ``_UNCACHEABLE``."""
+    if value is None or isinstance(value, str | bool | int | float | complex):
+        return value
+    arr = np.asarray(value)
+    if arr.dtype == object or arr.size > 4096:
+        return _UNCACHEABLE
+    return (arr.dtype.str, arr.shape, arr.tobytes())
+
+
+@functools.lru_cache(maxsize=256)
+def _accepts(func, name: str) -> bool:
+    params = inspect.signature(func).parameters
+    return name in params or any(p.kind is p.VAR_KEYWORD for p in params.values())
+
+
+def _call_check(module, roughness, k, eps, theta_i, options) -> dict:
+    check = module.check_validity
+    kw = {n: v for n, v in options.items() if _accepts(check, n)}
+    if eps is not None and _accepts(check, "eps"):
+        kw["eps"] = eps
+    if theta_i is not None and _accepts(check, "theta_i"):
+        try:
+            return dict(check(roughness, k, theta_i=theta_i, **kw))
+        except (TypeError, ValueError):  # a solver that takes one scalar angle only
+            pass
+    return dict(check(roughness, k, **kw))
+
+
+def _remember(key, value) -> None:
+    if key is not None:
+        _CACHE[key] = value
+        if len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+
+
+def _recall(key):
+    if key is None:
+        return None
+    value = _CACHE.get(key)
+    if value is not None:
+        _CACHE.move_to_end(key)
+    return value
+
+
+def validity_report(name: str, roughness, k: float, *, eps=None, theta_i=None, **options):
+    """``solvers.get(name).check_validity(roughness, k, ...)`` — a fresh dict each call, cached
+    on ``(name, roughness, k, eps, theta_i, options)``. A solver that cannot take this
+    roughness gives ``{"valid": False, "unsupported": True, "reasons": [why]}``."""
+    parts = (name, roughness, float(k), _key_of(eps), _key_of(theta_i))
+    parts += tuple(sorted((n, _key_of(v)) for n, v in options.items()))
+    key = None if _UNCACHEABLE in parts else parts
+    hit = _recall(key)
+    if hit is not None:
+        return dict(hit)
+    module = solvers.get(name)
+    try:
+        report = _call_check(module, roughness, k, eps, theta_i, options)
+    except (ValueError, TypeError) as exc:
+        report = {"valid": False, "reasons": [str(exc)], "unsupported": True}
+    _remember(key, report)
+    return dict(report)
+
+
+def angle_report(name: str, roughness, k: float, *, eps=None, theta_i) -> dict:
+    """The per-angle entries (``angle_valid``, ``angle_excess`` in ``theta_i``'s shape,
+    ``angle_reasons``) of :func:`validity_report` for incidence angles ``theta_i`` [rad],
+    evaluated at the distinct angles and mapped back; cached on the angles themselves, so a
+    repeated call does not sort them again. Fresh arrays each call."""
+    ti = np.asarray(theta_i, dtype=float)
+    parts = ("angles", name, roughness, float(k), _key_of(eps), _key_of(ti))
+    key = None if _UNCACHEABLE in parts else parts
+    hit = _recall(key)
+    if hit is not None:
+        return {n: v.copy() if isinstance(v, np.ndarray) else v for n, v in hit.items()}
+    uniq, inverse = np.unique(ti, return_inverse=True)
+    angular = validity_report(name, roughness, k, eps=eps, theta_i=uniq)
+    out = {}
+    for entry in ("angle_valid", "angle_excess"):
+        if entry in angular:
+            out[entry] = np.asarray(angular[entry])[inverse.reshape(ti.shape)]
+    if "angle_reasons" in angular:
+        out["angle_reasons"] = angular["angle_reasons"]
+    _remember(key, out)
+    return {n: v.copy() if isinstance(v, np.ndarray) else v for n, v in out.items()}
+
+
+def call_report(name: str, roughness, k: float, *, eps=None, theta_i=None) -> dict:
+    """:func:`validity_report` with ``"roughness_valid"`` (its own ``valid``) and, when
+    ``theta_i`` [rad] is given, :func:`angle_report`'s entries merged in (``valid`` then also
+    requires every angle); cached on the inputs as one entry. A fresh dict each call; its
+    arrays are read-only (shared between calls)."""
+    ti = None if theta_i is None else np.asarray(theta_i, dtype=float)
+    parts = ("call", name, roughness, float(k), _key_of(eps), _key_of(ti))
+    key = None if _UNCACHEABLE in parts else parts
+    hit = _recall(key)
+    if hit is None:
+        hit = validity_report(name, roughness, k, eps=eps)
+        hit["roughness_valid"] = bool(hit.get("valid", False))
+        if ti is not None:  # checked at the distinct angles, mapped back to theta_i's shape
+            hit.update(angle_report(name, roughness, k, eps=eps, theta_i=ti))
+            if "angle_valid" in hit:
+                hit["valid"] = hit["roughness_valid"] and bool(np.all(hit["angle_valid"]))
+        for v in hit.values():
+            if isinstance(v, np.ndarray):
+                v.flags.writeable = False  # shared by the calls that hit this entry
+        _remember(key, hit)
+    return dict(hit)
+
+
+def clear_cache() -> None:
+    """Forget every cached validity report and ranking."""
+    _CACHE.clear()
+
+
+def _excess(report: dict) -> float:
+    if report.get("valid", False):
+        return 0.0
+    return float(report.get("excess", math.inf))
+
+
+def rank_methods(roughness, k: float, *, eps=None, theta_i=None, methods=None):
+    """``[(name, report), ...]`` best first for ``method="auto"`` (BOARD interface 2).
+
+    Uses :func:`emscatter.solvers.select.rank_methods` when it exists. Otherwise: the method
+    :func:`~emscatter.solvers.select.select_method` picks, then the other supported methods
+    by (valid, excess, cost order). Raises ValueError when no method supports the roughness.
+    """
+    methods = tuple(methods or solvers.AUTO_ORDER)
+    native = getattr(select, "rank_methods", None)
+    if native is not None:  # cached like the reports (fresh report dicts each call)
+        parts = ("rank", methods, roughness, float(k), _key_of(eps), _key_of(theta_i))
+        key = None if _UNCACHEABLE in parts else parts
+        ranked = _recall(key)
+        if ranked is None:
+            ranked = list(native(roughness, k, eps=eps, theta_i=theta_i, methods=methods))
+            _remember(key, ranked)
+        return [(n, dict(r)) for n, r in ranked]
+    first, _ = select.select_method(roughness, k, methods)
+    reports = {n: validity_report(n, roughness, k, eps=eps, theta_i=theta_i) for n in methods}
+    order = {n: i for i, n in enumerate(methods)}
+    rest = sorted(
+        (n for n in methods if n != first and not reports[n].get("unsupported")),
+        key=lambda n: (not reports[n].get("valid", False), _excess(reports[n]), order[n]),
+    )
+    return [(n, reports[n]) for n in (first, *rest)]
+
+
+def blend_weights(roughness, k: float, *, eps=None) -> dict:
+    """:func:`emscatter.solvers.select.blend_weights` (``auto``'s methods and weights near a
+    switch), cached on ``(roughness, k, eps)``; a fresh dict each call."""
+    parts = ("blend", roughness, float(k), _key_of(eps))
+    key = None if _UNCACHEABLE in parts else parts
+    hit = _recall(key)
+    if hit is None:
+        hit = select.blend_weights(roughness, k, eps=eps)
+        _remember(key, hit)
+    return {"weights": dict(hit["weights"]), "switches": list(hit["switches"])}
+
+
+def angles_deg(theta_i, mask, *, limit: int = 8) -> str:
+    """``"85°, 88°, 89°"`` for the angles where ``mask`` is True (at most ``limit`` shown)."""
+    deg = np.degrees(np.broadcast_to(theta_i, np.shape(mask))[mask]).ravel()
+    uniq = np.unique(np.round(deg, 6))
+    shown = ", ".join(f"{d:.4g}°" for d in uniq[:limit])
+    more = f" and {uniq.size - limit} more" if uniq.size > limit else ""
+    return f"θi = {shown}{more}"
+
+
+def angle_policy(
+    name: str, bad: np.ndarray, theta_i, out_of_range: str, reasons: list[str], *, stacklevel=4
+) -> np.ndarray:
+    """Apply ``out_of_range`` at the incidence angles where ``bad`` is True.
+
+    Returns the mask of elements to set to NaN (all False unless ``out_of_range="nan"``).
+    """
+    bad = np.asarray(bad, dtype=bool)
+    if not bad.any() or out_of_range == "ignore":
+        return np.zeros(bad.shape, dtype=bool)
+    why = "; ".join(reasons) if reasons else "outside its validity range"
+    msg = f"method {name!r} at {angles_deg(theta_i, bad)}: {why}"
+    if out_of_range == "raise":
+        raise select.ValidityError(msg)
+    if out_of_range == "warn":
+        warnings.warn(
+            msg + " (out_of_range='nan' blanks these angles, 'raise' stops)",
+            select.ValidityWarning,
+            stacklevel=stacklevel,
+        )
+        return np.zeros(bad.shape, dtype=bool)
+    return bad
+
+
+def eps_label(eps) -> str:
+    """A permittivity for messages: ``pec``, ``(17+2j)``, or ``array of shape (n,)``."""
+    if is_pec(eps):
+        return "pec"
+    arr = np.asarray(eps)
+    return fmt(complex(arr)) if arr.ndim == 0 else f"array of shape {arr.shape}"

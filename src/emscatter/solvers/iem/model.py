@@ -1,0 +1,660 @@
+"""Integral-equation model (IEM family): the advanced IEM for bistatic σ⁰, all four
+polarizations, between the small-perturbation and Kirchhoff regimes (kσ ≈ 0.3–3).
+
+Which IEM, and why
+------------------
+Three IEM versions are in use. The original IEM (Fung, Li & Chen, IEEE TGRS 30, 356, 1992;
+Fung 1994, *Microwave Scattering and Emission Models*) drops the phase of the Green's function
+in the complementary (multiple-bounce) surface field, which limits it to ``kσ·kℓ ≲ 1.2√|ε|``
+and makes it inaccurate in bistatic geometries. The improved IEM (I2EM: Fung, Liu, Chen &
+Tsay, J. Electromagn. Waves Appl. 16, 689, 2002; Fung & Chen, IEEE GRSL 1, 75, 2004; the
+Ulaby & Long 2014 codes and SMRT's ``iiem_fung02``) keeps the upper-medium phase and adds the
+Fresnel *transition* between ``R(θi)`` (small roughness) and ``R`` at the local specular
+angle (large roughness, Wu et al. IEEE TGRS 39, 2001), but it is co-polarized in bistatic
+(no ``hv`` out of the plane) and its published codes evaluate the Fresnel coefficients with
+``Re ε`` only. The advanced IEM (AIEM: Chen, Wu, Tsang, Li, Shi & Fung, IEEE TGRS 41, 90,
+2003; Wu & Chen, IEEE TGRS 42, 743, 2004) keeps the Green's-function phase in *both* media,
+gives all four polarizations at any bistatic geometry with the same transition, and is the
+version checked against exact 3-D numerical (method-of-moments) solutions: emission within
+~1 % (Chen et al. 2003, against the 3-D MoM of Zhou, Tsang et al.) and backscatter within
+~1 dB over kσ ≲ 3 (Wu & Chen 2004), where the 1992 IEM errs by several dB for large kσ·kℓ.
+Its cost over I2EM is four more complementary terms (linear in the number of geometries).
+The BRDF and radio bridges need bistatic cross-polarization, so this module implements the
+AIEM, with ``complementary="fung92"`` giving the 1992 model (used to reproduce SMRT's
+``iem_fung92`` to 1e-6 in the tests).
+
+The model (normalized to the free-space wavenumber, ``k = 1``)
+----------------------------------------------------------------
+Single scattering (Chen et al. 2003, eqs. 9–10)::
+
+    σ⁰_qp = ½ e^{−(kσ)²(kz²+ksz²)} Σ_{n≥1} (kσ)^{2n}/n! |Iₙ|² Ŵₙ(ks⊥ − ki⊥)
+    Iₙ = (kz+ksz)ⁿ f_qp e^{−(kσ)² kz ksz}
+         + ¼ Σ_{8 terms} F̃_j e^{−(kσ)²(q_j² − q_j(ksz−kz))} α_j^(n−1)
+
+``Ŵₙ = k² Wₙ`` with Ulaby's ``Wₙ = 2π wₙ``, ``wₙ`` the normalized spectrum of ``ρⁿ``
+(:func:`emscatter.solvers.kirchhoff.po.log_nfold`: closed forms for Gaussian and exponential,
+the power-law table). The complementary coefficients ``F̃_j`` and the bases ``α_j`` are in
+:mod:`emscatter.solvers.iem.terms` (reduced so that they stay finite where ``α_j = 0``, e.g.
+backscatter).
+
+Choices made here, where the papers are silent or inconsistent (each tested):
+
+* **Kirchhoff coefficient.** ``f = f_vec(R_l) + f_scalar(R_T − R_l)``: the vector tangent-plane
+  coefficient (polarization mixing out of the plane, the physical-optics limit) with ``R`` at
+  the local specular angle ``cosθ_l = |ks − ki|/2k``, plus the scalar I2EM coefficient for the
+  difference between the transition ``R_T`` and ``R_l``. In the plane of incidence (and so in
+  backscatter) this *is* the published AIEM/I2EM coefficient with ``R_T``; as kσ grows
+  (``R_T → R_l``) it becomes the physical-optics amplitude of :mod:`emscatter.solvers.kirchhoff.po`
+  exactly.
+  The published vector form with ``R_T`` is discontinuous at backscatter (its facet frame is
+  undefined there and ``R_h + R_v ≠ 0``: approaching backscatter in azimuth swaps hh and vv);
+  this combination is continuous.
+* **First order.** The published AIEM reduces to first-order SPM in backscatter and in the
+  plane of incidence near specular, but not in general bistatic geometries (its n = 1 amplitude
+  is off by up to ~30 % out of the plane, e.g. θi = 20°, θs = 70°, φ = 120°). With
+  ``first_order="spm"`` (default) the n = 1 amplitude gets the difference ``D`` to the exact
+  first-order (SPM) amplitude, attenuated like the rest of the series by
+  ``e^{−(kσ)²(kz²+ksz²)/2}``: σ⁰ → SPM1 as kσ → 0 in every geometry, the n ≥ 2 terms are
+  untouched, and ``D = 0`` in backscatter (the published backscatter values are unchanged).
+* **Lower-medium phase.** AIEM averages ``exp(±i q₂ (z − z'))`` over all heights; for
+  ``Im q₂ · σ ≳ 1`` (skin depth below the rms height: metals, very lossy media) this grows like
+  ``e^{3 (Im q₂ σ)²}`` although the true factor ``e^{i q₂|z−z'|}`` is bounded by 1. The height
+  phase of the lower-medium terms uses ``Re q₂`` (their coefficients keep the complex ``q₂``):
+  identical for lossless media, a relative change ``O((Im q₂ σ)²)`` (< 2 % for a wet soil,
+  ε = 15 + 2i, kσ = 0.5) otherwise, and every term stays bounded (tested up to ε = 1e7i).
+* **Co-pol ratio (issue 20).** In backscatter at kσ ≳ 0.5 this model puts σhh above σvv
+  (kσ 0.79–1.32, 40°, exponential, ε 3–30: HH − VV = +0.9 dB on average, up to +2.4), where
+  exact 3-D solutions give −1.2 dB (NMM3D) and measured soils σhh ≤ σvv (Oh et al. 1992).
+  Why: the Kirchhoff term with ``R(θi)`` (or a partial transition) has ``|R_h| > |R_v|``, and
+  the complementary terms that restore ``|α_vv| > |α_hh|`` (SPM) are, in backscatter, the
+  lower-medium ones: the upper-medium "i"/"s" terms cancel or act at n = 1 only. With the
+  lower-medium phase they carry ``e^{−σ²(Re q₂)²}`` (an average of ``e^{±i q₂ (z − z')}``
+  over all heights; the true ``e^{i q₂|z−z'|}`` decays only algebraically in σ q₂), so they
+  vanish once ``kσ √ε ≳ 1``. ``complementary="aiem-upper"`` gives them the upper-medium
+  phase (as I2EM, Fung et al. 2002, and SMRT's ``iiem_fung02``): HH < VV by 1.7–5.0 dB there,
+  HH RMSE 0.95 dB against NMM3D (0.49 is the 1992 model's), VV +1.1 dB biased — but those
+  terms then never fade, and the physical-optics limit at kσ = 3 is missed by up to 2.5 dB,
+  so it is not the default. validation/iem/copol_ratio.md has the table.
+* **Reciprocity.** The transition and the complementary coefficients use ``R(θi)``, so the
+  published bistatic σ⁰ is not reciprocal. ``reciprocal=True`` (default) returns
+  ``½[σ⁰_qp(i→s) + σ⁰_pq(−s→−i)]`` (exactly reciprocal; a single evaluation in backscatter and
+  at specular, where the two coincide); ``info["nonreciprocity"]`` reports the largest relative
+  difference of the two, a measure of the model's own error.
+* **Shadowing** (optional factor, default ``"direction-correlated"``): Smith's ``Λ`` with the
+  direction-correlated form ``1/(1 + Λ_max + λ(ψ) Λ_min)``, ``λ = 4.41ψ/(4.41ψ + 1)``
+  (van Ginneken, Stavridi & Koenderink, Appl. Opt. 37, 130, 1998; Heitz, JCGT 3, 2014), ``ψ``
+  the azimuth between the two directions seen from the surface: the monostatic ``1/(1 + Λ)``
+  in backscatter, ~``1/(1 + Λi + Λs)`` (Fung et al. 2002, eq. 7) near specular.
+  ``"height-correlated"`` is Fung's form, ``False`` none. The slope is the model's nominal
+  per-direction rms slope (Ulaby & Long 2014, I2EM codes): ``√2 σ/ℓ`` (Gaussian), ``σ/ℓ``
+  (exponential), ``√(2H) σ/ℓ`` (power law, equal to the exponential's at H = ½), or
+  ``rms_slope=``.
+
+Cross-polarization
+------------------
+* Bistatic, out of the plane of incidence: the single-scattering ``hv``, ``vh`` above
+  (Kirchhoff mixing + the AIEM cross-pol complementary coefficients). They vanish in the plane
+  of incidence, hence in backscatter.
+* Multiple scattering, every geometry: the cross-polarized term of Fung et al. 1992 (appendix)
+  / Fung 1994 — in backscatter the form of Ulaby & Long 2014 (§10-3.9, code 10.1) and SMRT's
+  ``iiem_fung02`` (``σ⁰_hv = σ⁰_vh``) — continued to bistatic geometry with the bistatic
+  kernel (Chen et al. 2003 appendix B/C at the intermediate wavevector), ladder + crossed
+  height pairings and a reciprocal symmetrization, :mod:`emscatter.solvers.iem.crosspol`
+  (derivation, what is
+  approximated). Continuous through backscatter, where it equals the published backscatter
+  form; reciprocal (``hv(i→s) = vh(−s→−i)``); against second-order SPM
+  (:mod:`emscatter.solvers.spm.crosspol`) within 1–3 dB at kσ = 0.05 in the plane of incidence (θs
+  ≤ 40°).
+  Outer shadowing: the direction-correlated form (``1/(1 + Λ)`` in backscatter). The
+  co-polarized multiple scattering (weak) is not included. ``crosspol=False`` omits it
+  (~0.3–0.6 ms per geometry with numba at ``crosspol_order=8``, ×5–10 the co-pol cost).
+* 1-D profiles (2-D problem): no cross-polarization.
+
+Coherent part: the Kirchhoff mean field ``|R(θi)|² exp(−(2kσ cosθi)²)`` (what Chen et al. 2003
+use with AIEM for emission), :func:`emscatter.solvers.kirchhoff.common.coherent_reflectivity`.
+
+1-D profiles (``dimension=1``): the same amplitudes in the plane of incidence with the 1-D
+spectrum, ``Ŵₙ = k² · 2π wₙ⁽¹ᴰ⁾/(2k)`` — the mapping between the 3-D and 2-D problems that the
+first-order SPM and the physical-optics series obey (:mod:`emscatter.solvers.spm`,
+:mod:`emscatter.solvers.kirchhoff.po`).
+
+Numerics: the series sums to ``rtol`` in log space (:mod:`emscatter.solvers.iem.series`); no fixed
+term count.
+Compiled kernels (:mod:`emscatter.solvers.iem.compiled`, numba, optional;
+``EMSCATTER_KERNELS=numpy`` forces the
+reference path) cover Gaussian and exponential correlations.
+
+Known traits (validation/iem/README.md): for high-permittivity soils toward 60–70° AIEM's vv
+falls below the 1992 IEM/I2EM (the lower-medium terms are attenuated by ``e^{−σ² Re q₂²}``,
+which the versions without the lower-medium phase lack); for exponential spectra the model,
+like physical optics, loses energy at kσ ≳ 0.5 (a PEC "emits" 0.1–0.8): emissivities are upper
+bounds there; near grazing (θ > 70°, and > 45° for conductors) it can create energy — the
+validity report flags those angles.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from emscatter.conventions import check_positive
+from emscatter.fresnel import PEC, fresnel_cos, is_pec
+from emscatter.scattering import Scattering
+from emscatter.solvers.iem import compiled as iem_jit
+from emscatter.solvers.iem import terms as kern
+from emscatter.solvers.iem.series import _orders_needed as iem_series_orders
+from emscatter.solvers.iem.series import _too_many, direct_sum, iem_series, orders_table
+from emscatter.solvers.iem.shadowing import _SHADOW_MODES, _back_shadow_args, _shadowing
+from emscatter.solvers.iem.validity import (  # noqa: F401 (re-exported: the solver's contract)
+    OPTIONS,
+    VALIDITY,
+    _conductor,
+    check_validity,
+    nominal_rms_slope,
+)
+from emscatter.solvers.kirchhoff.common import (
+    check_roughness,
+    coherent_local,
+    geometry,
+    workers_for,
+)
+from emscatter.solvers.kirchhoff.po import log_nfold
+
+__all__ = ["bistatic", "check_validity", "VALIDITY", "OPTIONS", "nominal_rms_slope"]
+
+_BACK_TOL = 1e-9
+_MODEL_NAMES = {
+    "aiem": "AIEM",
+    "aiem-upper": "AIEM, lower-medium terms with the upper-medium phase (I2EM)",
+    "fung92": "IEM (Fung et al. 1992)",
+}
+_SPM_SIGN = (-1.0, 1.0, -1.0, 1.0)  # I₁(AIEM) ≈ s · 4 f_SPM (hh, hv, vh, vv): basis signs
+
+
+# ----------------------------------------------------------------------------- amplitudes
+class _Options:
+    __slots__ = ("fresnel", "complementary", "first_order", "rtol", "max_terms", "threads")
+
+
+def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options):
+    """Series components for flat geometries (k = 1, φi = 0): ``la, ph`` (4, N, J), ``lx, sx``
+    (N, J) and the first-order amplitude ``d`` (4, N), pols ordered (hh, hv, vh, vv)."""
+    pec = is_pec(eps)
+    n = si.shape[0]
+    rh_i, rv_i = fresnel_cos(eps, cs)
+    cos_l = np.sqrt(np.clip(0.5 * (1.0 + cs * css - si * ss * cf), 0.0, 1.0))
+    rh_l, rv_l = fresnel_cos(eps, cos_l)
+    if opt.fresnel == "transition" and not pec:
+        g_h, g_v = _transition(rough, eps, cs, ks, log_w, K, opt.rtol)
+        rh_t, rv_t = rh_i + (rh_l - rh_i) * g_h, rv_i + (rv_l - rv_i) * g_v
+    else:
+        rh_t, rv_t = rh_i, rv_i
+    kv = kern.kirchhoff_vector(si, cs, ss, css, sf, cf, rh_l, rv_l)
+    sh, sv = kern.kirchhoff_scalar(si, cs, ss, css, cf, rh_t - rh_l, rv_t - rv_l)
+    xf = (kv[0] + sh, kv[1], kv[2], kv[3] + sv)
+    terms = kern.complementary_terms(
+        si, cs, ss, css, sf, cf, 1.0 if pec else eps, rh_i, rv_i, lower=not pec,
+        phase=opt.complementary,
+    )  # fmt: skip
+    ks2 = ks * ks
+    base = -0.5 * ks2 * (cs * cs + css * css)
+    # component 0: Kirchhoff (x = kz + ksz, E = −σ² kz ksz), with the complementary terms of
+    # the same base and exponent merged in (AIEM's q = −kz "i" and q = +ksz "s" terms)
+    x0 = cs + css
+    amps = [list(xf)]
+    xs = [x0]
+    es = [-ks2 * cs * css]
+    merged = ("dn_i", "up_s") if opt.complementary != "fung92" else ()
+    comp_sum = [0.0, 0.0, 0.0, 0.0]
+    for name, F, qph, side in terms:
+        comp_sum = [c + 0.25 * f for c, f in zip(comp_sum, F, strict=True)]
+        if name in merged:
+            amps[0] = [a + 0.25 * f for a, f in zip(amps[0], F, strict=True)]
+            continue
+        amps.append([0.25 * f for f in F])
+        xs.append((css - qph) if side == "i" else (cs + qph))
+        es.append(-ks2 * (qph * qph - qph * (css - cs)))
+    J = len(xs)
+    a = np.empty((4, n, J), dtype=complex)
+    for j in range(J):
+        for p in range(4):
+            a[p, :, j] = amps[j][p]
+    E = np.stack([np.broadcast_to(e, (n,)) for e in es], axis=1) + base[:, None]
+    x = np.stack([np.broadcast_to(v, (n,)) for v in xs], axis=1)
+    mag = np.abs(a)
+    with np.errstate(divide="ignore"):
+        la = np.log(mag) + E[None]
+        lx = np.log(np.abs(x))
+    ph = np.where(mag > 0, a / np.where(mag > 0, mag, 1.0), 1.0)
+    sx = np.where(x < 0, -1.0, 1.0)
+    # first-order defect to SPM1 (γ = 0 Kirchhoff coefficient, all exponentials → 1)
+    if opt.first_order == "spm":
+        from emscatter.solvers.spm.model import _f_factors  # the closed-form first-order amplitudes
+
+        sh0, sv0 = kern.kirchhoff_scalar(si, cs, ss, css, cf, rh_i - rh_l, rv_i - rv_l)
+        xf0 = (kv[0] + sh0, kv[1], kv[2], kv[3] + sv0)
+        f_spm = _f_factors(PEC if pec else eps, cs, si, css, ss, cf, sf)
+        d = np.empty((4, n), dtype=complex)
+        for p in range(4):
+            d[p] = (4.0 * _SPM_SIGN[p] * f_spm[p] - (xf0[p] + comp_sum[p])) * np.exp(base)
+    else:
+        d = np.zeros((4, n), dtype=complex)
+    return la, lx, ph, sx, d
+
+
+# ----------------------------------------------------------------------------- solver
+
+
+def _choice(name, value, allowed):
+    if isinstance(value, bool) or value not in allowed:
+        raise ValueError(f"{name} must be one of {list(allowed)}, got {value!r}")
+    return value
+
+
+def _spectral_args(rough, k, loc, n):
+    """Scaled spectral argument K and log normalization of the series (module docstring)."""
+    qx, qy = iem_jit.flat_n(loc.qx, n), iem_jit.flat_n(loc.qy, n)
+    if rough.dimension == 2:
+        K = np.sqrt((qx * (k * rough.length)) ** 2 + (qy * (k * rough.length_y)) ** 2)
+        return K, math.log(math.pi * (k * rough.length) * (k * rough.length_y))
+    return np.abs(qx) * (k * rough.length), math.log(0.5 * math.pi * k * rough.length)
+
+
+def _transition(rough, eps, cs, ks, log_w, K, rtol):
+    """Fresnel transition factors (γ_h, γ_v), compiled sums where covered."""
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is None:
+        return kern.transition_factor(eps, cs, ks, log_w, K)
+    with np.errstate(divide="ignore"):
+        lq = np.log((ks * cs) ** 2)
+    sums = [iem_jit.poisson_sums(lq + math.log(b), K, spec, rough.dimension, rtol=rtol * 1e-2)
+            for b in (1.0, 2.0, 4.0)]  # fmt: skip
+    return kern.transition_from_sums(eps, cs, ks, *sums)
+
+
+def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
+    """The series (:func:`emscatter.solvers.iem.series.iem_series`), compiled where
+    :mod:`emscatter.solvers.iem.compiled` covers it."""
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is not None:
+        ls, lp, status = iem_jit.series_rows(
+            la, lx, ph, sx, d, log_ks2, spec, rough.dimension, K, pref,
+            rtol=opt.rtol, max_terms=opt.max_terms,
+        )  # fmt: skip
+        if status:
+            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, log_ks2))
+        return ls, lp
+    return iem_series(la, lx, ph, sx, d, log_ks2, log_w, K, pref, rtol=opt.rtol,
+                      max_terms=opt.max_terms)  # fmt: skip
+
+
+def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
+    """Exact-backscatter σ⁰ (2, 2, n): the closed-form terms of
+    :func:`emscatter.solvers.iem.terms.backscatter_terms`, two components (Kirchhoff, lower medium)
+    plus the
+    n = 1 terms; hh and vv only (single-scattering cross-pol vanishes in the plane)."""
+    if opt.complementary == "fung92":  # the 1992 model: general terms
+        return None
+    n = loc.n
+    ks = k * rough.sigma
+    ks2 = ks * ks
+    pec = is_pec(eps)
+    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
+    if spec is not None and (pec or np.ndim(eps) == 0):  # compiled, end to end
+        K, pref = _spectral_args(rough, k, loc, n)
+        shadow = _back_shadow_args(shadow_mode, loc, slope)
+        if shadow[0] < 0:
+            pref = pref + np.log(iem_jit.flat_n(_shadowing(shadow_mode, loc, slope), n))  # > 0
+            shadow = (0, 0.0, shadow[2])
+        s_hh, s_vv, lp, status = iem_jit.backscatter(
+            iem_jit.flat_n(loc.si, n), iem_jit.flat_n(loc.ci, n), eps, ks, K, pref, spec,
+            rough.dimension,
+            transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
+            shadow=shadow, threads=opt.threads, lower_q2=opt.complementary == "aiem",
+        )  # fmt: skip
+        if status:
+            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
+        sig = np.zeros((2, 2, n))
+        sig[0, 0], sig[1, 1] = s_hh, s_vv
+        return sig, 0.0, float(np.max(lp)) if n else -np.inf
+    K, pref = _spectral_args(rough, k, loc, n)
+    shadow = _shadowing(shadow_mode, loc, slope)
+    with np.errstate(divide="ignore"):
+        pref = pref + np.log(np.broadcast_to(shadow, (n,)))
+    si, cs = np.broadcast_to(loc.si, (n,)), np.broadcast_to(loc.ci, (n,))
+    eps_f = eps if (pec or np.ndim(eps) == 0) else np.broadcast_to(eps, (n,))
+    rh, rv = fresnel_cos(eps_f, cs)
+    (u_h, u_v), lower = kern.backscatter_terms(si, cs, eps_f, rh, rv, phase=opt.complementary)
+    # components: Kirchhoff (base 2 kz), the lower-medium α⁺, α⁻ terms, (and d at n = 1)
+    e_k = -2.0 * ks2 * cs * cs
+    bases = [2.0 * cs]
+    e_list = [e_k]
+    if lower is not None:
+        gp_h, gp_v, a_p, gm_h, gm_v, a_m = lower
+        e_g = -ks2 * ((a_p - cs) ** 2 + cs * cs)  # a_p − cs: the lower-medium phase
+        bases += [a_p, a_m]
+        e_list += [e_g, e_g]
+    J = len(bases)
+    lx = np.empty((n, J))
+    sx = np.empty((n, J))
+    for j, x in enumerate(bases):
+        x = np.broadcast_to(x, (n,))
+        with np.errstate(divide="ignore"):
+            lx[:, j] = np.log(np.abs(x))
+        sx[:, j] = np.where(x < 0, -1.0, 1.0)
+    log_ks2 = 2.0 * math.log(ks)
+    log_rtol = math.log(opt.rtol)
+    # orders: enough for every component whose mass bound is relevant (as in iem_series)
+    mass = [np.log(4.0 * np.maximum(np.abs(rh), np.abs(rv)) + 1e-300) * 2 + 2 * e_k]
+    if lower is not None:
+        for gh, gv in ((gp_h, gp_v), (gm_h, gm_v)):
+            mass.append(2 * (np.log(np.maximum(np.abs(gh), np.abs(gv)) + 1e-300) + e_g))
+    q_all = np.exp(log_ks2 + 2.0 * lx)
+    mass = np.stack(mass, axis=1) + q_all
+    relevant = mass >= np.max(mass, axis=1, keepdims=True) + log_rtol - 10.0
+    q_size = np.max(np.where(relevant & np.isfinite(lx), q_all, 0.0), axis=1)
+    N = int(np.max(iem_series_orders(q_size, log_rtol))) + 2 if n else 2
+    if N > opt.max_terms:
+        raise RuntimeError(_too_many(opt.rtol, opt.max_terms, N, log_ks2))
+    table = orders_table(log_ks2, log_w, K, N)
+    # transition (Wu et al. 2001): the three sums S(βQ) from the same table
+    if opt.fresnel == "transition" and not pec:
+        sums = [_table_sum(table, np.log(b * cs * cs)) for b in (1.0, 2.0, 4.0)]
+        g_h, g_v = kern.transition_from_sums(eps_f, cs, ks, *sums)
+        rh0, rv0 = fresnel_cos(eps_f, np.ones(1))
+        rh_t, rv_t = rh + (rh0 - rh) * g_h, rv + (rv0 - rv) * g_v
+    else:
+        rh_t, rv_t = rh, rv
+    amps = [(-4.0 * rh_t, 4.0 * rv_t)]
+    if lower is not None:
+        amps += [(gp_h, gp_v), (gm_h, gm_v)]
+    la = np.empty((2, n, J))
+    ph = np.empty((2, n, J), dtype=complex)
+    for j, amp in enumerate(amps):
+        for p in (0, 1):
+            a = np.broadcast_to(amp[p], (n,))
+            m = np.abs(a)
+            with np.errstate(divide="ignore"):
+                la[p, :, j] = np.log(m) + e_list[j]
+            ph[p, :, j] = np.where(m > 0, a / np.where(m > 0, m, 1.0), 1.0)
+    d = np.stack([u_h * np.exp(e_k), u_v * np.exp(e_k)])
+    prefs = np.broadcast_to(pref, (n,))
+    log_s = np.empty((2, n))
+    log_prec = np.empty((2, n))
+    for p in (0, 1):
+        ls, ok, lp = direct_sum(table, la[p], lx, ph[p], sx, d[p], prefs, log_rtol, log_ks2,
+                                float(np.max(log_w(np.ones(1), np.zeros(1)))))  # fmt: skip
+        if not np.all(ok):
+            bad = np.nonzero(~ok)[0]
+            ls[bad], lp[bad] = iem_series(
+                la[p][bad], lx[bad], ph[p][bad], sx[bad], d[p][bad], log_ks2, log_w, K[bad],
+                prefs[bad], rtol=opt.rtol, max_terms=opt.max_terms,
+            )  # fmt: skip
+        log_s[p], log_prec[p] = ls, lp
+    s = np.exp(log_s)
+    sig = np.zeros((2, 2, n))
+    sig[0, 0], sig[1, 1] = s
+    return sig, 0.0, float(np.max(log_prec)) if n else -np.inf
+
+
+def _table_sum(table, log_c2):
+    """``log Σₙ exp(table[:, n] + n log_c2)`` (row-wise, n from 1)."""
+    n = np.arange(1.0, table.shape[1] + 1.0)
+    with np.errstate(invalid="ignore"):
+        t = table + n[None, :] * np.asarray(log_c2)[:, None]
+    t = np.where(np.isnan(t), -np.inf, t)
+    top = np.max(t, axis=1)
+    top = np.where(np.isfinite(top), top, 0.0)
+    return top + np.log(np.exp(t - top[:, None]).sum(axis=1))
+
+
+def _single(rough, eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w):
+    """Single-scattering σ⁰ (2, 2, n) on a chunk, and the largest non-reciprocity."""
+    n = loc.n
+    ks = k * rough.sigma
+    dim = rough.dimension
+    K, pref = _spectral_args(rough, k, loc, n)
+    shadow = _shadowing(shadow_mode, loc, slope)
+    with np.errstate(divide="ignore"):
+        pref = pref + np.log(np.broadcast_to(shadow, (n,)))
+    b = lambda v: np.broadcast_to(v, (n,))  # noqa: E731
+    si, cs, ss, css = b(loc.si), b(loc.ci), b(loc.ss), b(loc.cs)
+    cf = b(loc.cd)
+    sf = b(loc.sd) if dim == 2 else np.zeros(n)
+    sf = np.where(np.abs(sf) < 1e-12, 0.0, sf)  # in the plane: exact zeros (no cross-pol)
+    eps_f = eps if (is_pec(eps) or np.ndim(eps) == 0) else b(eps)
+    # reversed geometry (−k_s → −k_i) only where it differs from the forward one
+    if reciprocal:
+        same = (np.abs(si - ss) <= 1e-12) & (np.abs(sf) <= 1e-12)
+        rev = np.nonzero(~same)[0]
+    else:
+        rev = np.zeros(0, dtype=np.int64)
+    if rev.size:
+        cat = lambda a, c: np.concatenate([a, c[rev]])  # noqa: E731
+        g_si, g_cs, g_ss, g_css = cat(si, ss), cat(cs, css), cat(ss, si), cat(css, cs)
+        g_sf, g_cf = np.concatenate([sf, -sf[rev]]), cat(cf, cf)
+        g_K, g_pref = cat(K, K), cat(np.broadcast_to(pref, (n,)), np.broadcast_to(pref, (n,)))
+        g_eps = eps_f if (is_pec(eps_f) or np.ndim(eps_f) == 0) else cat(eps_f, eps_f)
+    else:
+        g_si, g_cs, g_ss, g_css, g_sf, g_cf = si, cs, ss, css, sf, cf
+        g_K, g_pref, g_eps = K, np.broadcast_to(pref, (n,)), eps_f
+    la, lx, ph, sxx, d = _amplitudes(
+        rough, g_si, g_cs, g_ss, g_css, g_sf, g_cf, g_eps, ks, log_w, g_K, opt
+    )
+    pols = (0, 1, 2, 3) if dim == 2 and np.any(g_sf != 0) else (0, 3)
+    m = la.shape[1]
+    P = len(pols)
+    log_s, log_prec = _series(
+        rough,
+        la[list(pols)].reshape(P * m, -1),
+        np.tile(lx, (P, 1)),
+        ph[list(pols)].reshape(P * m, -1),
+        np.tile(sxx, (P, 1)),
+        d[list(pols)].reshape(P * m),
+        2.0 * math.log(ks),
+        log_w,
+        np.tile(g_K, P),
+        np.tile(g_pref, P),
+        opt,
+    )
+    vals = np.zeros((4, m))
+    vals[list(pols)] = np.exp(log_s).reshape(P, m)
+    prec = np.full((4, m), -np.inf)
+    prec[list(pols)] = log_prec.reshape(P, m)
+    fwd = vals[:, :n]
+    out = fwd.copy()
+    nonrec = 0.0
+    tr = [0, 2, 1, 3]  # (hh, hv, vh, vv) → transposed [pol_s, pol_i]
+    if reciprocal:
+        both = np.nonzero(same)[0]
+        out[:, both] = 0.5 * (fwd[:, both] + fwd[tr][:, both])
+        if rev.size:
+            back = vals[:, n:][tr]
+            scale = np.max(fwd[:, rev], axis=0) + np.max(back, axis=0) + 1e-300
+            nonrec = float(np.max(np.abs(fwd[:, rev] - back) / scale)) if rev.size else 0.0
+            out[:, rev] = 0.5 * (fwd[:, rev] + back)
+    sig = np.empty((2, 2, n))
+    sig[0, 0], sig[0, 1], sig[1, 0], sig[1, 1] = out
+    return sig, 2.0 * nonrec, float(np.max(prec))
+
+
+def bistatic(
+    roughness,
+    eps,
+    k: float,
+    theta_i,
+    theta_s,
+    phi_s,
+    phi_i=0.0,
+    *,
+    coherent: bool = True,
+    rtol: float = 1e-8,
+    max_terms: int = 10**6,
+    fresnel: str = "transition",
+    complementary: str = "aiem",
+    first_order: str = "spm",
+    reciprocal: bool = True,
+    shadowing="direction-correlated",
+    rms_slope=None,
+    crosspol: bool = True,
+    crosspol_order: int = 8,
+    threads: int | None = None,
+) -> Scattering:
+    """Integral-equation (AIEM) bistatic scattering coefficients σ⁰, all four polarizations.
+
+    Parameters
+    ----------
+    roughness : Gaussian, exponential or power-law :class:`~emscatter.spectra.Roughness`,
+        ``dimension`` 2 (surface, per unit area) or 1 (profile, per unit length; hh and vv,
+        ``φs ∈ {φi, φi + π}``).
+    eps : relative permittivity (``Im ε ≥ 0``; broadcasts with the angles) or ``"pec"``.
+    k : free-space wavenumber [rad/m].
+    theta_i, theta_s, phi_s, phi_i : angles [rad], numpy-broadcast (θ ∈ [0, π/2]).
+    coherent : ``False`` skips the coherent part (``coherent`` is then NaN).
+    rtol : relative tolerance of the series (a bound on the neglected tail) [-].
+    max_terms : safety cap on series terms per geometry.
+    fresnel : ``"transition"`` (Wu et al. 2001, default) or ``"incident"`` (``R(θi)``, as the
+        1992 IEM) in the Kirchhoff coefficient.
+    complementary : ``"aiem"`` (Green's-function phase kept, Chen et al. 2003),
+        ``"aiem-upper"`` (the lower-medium terms with the upper-medium phase, as I2EM: the
+        physical co-pol ratio at kσ ≈ 1, module docstring) or ``"fung92"`` (phase dropped,
+        Fung et al. 1992).
+    first_order : ``"spm"`` (exact first-order amplitude, module docstring) or ``"model"``
+        (the published coefficients as they are).
+    reciprocal : symmetrize σ⁰ by reciprocity (module docstring).
+    shadowing : ``"direction-correlated"`` (default, ``True``), ``"height-correlated"`` or
+        ``False``.
+    rms_slope : per-direction rms slope for the shadowing functions [-] (float or pair);
+        default :func:`nominal_rms_slope`.
+    crosspol : add the multiple-scattering ``hv``, ``vh`` at every geometry (2-D surfaces).
+    crosspol_order : Gauss–Legendre nodes per graded segment of its 2-D integral (8: ≲ 1e-2
+        relative, 12: ≲ 1e-3).
+    threads : worker threads of the compiled exact-backscatter kernel (default: the CPU count,
+        at most 8; used from 512 backscatter angles on; results do not depend on it).
+
+    Returns
+    -------
+    :class:`~emscatter.scattering.Scattering` (``method="iem"``); ``info`` holds the options,
+    ``"nonreciprocity"`` and ``"precision"`` (rounding-error estimate of the series).
+    """
+    rough = check_roughness(roughness)
+    k = check_positive("k", k, unit="rad/m")
+    rtol = check_positive("rtol", rtol)
+    if not rtol < 1:
+        raise ValueError(f"rtol must be in (0, 1), got {rtol!r}")
+    if isinstance(max_terms, bool) or not isinstance(max_terms, int | np.integer) or max_terms < 1:
+        raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
+    opt = _Options()
+    opt.fresnel = _choice("fresnel", fresnel, ("transition", "incident"))
+    opt.complementary = _choice("complementary", complementary, ("aiem", "aiem-upper", "fung92"))
+    opt.first_order = _choice("first_order", first_order, ("spm", "model"))
+    opt.rtol, opt.max_terms = rtol, int(max_terms)
+    opt.threads = workers_for(threads, 8)
+    if shadowing not in _SHADOW_MODES or (isinstance(shadowing, str) is False and
+                                          not isinstance(shadowing, bool | None)):  # fmt: skip
+        raise ValueError(
+            "shadowing must be 'direction-correlated' (or True), 'height-correlated' or False, "
+            f"got {shadowing!r}"
+        )
+    shadow_mode = _SHADOW_MODES[shadowing]
+    for name, flag in (("reciprocal", reciprocal), ("crosspol", crosspol), ("coherent", coherent)):
+        if not isinstance(flag, bool | np.bool_):
+            raise ValueError(f"{name} must be True or False, got {flag!r}")
+    if (
+        isinstance(crosspol_order, bool)
+        or not isinstance(crosspol_order, int | np.integer)
+        or not (2 <= crosspol_order <= 64)
+    ):
+        raise ValueError(f"crosspol_order must be an integer in [2, 64], got {crosspol_order!r}")
+    log_w = log_nfold(rough)
+    slope = _slope(rough, rms_slope)
+    dim = rough.dimension
+    g = geometry(theta_i, theta_s, phi_s, phi_i, eps, dim)
+    sig = np.empty((2, 2, g.size))
+    nonrec, prec = 0.0, -np.inf
+    block = 1 << 14
+    back = g.backscatter_chunk(_BACK_TOL) if g.size <= block else None  # the common case, lean
+    for st in range(0, g.size, block):
+        sl = slice(st, st + block)
+        loc = back if back is not None else g.chunk(sl, signed_azimuth=True)
+        res = None
+        if back is not None or _all_backscatter(loc):
+            res = _backscatter(rough, loc.eps, k, loc, opt, slope, shadow_mode, log_w)
+        if res is None:
+            res = _single(rough, loc.eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w)
+        s, nr, pr = res
+        sig[:, :, sl] = s
+        nonrec, prec = max(nonrec, nr), max(prec, pr)
+    if dim == 1:
+        sig[0, 1] = sig[1, 0] = 0.0
+    elif crosspol and g.size:
+        _add_crosspol(sig, rough, g, k, slope, int(crosspol_order))
+    sig = sig.reshape(2, 2, *g.shape)
+    if coherent:
+        coh = coherent_local(g.chunk(), rough.sigma, k).reshape(2, *g.shape)
+    else:
+        coh = np.full((2, *g.shape), np.nan)
+    info = {
+        "model": _MODEL_NAMES[opt.complementary],
+        "rtol": rtol,
+        "fresnel": opt.fresnel,
+        "complementary": opt.complementary,
+        "first_order": opt.first_order,
+        "reciprocal": bool(reciprocal),
+        "shadowing": shadow_mode or "none",
+        "rms_slope": slope,
+        "crosspol": "multiple scattering (bistatic, reciprocal)"
+        if crosspol and dim == 2
+        else "none",
+        "nonreciprocity": nonrec,
+        "precision": float(1e-16 * math.exp(min(prec, 700.0))),
+        "coherent": "Kirchhoff |R(θi)|² exp(−(2kσ cosθi)²)"
+        if coherent
+        else "not computed (coherent=False)",  # fmt: skip
+    }
+    return Scattering(
+        sigma0=sig,
+        coherent=coh,
+        method="iem",
+        theta_i=g.theta_i,
+        theta_s=g.theta_s,
+        phi_s=g.phi_s,
+        phi_i=g.phi_i,
+        k=k,
+        dimension=dim,
+        info=info,
+    )
+
+
+def _all_backscatter(loc) -> bool:
+    """θs = θi and φs = φi + π (to 1e-9 rad) for every geometry of the chunk."""
+    d = np.mod(loc.phi_s - loc.phi_i, 2 * math.pi)
+    return bool(
+        np.all(np.abs(loc.si - loc.ss) <= 1e-12) and np.all(np.abs(d - math.pi) <= _BACK_TOL)
+    )
+
+
+def _slope(rough, rms_slope) -> tuple[float, float]:
+    if rms_slope is None:
+        return nominal_rms_slope(rough)
+    arr = np.atleast_1d(np.asarray(rms_slope, dtype=float))
+    if arr.ndim != 1 or arr.size not in (1, 2) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(
+            f"rms_slope must be a positive float or a pair (s_x, s_y), got {rms_slope!r}"
+        )
+    return float(arr[0]), float(arr[-1])
+
+
+def _add_crosspol(sig, rough, g, k, slope, order):
+    """Add the multiple-scattering hv, vh (:mod:`emscatter.solvers.iem.crosspol`) at every
+    geometry."""
+    from emscatter.solvers.iem.crosspol import multiple_scattering
+
+    shadow = _shadowing("direction-correlated", g.chunk(signed_azimuth=True), slope)
+    b = lambda a: np.broadcast_to(a, (g.size,))  # noqa: E731
+    eps = g.eps if is_pec(g.eps) else b(g.eps_flat)
+    angles = (b(g.ti_flat), b(g.ts_flat), b(g.dphi), b(g.phi_i_flat))
+    hv, vh = multiple_scattering(rough, eps, k, *angles, slope=slope, shadow=b(shadow), order=order)
+    sig[0, 1] += hv
+    sig[1, 0] += vh

@@ -1,0 +1,336 @@
+"""Field coefficients of the integral-equation model (:mod:`emscatter.solvers.iem.model`):
+Kirchhoff ``f_qp``,
+complementary ``F_qp``, Fresnel transition.
+
+Everything here is in units of the free-space wavenumber (``k = 1``: ``kz = cosθi``,
+``ksz = cosθs``, ``q₂ = √(ε − sin²θ)``) and works on flat 1-D arrays of geometries with
+``φi = 0``: ``si, cs`` = sin/cos θi, ``ss, css`` = sin/cos θs, ``sf, cf`` = sin/cos(φs − φi).
+Polarization tuples are ordered ``(hh, hv, vh, vv)`` = ``[pol_s, pol_i]`` (scattered first).
+
+Complementary field (Chen, Wu, Tsang, Li, Shi & Fung, IEEE TGRS 41, 90, 2003, eqs. 9–10 and
+appendix B–C; the same algebra as Fung, Li & Chen, IEEE TGRS 30, 356, 1992, appendix). The
+spectral integral of the Green's function is evaluated at the two stationary points
+``(u, v) = (−kx, −ky)`` ("i" terms) and ``(−ksx, −ksy)`` ("s" terms), upward/downward
+(``±q``), in the upper (``q₁``, coefficients ``F``) and lower (``q₂``, coefficients ``G``)
+medium: eight terms. In each term the surface slopes are replaced, by integration by parts
+of the height phase ``exp(i α z)``, with ``α = ksz − q`` (i terms) or ``kz + q`` (s terms):
+``(zx, zy) = −(X, Y)/α``, ``X = sinθs cosφ − sinθi``, ``Y = sinθs sinφ`` (i terms; for s terms
+the primed slopes). The coefficient is affine in those slopes, so we return the *reduced*
+coefficient ``F̃ = α F`` — a polynomial, finite at ``α = 0``, which multiplies ``α^(n−1)`` in
+the series. (Chen et al.'s code sets the slopes to zero where ``α = 0``, e.g. exact
+backscatter for the ``q = kz`` term; the limit ``α → 0`` of ``α F`` is finite and that is what
+the continuous expression gives.) The coefficients ``C₁…C₆`` (co-pol) and ``B₁…B₆`` (cross-pol)
+of the appendix simplify at the stationary points (one pair of slopes vanishes,
+``C₆ = B₆ = 0`` for i terms, ``C₆ = B₃ = 0`` for s terms); the simplified forms below are
+checked against the full appendix expressions in ``tests/test_iem_kernels.py``.
+
+Kirchhoff coefficients: the vector tangent-plane coefficients of Chen et al. 2003 (their
+``f_qp`` with the stationary-phase slopes ``zx = −(ksx − kx)/(ksz + kz)``), multiplied through
+by ``ksz + kz`` so they stay finite at forward grazing; and the scalar (I2EM) form
+``f_vv = 2R_v (sinθi sinθs − (1 + cosθi cosθs) cosφ)/(cosθi + cosθs)``, ``f_hh`` with
+``−R_h`` (Fung et al., J. Electromagn. Waves Appl. 16, 689, 2002, eq. 5). See
+:mod:`emscatter.solvers.iem.model`
+for how the two are combined.
+
+Transition (Wu, Chen, Shi & Fung, IEEE TGRS 39, 2001; Fung & Chen, IEEE GRSL 1, 75, 2004):
+``R_T = R(θi) + (R(θ_l) − R(θi)) γ`` with ``γ = 1 − S_t/S_t0`` from the series ratio of the
+paper, rewritten without the ``1/F_t`` division so that normal incidence (``F_t = 0``) is
+regular:
+``S_t/S_t0 = |F_t + 8R₀/cosθ|² Σ aₙWₙ / Σ aₙ |F_t + 2^(n+2) R₀ e^(−(kσcosθ)²)/cosθ|² Wₙ``,
+``aₙ = (kσ cosθ)^(2n)/n!``; the three sums are physical-optics-type series
+(:func:`emscatter.solvers.kirchhoff.po.series_sum`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = [
+    "kirchhoff_vector",
+    "kirchhoff_scalar",
+    "complementary_terms",
+    "transition_factor",
+    "backscatter_terms",
+    "branch_root",
+]
+
+
+def branch_root(z) -> np.ndarray:
+    """``√z`` with ``Im ≥ 0`` (and ``Re ≥ 0`` on the positive real axis)."""
+    r = np.sqrt(np.asarray(z, dtype=complex))
+    return np.where(r.imag < 0, -r, r)
+
+
+# ----------------------------------------------------------------------------- Kirchhoff
+def kirchhoff_vector(si, cs, ss, css, sf, cf, rh, rv):
+    """``(ksz + kz) f_qp`` of the vector Kirchhoff field (Chen et al. 2003), tuple
+    (hh, hv, vh, vv). ``rh, rv``: Fresnel coefficients used in the tangent plane.
+
+    The polarization-mixing part carries ``(R_h + R_v)`` times a ratio that is 0/0 at exact
+    backscatter (the facet frame is undefined there); it is set to 0 where the facet's
+    tangent vector vanishes, which is the limit when ``R_h + R_v → 0`` (local normal
+    incidence, i.e. ``R`` at the local specular angle)."""
+    den = css + cs  # ksz + kz
+    zx = si - ss * cf  # (ksz + kz) × stationary slope zx
+    zy = -ss * sf
+    a = cs * den + si * zx  # (cs + si zx) × den
+    hsnv = -(cs * cf * den + si * (zx * cf + zy * sf))
+    vsnh = css * cf * den - zx * ss
+    hsnh = -sf * den
+    vsnv = zy * cs * ss + css * (zy * cf * si - a * sf)
+    t = cs * zx - si * den
+    d2 = t * t + zy * zy  # (den × d2 of Chen et al.)²
+    n_t = -sf * t * den + cf * a * zy + si * sf * zy * zy
+    n_d = -a * (si * ss * zy - css * (si * sf * den - cs * sf * zx + cs * cf * zy))
+    n_hd = -a * (-cf * si * den + cs * cf * zx + cs * sf * zy)
+    n_vt = t * (cf * css * den - ss * zx) + css * sf * a * zy - (cf * css * si + cs * ss) * zy * zy
+    ok = d2 > 1e-300
+    g = np.where(ok, zy / np.where(ok, d2, 1.0), 0.0)
+    mix = rh + rv
+    co = (n_t + n_d) * g * mix
+    cr = (n_hd - n_vt) * g * mix
+    fhh = (1 - rh) * hsnv + (1 + rh) * vsnh - co
+    fvv = -((1 - rv) * hsnv + (1 + rv) * vsnh) + co
+    fhv = -(1 + rv) * hsnh + (1 - rv) * vsnv + cr
+    fvh = -(1 + rh) * hsnh + (1 - rh) * vsnv + cr
+    return fhh, fhv, fvh, fvv
+
+
+def kirchhoff_scalar(si, cs, ss, css, cf, rh, rv):
+    """``(ksz + kz) f_pp`` of the scalar (I2EM) Kirchhoff coefficients, (hh, vv)."""
+    g = 2.0 * (si * ss - (1.0 + cs * css) * cf)
+    return -rh * g, rv * g
+
+
+# ----------------------------------------------------------------------------- complementary
+def _combine(C, B, R, Rx, qfix, eps, lower: bool, co_only: bool = False):
+    """Appendix B combinations of the (reduced) C and B coefficients: (hh, hv, vh, vv).
+    ``R = (R_h, R_v)`` for co-pol, ``Rx = (R_v − R_h)/2`` for cross-pol; ``co_only`` skips
+    the cross-pol pair (returned as 0)."""
+    c1, c2, c3, c4, c5 = C
+    b1, b2, b3, b4, b5, b6 = B
+    rh, rv = R
+    # hh
+    rp, rm = 1 + rh, 1 - rh
+    a, b = rp / qfix, rm / qfix
+    if lower:
+        hh = a * (-rp * c1 * eps + rm * c2 + rp * c3) + b * (rm * c4 + rp * c5)
+    else:
+        hh = -(b * (-rp * c1 + rm * c2 + rp * c3) + a * (rm * c4 + rp * c5))
+    # cross
+    rp, rm = 1 + Rx, 1 - Rx
+    a, b = rp / qfix, rm / qfix
+    if co_only:
+        hv = vh = 0.0
+    elif lower:
+        hv = a * (-rp * b1 + rm * b2 + rp * b3 / eps) - b * (rm * b4 * eps + rp * b5 + rm * b6)
+        vh = -a * (rp * b4 + rm * b5 + rp * b6 / eps) + b * (-rm * b1 * eps + rp * b2 + rm * b3)
+    else:
+        hv = b * (rp * b1 - rm * b2 - rp * b3) + a * (rm * b4 + rp * b5 + rm * b6)
+        vh = b * (rp * b4 + rm * b5 + rp * b6) - a * (-rm * b1 + rp * b2 + rm * b3)
+    # vv
+    rp, rm = 1 + rv, 1 - rv
+    a, b = rp / qfix, rm / qfix
+    if lower:
+        vv = a * (rp * c1 - rm * c2 - rp * c3 / eps) - b * (rm * c4 * eps + rp * c5)
+    else:
+        vv = b * (-rp * c1 + rm * c2 + rp * c3) + a * (rm * c4 + rp * c5)
+    return hh, hv, vh, vv
+
+
+def _reduced_i(si, cs, ss, css, sf, cf, q, alpha):
+    """Reduced ``α C`` and ``α B`` at ``(u, v) = (−kx, 0)`` (slopes ``zx, zy = −(X, Y)/α``),
+    Green's-function ``q`` (complex for the lower medium)."""
+    X = ss * cf - si
+    Y = ss * sf
+    P = ss - si * cf  # cosφ X + sinφ Y
+    C = (
+        alpha * cf,
+        alpha * cf * cs * q + cs * si * P,
+        alpha * cf * si * si - si * q * P,
+        alpha * cs * css * cf + cs * ss * X,
+        -alpha * cf * css * q - ss * q * X,
+    )
+    B = (
+        alpha * css * sf + ss * Y,
+        alpha * css * sf * cs * q + cs * sf * (ss * ss * q - css * si * si),
+        alpha * css * sf * si * si + si * si * sf * (css * q + ss * ss),
+        -alpha * sf * cs,
+        alpha * sf * q,
+        0.0,
+    )
+    return C, B
+
+
+def _reduced_s(si, cs, ss, css, sf, cf, q, alpha):
+    """Reduced coefficients at ``(u, v) = (−ksx, −ksy)`` (primed slopes ``−(X, Y)/α``)."""
+    X = ss * cf - si
+    Y = ss * sf
+    P = ss - si * cf
+    C = (
+        alpha * cf,
+        alpha * cf * cs * q - q * si * P,
+        alpha * ss * si + ss * cs * X,
+        alpha * css * cf * cs - css * si * P,
+        -alpha * css * cf * q - css * ss * X,
+    )
+    B = (
+        alpha * css * sf,
+        alpha * css * sf * cs * q + css * sf * (q * si * si + cs * ss * ss),
+        0.0,
+        -alpha * sf * cs - si * si * sf,
+        alpha * sf * q,
+        ss * Y,
+    )
+    return C, B
+
+
+def complementary_terms(si, cs, ss, css, sf, cf, eps, rh, rv, *, lower=True, phase="aiem"):
+    """The eight complementary terms as a list of ``(name, F̃ (hh, hv, vh, vv), q_phase, side)``.
+
+    ``q_phase`` is the (real) vertical wavenumber in the term's height phase: ``±kz``,
+    ``±ksz`` (upper medium; also the lower-medium terms with ``phase="aiem-upper"``) or
+    ``±Re q₂`` (lower medium, see :mod:`emscatter.solvers.iem.model` for why the real part); the
+    term enters the
+    series as ``¼ F̃ exp(−σ²(q² − q(ksz − kz))) α^(n−1)`` with
+    ``α = ksz − q`` (side "i") or ``kz + q`` (side "s"). ``eps="pec"`` (or ``lower=False``)
+    drops the lower-medium terms (their coefficients vanish as ``1/√ε``). ``phase``:
+
+    * ``"aiem"`` (default of :mod:`emscatter.solvers.iem.model`): every term keeps its
+      Green's-function phase, the
+      lower-medium terms ``±Re q₂`` (Chen et al. 2003, with the real part,
+      :mod:`emscatter.solvers.iem.model`);
+    * ``"aiem-upper"``: the lower-medium terms keep their coefficients (complex ``q₂``) but
+      take the upper-medium height phase of the same side and direction (``±kz``, ``±ksz``),
+      as the improved IEM of Fung et al. 2002 / Fung & Chen 2004 and its codes do
+      (:mod:`emscatter.solvers.iem.model`: the lower-medium phase removes these terms, and with
+      them the co-pol
+      ratio, once ``σ Re q₂ ≳ 1``);
+    * ``"fung92"``: no Green's-function phase (``q = 0`` in the height phase and in ``α``:
+      Fung et al. 1992, whose backscatter closed forms this reproduces; tested)."""
+    R = (rh, rv)
+    Rx = 0.5 * (rv - rh)
+    terms = []
+    for name, q, side in (
+        ("up_i", cs, "i"),
+        ("dn_i", -cs, "i"),
+        ("up_s", css, "s"),
+        ("dn_s", -css, "s"),
+    ):
+        qph = 0.0 * q if phase == "fung92" else q
+        alpha = css - qph if side == "i" else cs + qph
+        fn = _reduced_i if side == "i" else _reduced_s
+        C, B = fn(si, cs, ss, css, sf, cf, q, alpha)
+        qfix = cs if side == "i" else css
+        terms.append((name, _combine(C, B, R, Rx, qfix, eps, False), qph, side))
+    if not lower:
+        return terms
+    q2i = branch_root(eps - si * si)
+    q2s = branch_root(eps - ss * ss)
+    for name, q, qup, side in (
+        ("Gup_i", q2i, cs, "i"),
+        ("Gdn_i", -q2i, -cs, "i"),
+        ("Gup_s", q2s, css, "s"),
+        ("Gdn_s", -q2s, -css, "s"),
+    ):
+        if phase == "aiem":
+            qph = q.real
+        elif phase == "aiem-upper":
+            qph = qup + 0.0 * q.real
+        else:
+            qph = 0.0 * q.real
+        alpha = css - qph if side == "i" else cs + qph
+        fn = _reduced_i if side == "i" else _reduced_s
+        C, B = fn(si, cs, ss, css, sf, cf, q, alpha)
+        qfix = q2i if side == "i" else q2s
+        terms.append((name, _combine(C, B, R, Rx, qfix, eps, True), qph, side))
+    return terms
+
+
+# ----------------------------------------------------------------------------- backscatter
+def backscatter_terms(si, cs, eps, rh, rv, *, phase="aiem"):
+    """Complementary terms in exact backscatter (``θs = θi``, ``φ = π``), co-polarized.
+
+    Returns ``(U_h, U_v)`` — the ``q = kz`` "i" and ``q = −ksz`` "s" terms, which have
+    ``α = 0`` (n = 1 only) and the closed form ``¼ F̃ = ±4 sin²θ R²`` each (hh with ``−R_h²``) —
+    and, unless ``eps`` is ``"pec"``, ``(G⁺_h, G⁺_v, α⁺, G⁻_h, G⁻_v, α⁻)``: the lower-medium
+    ``q = −q₂`` "i" plus ``q = +q₂`` "s" terms (base ``α⁺ = kz + a``) and the ``q = −q₂`` "s"
+    term (base ``α⁻ = kz − a``), each times ¼, both with the height exponent ``−σ² a²``
+    (besides the common ``−σ² kz²``), where ``a`` is the lower-medium height phase of
+    :func:`complementary_terms`: ``a = Re q₂`` (``phase="aiem"``) or ``kz`` (``"aiem-upper"``:
+    ``α⁺ = 2kz``, the Kirchhoff base and exponent; ``α⁻ = 0``, n = 1 only). The remaining
+    terms cancel (``q = −kz`` "i" against ``q = +ksz`` "s") or vanish (``q = +q₂`` "i",
+    co-pol). Checked against :func:`complementary_terms` in the tests."""
+    s2 = si * si
+    u = (-2.0 * s2 * rh * rh, 2.0 * s2 * rv * rv)  # per term; the two are equal
+    u = (2.0 * u[0], 2.0 * u[1])
+    if isinstance(eps, str):
+        return u, None
+    zero, minus = 0.0 * si, -1.0 + 0.0 * si
+    q2 = branch_root(eps - s2)
+    a = cs + 0.0 * q2.real if phase == "aiem-upper" else q2.real
+    R, Rx = (rh, rv), 0.5 * (rv - rh)
+    plus = []
+    for fn, q, alpha in ((_reduced_i, -q2, cs + a), (_reduced_s, q2, cs + a)):
+        C, B = fn(si, cs, si, cs, zero, minus, q, alpha)
+        plus.append(_combine(C, B, R, Rx, q2, eps, True, co_only=True))
+    C, B = _reduced_s(si, cs, si, cs, zero, minus, -q2, cs - a)
+    neg = _combine(C, B, R, Rx, q2, eps, True, co_only=True)
+    gp_h = 0.25 * (plus[0][0] + plus[1][0])
+    gp_v = 0.25 * (plus[0][3] + plus[1][3])
+    return u, (gp_h, gp_v, cs + a, 0.25 * neg[0], 0.25 * neg[3], cs - a)
+
+
+# ----------------------------------------------------------------------------- transition
+def transition_factor(eps, cs, ks: float, log_w, K, *, rtol: float = 1e-10):
+    """``(γ_h, γ_v)`` ∈ [0, 1] of Wu et al. (2001) / Fung & Chen (2004) at incidence cosine
+    ``cs``, normalized roughness ``ks = kσ``, scaled spectral argument ``K`` (as for
+    ``log_w``, the n-fold spectrum of :func:`emscatter.solvers.kirchhoff.po.log_nfold`).
+
+    With ``S(βQ) = Σₙ (βQ)ⁿ/n! Ŵₙ``, ``Q = (kσ cosθ)²``, ``c = cosθ`` and
+    ``F_t c = 8R₀² sin²θ (c + q₂)/q₂`` (finite at grazing), the ratio of the papers is
+    ``|F_t c + 8R₀|² S(Q) / [|F_t c|² S(Q) + 8 Re(F_t c R₀*) e^{−Q} S(2Q)
+    + 16 |R₀|² e^{−2Q} S(4Q)]`` for v (``R₀ = R_v(0)``) and the same with ``F_t → −F_t`` for h
+    (``R_h(0) = −R_v(0)``). The sums are the single-component case of :func:`iem_series`."""
+    from emscatter.solvers.iem.series import iem_series
+
+    cs = np.asarray(cs, dtype=float)
+    n = cs.size
+    with np.errstate(divide="ignore"):
+        lx = np.concatenate([np.log(np.sqrt(b) * cs) for b in (1.0, 2.0, 4.0)])
+    rows = 3 * n
+    ls, _ = iem_series(
+        np.zeros((rows, 1)), lx[:, None], np.ones((rows, 1), complex), np.ones((rows, 1)),
+        np.zeros(rows, complex), 2.0 * math.log(ks), log_w, np.tile(K, 3), np.zeros(rows),
+        rtol=rtol,
+    )  # fmt: skip
+    l1, l2, l4 = ls[:n], ls[n : 2 * n], ls[2 * n :]  # S(βQ) = β c² exp(l_β)
+    return transition_from_sums(eps, cs, ks, l1 + np.log(cs * cs), l2 + np.log(2 * cs * cs),
+                                l4 + np.log(4 * cs * cs))  # fmt: skip
+
+
+def transition_from_sums(eps, cs, ks: float, l1, l2, l4):
+    """``(γ_h, γ_v)`` from ``l_β = log S(βQ)`` (:func:`transition_factor`)."""
+    cs = np.asarray(cs, dtype=float)
+    s2 = 1.0 - cs * cs
+    sq = np.sqrt(eps)
+    r0 = (sq - 1.0) / (sq + 1.0)
+    q2 = branch_root(eps - s2)
+    ftc = 8.0 * r0 * r0 * s2 * (cs + q2) / q2
+    Q = (ks * cs) ** 2
+    with np.errstate(invalid="ignore"):
+        e2 = np.exp(np.minimum(l2 - l1 - Q, 700.0))
+        e4 = np.exp(np.minimum(l4 - l1 - 2.0 * Q, 700.0))
+    e2 = np.where(np.isnan(e2), 2.0, e2)  # grazing (cosθ = 0): the n = 1 terms, S(βQ)/S(Q) = β
+    e4 = np.where(np.isnan(e4), 4.0, e4)
+    a0 = 16.0 * np.abs(r0) ** 2
+    out = []
+    for f in (-ftc, ftc):  # h, v
+        num = np.abs(f + 8.0 * r0) ** 2
+        den = np.abs(f) ** 2 + 8.0 * (f * np.conj(r0)).real * e2 + a0 * e4
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
+        out.append(np.clip(1.0 - ratio, 0.0, 1.0))
+    return out[0], out[1]
