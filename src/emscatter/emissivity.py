@@ -29,14 +29,17 @@ chunk's time even when the solver's loops are compiled. The measured cost per ev
 the estimate before each step: a refinement that would end past the time budget
 (:data:`TIME_BUDGET_S`, or :func:`time_budget` / ``EMSCATTER_TIME_BUDGET_S``) is not started
 and the last estimate is returned with its error (the documented cheaper path, as for the
-evaluation budget); if even the first, coarsest estimate would end past it, the call raises
-:class:`TimeBudgetError` after a few chunks, naming the estimate, the budget and the ways out.
+evaluation budget); if even the first two, coarsest estimates (one is no error bound) would
+end past it, the call raises :class:`TimeBudgetError` once a tenth of the budget is spent
+(:data:`EARLIEST_REFUSAL`: the first chunks can be slowed by tables a solver fills on first
+use), naming the estimate, the budget and the ways out.
 """
 
 from __future__ import annotations
 
 import contextlib
 import contextvars
+import functools
 import math
 import os
 import time
@@ -109,7 +112,11 @@ MAX_EVALUATIONS_PER_ANGLE = 100_000
 TIME_BUDGET_S = 60.0
 
 #: Target duration [s] of one chunk of σ⁰ evaluations: how long Ctrl-C may wait.
-CHUNK_SECONDS = 0.2
+CHUNK_SECONDS = 1.0
+
+#: Fraction of the time budget spent before a call is refused on its estimate: solvers fill
+#: tables on first use (the first seconds can be 20× slower per σ⁰ than the rest).
+EARLIEST_REFUSAL = 0.1
 
 _BUDGET = contextvars.ContextVar("emscatter_time_budget", default=())
 
@@ -147,6 +154,39 @@ def time_budget(seconds: float | None):
         _BUDGET.reset(token)
 
 
+_DEADLINE = contextvars.ContextVar("emscatter_call_deadline", default=None)
+
+
+def one_deadline(fn):
+    """Decorator: one time budget for the whole call of ``fn`` (e.g. :func:`emscatter.emissivity`
+    with ``method="auto"``, whose per-angle fallbacks are integrals of their own): every
+    hemispherical integral inside it gets what is left of :func:`current_time_budget`
+    counted from the call's start; calls nested in it share the outer deadline."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        if _DEADLINE.get() is not None:
+            return fn(*args, **kwargs)
+        budget = current_time_budget()
+        token = _DEADLINE.set((None if budget is None else time.perf_counter() + budget,))
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            _DEADLINE.reset(token)
+
+    return wrapper
+
+
+def _budget_left() -> float | None:
+    """Seconds left to the enclosing call's deadline, else the budget of a fresh call."""
+    outer = _DEADLINE.get()
+    if outer is None:
+        return current_time_budget()
+    if outer[0] is None:
+        return None
+    return max(outer[0] - time.perf_counter(), 1e-9)
+
+
 def current_time_budget() -> float | None:
     """The budget [s] in force: :func:`time_budget`, else ``EMSCATTER_TIME_BUDGET_S``, else
     :data:`TIME_BUDGET_S` (``None``: no budget)."""
@@ -168,12 +208,17 @@ class _OverBudget(Exception):
 
 
 class _Clock:
-    """Wall clock of one integral and the measured cost of a σ⁰ evaluation [s]."""
+    """Wall clock of one integral and the measured cost of a σ⁰ evaluation [s] (the fastest
+    chunk's: an optimistic estimate, so a refusal is sure).
+
+    ``follow``: how many times this estimate's evaluations must follow it (the first
+    estimate is useless without the second, ``growth`` times as large)."""
 
     def __init__(self, budget: float | None):
         self.t0 = time.perf_counter()
         self.budget = budget
         self.rate: float | None = None
+        self.follow = 0
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
@@ -188,31 +233,36 @@ class _Clock:
 def _evaluate(sigma0_fn, theta_s, phi_s, lead: int, clock: _Clock):
     """``sigma0_fn`` over directions of shape ``(*S, *D)`` (``lead = len(S)``), in chunks of
     the flattened ``D`` (each ≈ CHUNK_SECONDS by the measured rate); between chunks Python
-    runs signal handlers and the budget is checked: :class:`_OverBudget` when the measured
-    rate says the estimate would end past it (after two chunks, so one-off set-up costs
-    such as table builds or compilation do not count as the rate)."""
+    runs signal handlers and the budget is checked. :class:`_OverBudget` when the time is
+    spent, or when at least :data:`EARLIEST_REFUSAL` of the budget is spent and even the
+    fastest rate seen (one-off costs — compilation, tables a solver fills on first use —
+    only slow chunks down) says this estimate and what must follow it would end past it."""
     lead_shape, tail = theta_s.shape[:lead], theta_s.shape[lead:]
     m = math.prod(tail)
     per_index = max(1, math.prod(lead_shape))
+    total = m * per_index
     # (*S, *D) → (*S, m, 1, ...): the solver broadcasts θi[..., None, ...] against it as before
     flat = (*lead_shape, m, *([1] * (len(tail) - 1)))
     ts, ps = theta_s.reshape(flat), phi_s.reshape(flat)
     rest = (slice(None),) * (len(tail) - 1)
     parts = []
-    start, size, chunks = 0, 1, 0
+    start, size = 0, 1
     while start < m:
         stop = min(m, start + size)
         t = time.perf_counter()
         idx = (Ellipsis, slice(start, stop), *rest)
         parts.append(sigma0_fn(ts[idx], ps[idx]))
-        dt = time.perf_counter() - t
-        clock.rate = dt / ((stop - start) * per_index)
-        chunks += 1
+        rate = (time.perf_counter() - t) / ((stop - start) * per_index)
+        clock.rate = rate if clock.rate is None else min(clock.rate, rate)
         start = stop
-        remaining = (m - start) * per_index
-        if remaining and chunks >= 2 and not clock.fits(remaining):
-            raise _OverBudget(clock.elapsed() + clock.rate * remaining, m * per_index, clock.rate)
-        size = max(1, int(CHUNK_SECONDS / max(clock.rate * per_index, 1e-12)))
+        left = (m - start) * per_index + clock.follow * total
+        if clock.budget is not None and start < m:
+            spent = clock.elapsed() > clock.budget
+            early = clock.elapsed() < EARLIEST_REFUSAL * clock.budget
+            if spent or (not early and not clock.fits(left)):
+                predicted = clock.elapsed() + clock.rate * left
+                raise _OverBudget(predicted, (1 + clock.follow) * total, clock.rate)
+        size = max(1, min(8 * (stop - start), int(CHUNK_SECONDS / max(rate * per_index, 1e-12))))
     axis = lead + 2  # after (pol_s, pol_i)
     sig = np.concatenate(parts, axis=axis) if len(parts) > 1 else parts[0]
     return sig.reshape(*sig.shape[:axis], *tail)
@@ -327,8 +377,8 @@ _WAYS_OUT = (
 
 def _over_budget_message(over: _OverBudget, clock: _Clock, theta_i) -> str:
     return (
-        f"the hemispherical integral would take about {over.predicted:.3g} s (its first, "
-        f"coarsest estimate needs {over.evaluations} σ⁰ evaluations at {over.rate * 1e3:.3g} ms "
+        f"the hemispherical integral would take about {over.predicted:.3g} s (its first two, "
+        f"coarsest estimates need {over.evaluations} σ⁰ evaluations at {over.rate * 1e3:.3g} ms "
         f"each, measured on the first {clock.elapsed():.2g} s) for {np.size(theta_i)} "
         f"incidence angle(s), more than the time budget of {clock.budget:g} s; " + _WAYS_OUT
     )
@@ -428,7 +478,7 @@ def hemispherical_reflectivity(
     order = order or default_order
     n_alpha = n_alpha or default_alpha
     evals = 0
-    clock = _Clock(current_time_budget() if budget_s == "default" else
+    clock = _Clock(_budget_left() if budget_s == "default" else
                    _check_budget("budget_s", budget_s))  # fmt: skip
 
     def estimate(o, na):
@@ -439,10 +489,12 @@ def hemispherical_reflectivity(
     budget = MAX_EVALUATIONS_PER_ANGLE if max_evaluations is None else int(max_evaluations)
     budget *= max(1, theta_i.size)
     growth = 2 if dimension == 1 else 4
+    clock.follow = growth if max_refinements > 0 else 0
     try:
         r_prev, n = estimate(order, n_alpha)
     except _OverBudget as over:
         raise TimeBudgetError(_over_budget_message(over, clock, theta_i)) from None
+    clock.follow = 0
     evals += n
     err = np.full(r_prev.shape, np.inf)
     for _ in range(max_refinements):

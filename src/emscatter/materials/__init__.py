@@ -191,7 +191,7 @@ def _unknown_material(value, metals: list[str]) -> str:
     return (
         f"unknown material {value!r}: use 'pec', one of {len(itu_names)} ITU-R P.2040 names "
         f"(materials.available_itu(), e.g. 'concrete'), a natural medium "
-        f"{sorted(NATURAL_MEDIA)} or one of {where}, e.g. 'Au'; a "
+        f"(materials.NATURAL_MEDIA, e.g. 'soil') or one of {where}, e.g. 'Au'; a "
         f"permittivity is a complex number (eps=17+2j), not a string{hint}"
     )
 
