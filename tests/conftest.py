@@ -53,3 +53,33 @@ def nothing_left_in_the_temp_dir():
             "folders once used, e.g. with tempfile.TemporaryDirectory)",
             pytrace=False,
         )
+
+
+# Hypothesis profiles (issue 23), chosen once for every test module:
+# * "dev" (the default on a laptop): fresh random examples on every run, and the failures it
+#   finds kept in the local example database (.hypothesis/ at the repository root) and
+#   replayed first on the next runs until they pass;
+# * "ci" (the default where CI is set, as on every CI service): derandomized — the same
+#   examples for the same code — and no database, so a run depends on the commit only;
+# * "long" (HYPOTHESIS_PROFILE=long): the dev profile with 20× the examples (test_properties).
+# A failure found either way becomes an explicit @example in the test (a regression that
+# every profile runs), never a narrower strategy.
+try:
+    from hypothesis import HealthCheck, settings
+    from hypothesis.database import DirectoryBasedExampleDatabase
+except ImportError:  # the suite's hypothesis tests importorskip it
+    pass
+else:
+    _COMMON = dict(
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
+        print_blob=True,
+    )
+    _DB = DirectoryBasedExampleDatabase(
+        os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), ".hypothesis")
+    )
+    settings.register_profile("ci", derandomize=True, database=None, **_COMMON)
+    settings.register_profile("dev", derandomize=False, database=_DB, **_COMMON)
+    settings.register_profile("long", derandomize=False, database=_DB, **_COMMON)
+    _CI = os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no")
+    settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or ("ci" if _CI else "dev"))

@@ -42,7 +42,14 @@ from .conventions import (
     check_finite,
     wavenumber,
 )
-from .emissivity import Emissivity, energy_balance, hemispherical_reflectivity, lobe_width
+from .emissivity import (
+    Emissivity,
+    TimeBudgetError,
+    energy_balance,
+    hemispherical_reflectivity,
+    lobe_width,
+    one_deadline,
+)
 from .frequency import Group, as_eps_or_material, eps_at, frequency_groups
 from .fresnel import is_pec
 from .scattering import Scattering
@@ -488,6 +495,8 @@ def _energy_fallback(rough, eps, k, ti, pi_, tol, options, ranking, primary, sta
             )
         except (ValueError, TypeError):  # this method cannot take these inputs
             continue
+        except TimeBudgetError:  # not within what is left of the call's time budget
+            continue
         angular = validity_report(cand, rough, k, eps=eps, theta_i=sub_ti)
         accept = energy_balance(rc, ri, er, sub_ti, tol=tol)["ok"] & _angle_mask(
             angular, sub_ti.shape
@@ -543,7 +552,7 @@ def _emissivity_one(rough, eps, k, ti, pi_, method, tol, out_of_range, options) 
     if not converged.all():
         quadrature["reason"] = (
             f"quadrature stopped at error {float(np.max(err)):.2g} > tol {tol:g} at "
-            f"{angles_deg(ti, ~converged)} (evaluation budget)"
+            f"{angles_deg(ti, ~converged)} (evaluation or time budget)"
         )
     info = {"validity": report, "energy": balance, "methods": methods, "quadrature": quadrature}
     if make_nan:
@@ -576,6 +585,7 @@ def _check_tol(tol) -> float:
     return float(tol)
 
 
+@one_deadline
 def emissivity(
     surface: Roughness,
     eps,

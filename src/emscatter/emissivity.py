@@ -19,11 +19,30 @@ The last panel uses ``t = 1 − (1 − a) s²`` so the ``1/cosθs`` edge singula
 smooth. 1-D profiles use the same graded rule in ``u = sinθs`` on both sides of ``sinθi``.
 The rule is refined (doubling both orders) until two successive estimates agree within
 ``tol``; their difference is the reported error estimate.
+
+Time budget and interrupts
+--------------------------
+σ⁰ is evaluated in chunks of scattered directions (each chunk ≈ :data:`CHUNK_SECONDS` of
+work, sized from the measured cost of the previous one), so the interpreter regains control
+between chunks: Ctrl-C (``KeyboardInterrupt``) and ``SIGALRM`` handlers run within about a
+chunk's time even when the solver's loops are compiled. The measured cost per evaluation is
+the estimate before each step: a refinement that would end past the time budget
+(:data:`TIME_BUDGET_S`, or :func:`time_budget` / ``EMSCATTER_TIME_BUDGET_S``) is not started
+and the last estimate is returned with its error (the documented cheaper path, as for the
+evaluation budget); if even the first two, coarsest estimates (one is no error bound) would
+end past it, the call raises :class:`TimeBudgetError` once a tenth of the budget is spent
+(:data:`EARLIEST_REFUSAL`: the first chunks can be slowed by tables a solver fills on first
+use), naming the estimate, the budget and the ways out.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
+import functools
 import math
+import os
+import time
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -36,6 +55,9 @@ __all__ = [
     "energy_balance",
     "ENERGY_ATOL",
     "MAX_EVALUATIONS_PER_ANGLE",
+    "TIME_BUDGET_S",
+    "TimeBudgetError",
+    "time_budget",
     "hemispherical_reflectivity",
     "lobe_width",
 ]
@@ -83,6 +105,168 @@ class Emissivity:
 #: (the graded rule needs ~1e3–9e4 for tol = 1e-4; the budget only stops pathological cases,
 #: e.g. physical optics at kσ = 1e3, whose every evaluation sums thousands of series terms).
 MAX_EVALUATIONS_PER_ANGLE = 100_000
+
+#: Default wall-clock budget [s] of one hemispherical integral (one emissivity call per
+#: frequency and method). ``EMSCATTER_TIME_BUDGET_S`` (seconds, or ``none``) overrides it for a
+#: process, :func:`time_budget` for a block of code.
+TIME_BUDGET_S = 60.0
+
+#: Target duration [s] of one chunk of σ⁰ evaluations: how long Ctrl-C may wait.
+CHUNK_SECONDS = 1.0
+
+#: Fraction of the time budget spent before a call is refused on its estimate: solvers fill
+#: tables on first use (the first seconds can be 20× slower per σ⁰ than the rest).
+EARLIEST_REFUSAL = 0.1
+
+_BUDGET = contextvars.ContextVar("emscatter_time_budget", default=())
+
+
+class TimeBudgetError(RuntimeError):
+    """A hemispherical integral would not finish within its time budget."""
+
+
+def _check_budget(name: str, value) -> float | None:
+    if value is None or (isinstance(value, str) and value.strip().lower() in ("none", "inf")):
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not v > 0 or isinstance(value, bool):
+        raise ValueError(
+            f"{name} must be a positive number of seconds or None (no budget), got {value!r}"
+        )
+    return None if math.isinf(v) else v
+
+
+@contextlib.contextmanager
+def time_budget(seconds: float | None):
+    """Within the block, every hemispherical integral (emissivity) gets ``seconds`` [s] of
+    wall-clock time (``None``: no budget)::
+
+        with emscatter.emissivity.time_budget(600):
+            em.emissivity(surface, eps, wavelength=1.0, theta_i=theta, method="iem")
+    """
+    token = _BUDGET.set((_check_budget("time_budget", seconds),))
+    try:
+        yield
+    finally:
+        _BUDGET.reset(token)
+
+
+_DEADLINE = contextvars.ContextVar("emscatter_call_deadline", default=None)
+
+
+def one_deadline(fn):
+    """Decorator: one time budget for the whole call of ``fn`` (e.g. :func:`emscatter.emissivity`
+    with ``method="auto"``, whose per-angle fallbacks are integrals of their own): every
+    hemispherical integral inside it gets what is left of :func:`current_time_budget`
+    counted from the call's start; calls nested in it share the outer deadline."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        if _DEADLINE.get() is not None:
+            return fn(*args, **kwargs)
+        budget = current_time_budget()
+        token = _DEADLINE.set((None if budget is None else time.perf_counter() + budget,))
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            _DEADLINE.reset(token)
+
+    return wrapper
+
+
+def _budget_left() -> float | None:
+    """Seconds left to the enclosing call's deadline, else the budget of a fresh call."""
+    outer = _DEADLINE.get()
+    if outer is None:
+        return current_time_budget()
+    if outer[0] is None:
+        return None
+    return max(outer[0] - time.perf_counter(), 1e-9)
+
+
+def current_time_budget() -> float | None:
+    """The budget [s] in force: :func:`time_budget`, else ``EMSCATTER_TIME_BUDGET_S``, else
+    :data:`TIME_BUDGET_S` (``None``: no budget)."""
+    override = _BUDGET.get()
+    if override:
+        return override[0]
+    env = os.environ.get("EMSCATTER_TIME_BUDGET_S")
+    if env is not None and env.strip():
+        return _check_budget("EMSCATTER_TIME_BUDGET_S", env)
+    return TIME_BUDGET_S
+
+
+class _OverBudget(Exception):
+    """Internal: the estimate in progress would end past the budget."""
+
+    def __init__(self, predicted: float, evaluations: int, rate: float):
+        super().__init__(predicted)
+        self.predicted, self.evaluations, self.rate = predicted, evaluations, rate
+
+
+class _Clock:
+    """Wall clock of one integral and the measured cost of a σ⁰ evaluation [s] (the fastest
+    chunk's: an optimistic estimate, so a refusal is sure).
+
+    ``follow``: how many times this estimate's evaluations must follow it (the first
+    estimate is useless without the second, ``growth`` times as large)."""
+
+    def __init__(self, budget: float | None):
+        self.t0 = time.perf_counter()
+        self.budget = budget
+        self.rate: float | None = None
+        self.follow = 0
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.t0
+
+    def fits(self, evaluations: int) -> bool:
+        """Whether ``evaluations`` more would end within the budget (by the measured rate)."""
+        if self.budget is None or self.rate is None:
+            return True
+        return self.elapsed() + self.rate * evaluations <= self.budget
+
+
+def _evaluate(sigma0_fn, theta_s, phi_s, lead: int, clock: _Clock):
+    """``sigma0_fn`` over directions of shape ``(*S, *D)`` (``lead = len(S)``), in chunks of
+    the flattened ``D`` (each ≈ CHUNK_SECONDS by the measured rate); between chunks Python
+    runs signal handlers and the budget is checked. :class:`_OverBudget` when the time is
+    spent, or when at least :data:`EARLIEST_REFUSAL` of the budget is spent and even the
+    fastest rate seen (one-off costs — compilation, tables a solver fills on first use —
+    only slow chunks down) says this estimate and what must follow it would end past it."""
+    lead_shape, tail = theta_s.shape[:lead], theta_s.shape[lead:]
+    m = math.prod(tail)
+    per_index = max(1, math.prod(lead_shape))
+    total = m * per_index
+    # (*S, *D) → (*S, m, 1, ...): the solver broadcasts θi[..., None, ...] against it as before
+    flat = (*lead_shape, m, *([1] * (len(tail) - 1)))
+    ts, ps = theta_s.reshape(flat), phi_s.reshape(flat)
+    rest = (slice(None),) * (len(tail) - 1)
+    parts = []
+    start, size = 0, 1
+    while start < m:
+        stop = min(m, start + size)
+        t = time.perf_counter()
+        idx = (Ellipsis, slice(start, stop), *rest)
+        parts.append(sigma0_fn(ts[idx], ps[idx]))
+        rate = (time.perf_counter() - t) / ((stop - start) * per_index)
+        clock.rate = rate if clock.rate is None else min(clock.rate, rate)
+        start = stop
+        left = (m - start) * per_index + clock.follow * total
+        if clock.budget is not None and start < m:
+            spent = clock.elapsed() > clock.budget
+            early = clock.elapsed() < EARLIEST_REFUSAL * clock.budget
+            if spent or (not early and not clock.fits(left)):
+                predicted = clock.elapsed() + clock.rate * left
+                raise _OverBudget(predicted, (1 + clock.follow) * total, clock.rate)
+        size = max(1, min(8 * (stop - start), int(CHUNK_SECONDS / max(rate * per_index, 1e-12))))
+    axis = lead + 2  # after (pol_s, pol_i)
+    sig = np.concatenate(parts, axis=axis) if len(parts) > 1 else parts[0]
+    return sig.reshape(*sig.shape[:axis], *tail)
+
 
 #: Absolute slack [-] added to the quadrature error when checking the energy balance
 #: (rounding of quantities of order 1).
@@ -184,7 +368,23 @@ def _graded_rule(finest: float, order: int) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(nodes), np.concatenate(weights)
 
 
-def _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, order, n_alpha):
+_WAYS_OUT = (
+    "ways out: a method that is cheaper here (method='go' where its kσ limit holds, "
+    "or 'spm' at small kσ), fewer incidence angles, a looser tol, or a larger budget "
+    "(with emscatter.emissivity.time_budget(seconds): ..., or EMSCATTER_TIME_BUDGET_S)"
+)
+
+
+def _over_budget_message(over: _OverBudget, clock: _Clock, theta_i) -> str:
+    return (
+        f"the hemispherical integral would take about {over.predicted:.3g} s (its first two, "
+        f"coarsest estimates need {over.evaluations} σ⁰ evaluations at {over.rate * 1e3:.3g} ms "
+        f"each, measured on the first {clock.elapsed():.2g} s) for {np.size(theta_i)} "
+        f"incidence angle(s), more than the time budget of {clock.budget:g} s; " + _WAYS_OUT
+    )
+
+
+def _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, order, n_alpha, clock):
     """One quadrature estimate; returns (r (2, *S), evaluations)."""
     t, wt = _graded_rule(finest, order)
     alpha = np.arange(n_alpha) * (2 * math.pi / n_alpha)
@@ -202,7 +402,9 @@ def _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, order, n_alpha):
     cos_s = np.sqrt(1.0 - s2)
     theta_s = np.arctan2(sin_s, cos_s)
     phi_s = np.arctan2(py, px)
-    sig = sigma0_fn(theta_s, phi_s)  # (2, 2, *S, n_alpha, n_t)
+    shape = np.broadcast_shapes(theta_s.shape, phi_s.shape)
+    theta_s, phi_s = np.broadcast_to(theta_s, shape), np.broadcast_to(phi_s, shape)
+    sig = _evaluate(sigma0_fn, theta_s, phi_s, theta_i.ndim, clock)  # (2, 2, *S, n_alpha, n_t)
     summed = sig.sum(axis=0)  # over scattered pol -> (2, *S, n_alpha, n_t)
     with np.errstate(divide="ignore", invalid="ignore"):
         jac = np.where(cos_s > 0, rho_max * rho / cos_s, 0.0) * wt
@@ -211,7 +413,7 @@ def _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, order, n_alpha):
     return r, summed[0].size
 
 
-def _reflectivity_1d(sigma0_fn, theta_i, phi_i, finest, order):
+def _reflectivity_1d(sigma0_fn, theta_i, phi_i, finest, order, clock):
     t, wt = _graded_rule(finest, order)
     u0 = np.sin(theta_i)[..., None]
     # forward side u in [u0, 1], backward side u in [-1, u0]
@@ -221,7 +423,9 @@ def _reflectivity_1d(sigma0_fn, theta_i, phi_i, finest, order):
     cos_s = np.sqrt(1.0 - u * u)
     theta_s = np.arctan2(np.abs(u), cos_s)
     phi_s = phi_i[..., None] + np.where(u >= 0, 0.0, math.pi)
-    sig = sigma0_fn(theta_s, phi_s)  # (2, 2, *S, n)
+    shape = np.broadcast_shapes(theta_s.shape, phi_s.shape)
+    theta_s, phi_s = np.broadcast_to(theta_s, shape), np.broadcast_to(phi_s, shape)
+    sig = _evaluate(sigma0_fn, theta_s, phi_s, theta_i.ndim, clock)  # (2, 2, *S, n)
     summed = sig.sum(axis=0)
     with np.errstate(divide="ignore", invalid="ignore"):
         jac = np.where(cos_s > 0, jl / cos_s, 0.0)
@@ -241,6 +445,7 @@ def hemispherical_reflectivity(
     n_alpha: int | None = None,
     max_refinements: int = 4,
     max_evaluations: int | None = None,
+    budget_s="default",
 ):
     """Incoherent reflectivity ``r_p(θi)`` of a bistatic σ⁰ by the graded quadrature above.
 
@@ -259,6 +464,10 @@ def hemispherical_reflectivity(
         together; default :data:`MAX_EVALUATIONS_PER_ANGLE`): a refinement that would exceed
         it is not started, so every call answers in bounded time; the returned error then
         says how far from ``tol`` it stopped.
+    budget_s : wall-clock budget [s] (default :func:`current_time_budget`; ``None``: none).
+        A refinement whose measured-rate estimate ends past it is not started (the error
+        reached is returned); a first estimate that would end past it raises
+        :class:`TimeBudgetError` (module docstring). σ⁰ is evaluated in chunks either way.
 
     Returns ``(r, error, evaluations)`` with ``r`` and ``error`` of shape ``(2, *S)``.
     """
@@ -269,23 +478,40 @@ def hemispherical_reflectivity(
     order = order or default_order
     n_alpha = n_alpha or default_alpha
     evals = 0
+    clock = _Clock(_budget_left() if budget_s == "default" else
+                   _check_budget("budget_s", budget_s))  # fmt: skip
 
     def estimate(o, na):
         if dimension == 1:
-            return _reflectivity_1d(sigma0_fn, theta_i, phi_i, finest, o)
-        return _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, o, na)
+            return _reflectivity_1d(sigma0_fn, theta_i, phi_i, finest, o, clock)
+        return _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, o, na, clock)
 
     budget = MAX_EVALUATIONS_PER_ANGLE if max_evaluations is None else int(max_evaluations)
     budget *= max(1, theta_i.size)
     growth = 2 if dimension == 1 else 4
-    r_prev, n = estimate(order, n_alpha)
+    clock.follow = growth if max_refinements > 0 else 0
+    try:
+        r_prev, n = estimate(order, n_alpha)
+    except _OverBudget as over:
+        raise TimeBudgetError(_over_budget_message(over, clock, theta_i)) from None
+    clock.follow = 0
     evals += n
     err = np.full(r_prev.shape, np.inf)
     for _ in range(max_refinements):
         if evals + growth * n > budget and np.isfinite(err).all():
             break  # the next refinement would exceed the budget: report the error reached
+        if not clock.fits(growth * n) and np.isfinite(err).all():
+            break  # ... or end past the time budget (estimated from the measured rate)
         order, n_alpha = 2 * order, 2 * n_alpha
-        r, n = estimate(order, n_alpha)
+        try:
+            r, n = estimate(order, n_alpha)
+        except _OverBudget:
+            if np.isfinite(err).all():
+                break  # keep the previous estimate and its error
+            raise TimeBudgetError(
+                f"the hemispherical integral needs two estimates for an error bound and the "
+                f"second would end past the time budget of {clock.budget:g} s; " + _WAYS_OUT
+            ) from None
         evals += n
         err = np.abs(r - r_prev)
         r_prev = r

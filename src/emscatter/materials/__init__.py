@@ -11,6 +11,9 @@
     mat.eps_from_conductivity(5.24, 0.12, 3.5e9) # ε′ + iσ/(ωε₀)   (exp(−iωt), Im ε ≥ 0)
     mat.to_engineering(eps)                      # the exp(+jωt) form Sionna uses (conjugate)
     mat.as_material(17 + 2j), mat.as_material("Au"), mat.as_material("itu:concrete")
+    soil = mat.MironovSoil(moisture=0.25, clay=0.3)  # or mat.DobsonSoil(moisture, sand, clay, ...)
+    sea = mat.MeissnerWentzWater(temperature=293.15, salinity=35)  # or KleinSwiftWater
+    mat.as_material("soil"), mat.as_material("soil:dobson"), mat.as_material("sea_water")
 
 Every material says where its numbers come from (``.source``) and where they hold (``.band``
 [Hz]); asking outside the band raises :class:`OutOfBandError` naming the band and the ways out.
@@ -41,6 +44,8 @@ from .core import (
 )
 from .itu import ITU_P2040, ItuMaterial, available_itu, itu
 from .metals import available_metals, metal
+from .soil import DobsonSoil, MironovSoil, soil
+from .water import KleinSwiftWater, MeissnerWentzWater, sea_water
 
 __all__ = [
     "Material",
@@ -50,6 +55,13 @@ __all__ = [
     "Tabulated",
     "PerfectConductor",
     "ItuMaterial",
+    "DobsonSoil",
+    "MironovSoil",
+    "KleinSwiftWater",
+    "MeissnerWentzWater",
+    "soil",
+    "sea_water",
+    "NATURAL_MEDIA",
     "OutOfBandError",
     "metal",
     "itu",
@@ -70,10 +82,42 @@ __all__ = [
 ]
 
 
+#: Names of the natural media (:mod:`.soil`, :mod:`.water`) with their default parameters:
+#: ``"soil"`` is Mironov's model at moisture 0.2 m³/m³ and clay 0.2; ``"soil:dobson"`` Dobson's
+#: at moisture 0.2, sand 0.4, clay 0.2, bulk density 1400 kg/m³, 20 °C; ``"sea_water"``
+#: Meissner–Wentz at 20 °C and 35 psu (``"sea_water:klein-swift"`` Klein–Swift's);
+#: ``"fresh_water"`` Meissner–Wentz at 20 °C and 0 psu. Other moistures, textures,
+#: temperatures and salinities: build the class (``MironovSoil(moisture=0.3, clay=0.1)``).
+NATURAL_MEDIA = {
+    "soil": lambda: soil("mironov"),
+    "soil:mironov": lambda: soil("mironov"),
+    "soil:dobson": lambda: soil("dobson"),
+    "sea_water": lambda: sea_water("meissner-wentz"),
+    "sea_water:meissner-wentz": lambda: sea_water("meissner-wentz"),
+    "sea_water:klein-swift": lambda: sea_water("klein-swift"),
+    "fresh_water": lambda: MeissnerWentzWater(salinity=0.0, name="fresh water (Meissner-Wentz)"),
+}
+
+
+def _natural_medium(low: str):
+    key = low.replace(" ", "_").replace("seawater", "sea_water")
+    if key in NATURAL_MEDIA:
+        return NATURAL_MEDIA[key]()
+    if key.startswith(("soil", "sea_water")):
+        raise ValueError(
+            f"unknown material {low!r}: the natural media are {sorted(NATURAL_MEDIA)}; for "
+            "other parameters build one, e.g. emscatter.materials.MironovSoil(moisture=0.3, "
+            "clay=0.1), DobsonSoil(moisture, sand, clay, bulk_density [kg/m³], temperature "
+            "[K]) or MeissnerWentzWater(temperature [K], salinity [psu])"
+        )
+    return None
+
+
 def as_material(value, *, extrapolate: bool = False) -> Material:
     """A :class:`Material` from a Material (returned as is), a number (``Constant``), ``"pec"``,
-    a Mitsuba metal name (``"Au"``, or ``"mitsuba:Au"``) or an ITU-R P.2040 name
-    (``"concrete"``, or ``"itu:concrete"``)."""
+    a Mitsuba metal name (``"Au"``, or ``"mitsuba:Au"``), an ITU-R P.2040 name
+    (``"concrete"``, or ``"itu:concrete"``) or a natural medium (:data:`NATURAL_MEDIA`:
+    ``"soil"``, ``"soil:dobson"``, ``"sea_water"``, ...)."""
     if isinstance(value, Material):
         return value
     if isinstance(value, bool) or value is None:
@@ -96,6 +140,9 @@ def as_material(value, *, extrapolate: bool = False) -> Material:
             return metal(text[len("mitsuba:") :], extrapolate=extrapolate)
         if low in ITU_P2040:
             return itu(low, extrapolate=extrapolate)
+        medium = _natural_medium(low)
+        if medium is not None:
+            return medium
         try:
             names = available_metals()
         except (ModuleNotFoundError, FileNotFoundError):
@@ -132,7 +179,7 @@ def _unknown_material(value, metals: list[str]) -> str:
     import difflib
 
     itu_names = list(available_itu())
-    every = ["pec", *itu_names, *metals]
+    every = ["pec", *itu_names, *NATURAL_MEDIA, *metals]
     lower = {n.lower(): n for n in every}
     close = difflib.get_close_matches(str(value).strip().lower(), list(lower), n=3, cutoff=0.6)
     hint = f"; did you mean {', '.join(repr(lower[c]) for c in close)}?" if close else ""
@@ -143,7 +190,8 @@ def _unknown_material(value, metals: list[str]) -> str:
     )
     return (
         f"unknown material {value!r}: use 'pec', one of {len(itu_names)} ITU-R P.2040 names "
-        f"(materials.available_itu(), e.g. 'concrete') or one of {where}, e.g. 'Au'; a "
+        f"(materials.available_itu(), e.g. 'concrete'), a natural medium "
+        f"(materials.NATURAL_MEDIA, e.g. 'soil') or one of {where}, e.g. 'Au'; a "
         f"permittivity is a complex number (eps=17+2j), not a string{hint}"
     )
 
@@ -179,6 +227,10 @@ def from_dict(d: dict) -> Material:
         return PerfectConductor()
     if kind == "ItuMaterial":
         return itu(d["name"], extrapolate=d.get("extrapolate", False))
+    if kind in _NATURAL_TYPES:
+        cls = _NATURAL_TYPES[kind]
+        fields = {k: d[k] for k in cls.__dataclass_fields__ if k in d}
+        return cls(**fields)
     if kind == "Tabulated":
         common = {"name": d["name"], "source": d["source"], "extrapolate": d["extrapolate"]}
         if "n" in d:
@@ -188,3 +240,8 @@ def from_dict(d: dict) -> Material:
         eps = np.array(d["eps_re"]) + 1j * np.array(d["eps_im"])
         return Tabulated(np.array(d["wavelength"]), eps, **common)
     raise ValueError(f"unknown material type {kind!r} in {d!r}")
+
+
+_NATURAL_TYPES = {
+    c.__name__: c for c in (DobsonSoil, MironovSoil, KleinSwiftWater, MeissnerWentzWater)
+}

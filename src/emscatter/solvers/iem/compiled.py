@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import functools
 import math
+import time
 
 import numpy as np
 
@@ -88,13 +89,28 @@ def series_rows(la, lx, ph, sx, d, log_ks2, spec, dim, K, pref, *, rtol, max_ter
     return out_s, lp, st
 
 
+#: Target duration [s] of one compiled call of :func:`poisson_sums`: between calls Python runs
+#: signal handlers (Ctrl-C, SIGALRM), which cannot interrupt compiled code.
+CHUNK_SECONDS = 0.2
+
+
 def poisson_sums(logq, K, spec, dim, *, rtol):
-    """``log Σ_{n≥1} qⁿ/n! Ŵₙ(K)`` per element (``logq = log q``)."""
+    """``log Σ_{n≥1} qⁿ/n! Ŵₙ(K)`` per element (``logq = log q``). Elements are independent:
+    they are summed in contiguous chunks of about :data:`CHUNK_SECONDS` each (sized from the
+    previous chunk's time; at kσ ~ 1e3 one element costs ~1e-3 s), so the call can be
+    interrupted."""
     _, poisson_kernel, _, _ = _build()
     logq = np.ascontiguousarray(logq, float).ravel()
+    Kf = np.ascontiguousarray(np.broadcast_to(K, logq.shape), float).ravel()
     out = np.empty(logq.size)
-    poisson_kernel(logq, np.ascontiguousarray(np.broadcast_to(K, logq.shape), float).ravel(),
-                   int(spec), int(dim), math.log(rtol), out)  # fmt: skip
+    start, size, lr = 0, 16, math.log(rtol)
+    while start < logq.size:
+        stop = min(logq.size, start + size)
+        t = time.perf_counter()
+        poisson_kernel(logq[start:stop], Kf[start:stop], int(spec), int(dim), lr, out[start:stop])
+        per = (time.perf_counter() - t) / (stop - start)
+        size = int(min(8 * (stop - start), max(1.0, CHUNK_SECONDS / max(per, 1e-9))))
+        start = stop
     return out
 
 
