@@ -225,14 +225,20 @@ def _bistatic_one(
 
 def _bistatic_blend(rough, eps, k, angles, blend, out_of_range, options, monostatic, depth):
     """``method="auto"`` near a switch: ``Σ wₘ σ⁰ₘ`` (and the same combination of the
-    coherent parts) over the blend's methods, each run and checked as when ``auto`` picks it
-    alone; ``method`` is ``"iem+go"`` (decreasing weight), ``info["blend"]`` the weights and
-    switches, ``info["validity"]`` valid when every blended method is (reasons name it)."""
+    coherent parts) over the blend's methods; ``method`` is ``"iem+go"`` (decreasing weight),
+    ``info["blend"]`` the weights and switches. The validity policy and report are those of
+    ``auto``'s own pick at this roughness (``blend["pick"]``): the other methods are, by
+    construction, within a factor :data:`~emscatter.solvers.select.BLEND_FACTOR` of the region
+    where they are valid and enter with weight ≤ ½; they run with ``out_of_range="ignore"``
+    (no warning, no blanking, no raise for a method the caller did not get alone) and their
+    reports are kept in ``info["validity"]["by_method"]``."""
     weights = blend["weights"]
+    pick = blend.get("pick", next(iter(weights)))
     parts = []
     for name in weights:  # (a loop: warnings point at the caller, one frame deeper)
+        policy = out_of_range if name == pick else "ignore"
         res = _bistatic_one(
-            rough, eps, k, angles, name, out_of_range, options, monostatic, depth + 1, True
+            rough, eps, k, angles, name, policy, options, monostatic, depth + 1, True
         )
         parts.append((name, res))
     sigma0 = sum(weights[n] * res.sigma0 for n, res in parts)
@@ -240,16 +246,11 @@ def _bistatic_blend(rough, eps, k, angles, blend, out_of_range, options, monosta
     def coherent():
         return sum(weights[n] * np.asarray(res.coherent) for n, res in parts)
 
-    reports = [(n, res.info["validity"]) for n, res in parts]
-    report = {
-        "valid": all(r.get("valid", False) for _, r in reports),
-        "roughness_valid": all(r.get("roughness_valid", False) for _, r in reports),
-        "reasons": [f"{n}: {why}" for n, r in reports for why in r.get("reasons", [])],
-        "by_method": dict(reports),
-    }
+    reports = dict((n, res.info["validity"]) for n, res in parts)
+    report = {**reports[pick], "method": pick, "by_method": reports}
     first = parts[0][1]
     info = {"validity": report, "blend": blend, "by_method": {n: r.info for n, r in parts}}
-    blanks = [r.info["out_of_range"] for _, r in parts if "out_of_range" in r.info]
+    blanks = [r.info["out_of_range"] for n, r in parts if n == pick and "out_of_range" in r.info]
     if blanks:
         info["out_of_range"] = np.logical_or.reduce(
             [np.broadcast_to(b, sigma0.shape[2:]) for b in blanks]

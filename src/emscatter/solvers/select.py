@@ -316,10 +316,11 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     bisection to every switch between them), so they need no list kept in
     step with the criteria: a new limit or map blends like the others.
 
-    Returns ``{"weights": {name: w}, "switches": [...]}`` (weights sum to 1, names in
-    decreasing weight; each switch: parameter, value of kσ or kℓ at the switch, methods on
-    both sides). Roughness without a size scaling (not a :class:`~emscatter.spectra.Roughness`)
-    gets its pick with weight 1."""
+    Returns ``{"weights": {name: w}, "switches": [...], "pick": name}`` (weights sum to 1,
+    names in decreasing weight; each switch: parameter, value of kσ or kℓ at the switch,
+    methods on both sides; ``pick``: the method ``auto`` ranks first at the roughness itself,
+    whose validity the blend reports). Roughness without a size scaling (not a
+    :class:`~emscatter.spectra.Roughness`) gets its pick with weight 1."""
     methods = tuple(methods)
     picks: dict[tuple[float, float], str] = {}  # one ranking per probed point
 
@@ -332,7 +333,7 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
 
     p0 = pick(0.0, 0.0)
     if not hasattr(roughness, "_params"):
-        return {"weights": {p0: 1.0}, "switches": []}
+        return {"weights": {p0: 1.0}, "switches": [], "pick": p0}
     d = math.log(BLEND_FACTOR)
 
     def line_blend(ls: float, ll: float, axis: int, m: str) -> dict:
@@ -369,4 +370,4 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     total = sum(raw.values())
     weights = {n: r / total for n, r in raw.items()}
     order = sorted(weights, key=lambda n: -weights[n])
-    return {"weights": {n: weights[n] for n in order}, "switches": switches}
+    return {"weights": {n: weights[n] for n in order}, "switches": switches, "pick": p0}
