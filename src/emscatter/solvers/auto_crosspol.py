@@ -107,13 +107,10 @@ def _spm2_ok(rough, eps) -> bool:
 
 def _iem_term(rough, eps, k, ti, pi_):
     """The IEM multiple-scattering hv (= vh) in backscatter at flat angles ``ti``, ``pi_``."""
-    from .iem import model as iem
-    from .kirchhoff.common import geometry
+    from .iem import crosspol
+    from .iem.model import nominal_rms_slope
 
-    g = geometry(ti, ti, pi_ + math.pi, pi_, eps, 2, checked=True)
-    sig = np.zeros((2, 2, g.size))
-    iem._add_crosspol(sig, rough, g, k, iem.nominal_rms_slope(rough), 8)
-    return sig[0, 1]
+    return crosspol.backscatter(rough, eps, k, ti, pi_, slope=nominal_rms_slope(rough), order=8)
 
 
 def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
