@@ -55,3 +55,33 @@ def test_supplement_caches_return_what_they_computed():
     auto_crosspol.clear_cache()
     fresh, _ = auto_crosspol.supplement("po", rough, 10 + 1j, K, ti, ti, pi_ + math.pi, pi_)
     np.testing.assert_allclose(fresh, auto_crosspol._iem_term(rough, 10 + 1j, K, ti, pi_))
+
+
+@pytest.mark.parametrize(
+    "rough",
+    [
+        ExponentialCorrelation(0.6 / K, 3 / K),
+        GaussianCorrelation(0.3 / K, 2 / K, length_y=4 / K),  # anisotropic slopes: Λ(φ)
+    ],
+)
+@pytest.mark.parametrize("eps", [10 + 1j, "pec", "per-angle"])
+def test_iem_backscatter_entry_is_the_bistatic_solver_term(rough, eps):
+    """``iem.crosspol.backscatter`` (no bistatic geometry, the reversed path's coefficients
+    reused) adds exactly what the IEM solver's ``_add_crosspol`` adds in backscatter, and
+    hv = vh there."""
+    from emscatter.solvers.iem import crosspol as iem_crosspol
+    from emscatter.solvers.iem import model as iem
+    from emscatter.solvers.kirchhoff.common import geometry
+
+    ti = np.radians([0.0, 10.0, 40.0, 40.0, 70.0, 89.0])
+    pi_ = np.array([0.0, 0.3, 1.0, 2.0, 4.0, 6.0])
+    if eps == "per-angle":
+        eps = np.array([3, 5, 10 + 1j, 20, 30 + 3j, 80 + 40j], dtype=complex)
+    g = geometry(ti, ti, pi_ + math.pi, pi_, eps, 2, checked=True)
+    sig = np.zeros((2, 2, g.size))
+    slope = iem.nominal_rms_slope(rough)
+    iem._add_crosspol(sig, rough, g, K, slope, 8)
+    fast = iem_crosspol.backscatter(rough, eps, K, ti, pi_, slope=slope, order=8)
+    np.testing.assert_allclose(fast, sig[0, 1], rtol=1e-13, atol=0.0)
+    np.testing.assert_array_equal(sig[0, 1], sig[1, 0])
+    assert np.all(fast > 0)

@@ -13,11 +13,12 @@ so ``R_h`` and ``R_v`` act on one polarization each, no mixing; Ulaby, Moore & F
   small-roughness limit). Nodes ``6 × 6`` per segment: within 0.002 dB of the ``16 × 16``
   default (Gaussian kσ = 0.3, kℓ = 3, ε = 3, 40°: −49.405 vs −49.407 dB), evaluated by
   :func:`emscatter.solvers.spm.crosspol.backscatter_hv` (the backscatter symmetries: an
-  eighth of the general kernel work, same value to rounding), ~1–2 ms per angle.
+  eighth of the general kernel work, same value to rounding): compiled
+  (:mod:`emscatter.solvers.spm.kernel_crosspol`) ≈ 0.13 ms per angle, numpy ≈ 1.5 ms.
   For a conductor (PEC, Re ε < 0, ``|ε| ≥ 100``; SPM2's TM kernel is singular at the horizon)
   or a power-law spectrum the IEM term below is used instead.
 * ``po``, ``go`` (and ``spm`` where SPM2 cannot): the IEM's multiple-scattering cross-pol
-  (:func:`emscatter.solvers.iem.crosspol.multiple_scattering`, Fung, Li & Chen 1992 appendix; Fung
+  (:func:`emscatter.solvers.iem.crosspol.backscatter`, Fung, Li & Chen 1992 appendix; Fung
   1994; in
   backscatter the form of Ulaby & Long 2014 code 10.1 and SMRT's ``iiem_fung02``). Why it
   belongs to the Kirchhoff regimes: it is the second bounce of the same tangent-plane field
@@ -107,13 +108,10 @@ def _spm2_ok(rough, eps) -> bool:
 
 def _iem_term(rough, eps, k, ti, pi_):
     """The IEM multiple-scattering hv (= vh) in backscatter at flat angles ``ti``, ``pi_``."""
-    from .iem import model as iem
-    from .kirchhoff.common import geometry
+    from .iem import crosspol
+    from .iem.model import nominal_rms_slope
 
-    g = geometry(ti, ti, pi_ + math.pi, pi_, eps, 2, checked=True)
-    sig = np.zeros((2, 2, g.size))
-    iem._add_crosspol(sig, rough, g, k, iem.nominal_rms_slope(rough), 8)
-    return sig[0, 1]
+    return crosspol.backscatter(rough, eps, k, ti, pi_, slope=nominal_rms_slope(rough), order=8)
 
 
 def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):

@@ -100,10 +100,10 @@ import numpy as np
 from emscatter.fresnel import fresnel_cos, is_pec
 from emscatter.solvers.iem.crosspol_terms import gauss_legendre, slope_coefficients  # noqa: F401
 from emscatter.solvers.iem.terms import _combine, branch_root
-from emscatter.solvers.kirchhoff.common import smith_lambda
+from emscatter.solvers.kirchhoff.common import _trig, smith_lambda
 from emscatter.solvers.kirchhoff.po import log_nfold, series_sum
 
-__all__ = ["multiple_scattering", "kernel_coefficients"]
+__all__ = ["multiple_scattering", "backscatter", "kernel_coefficients"]
 
 _S_SPAN = 14.0  # table range in log Q below (kσ)²: Q/Q_max ≥ 8e-7 (θ ≤ 89.95°)
 _N_S, _N_X = 128, 1024
@@ -310,9 +310,12 @@ def multiple_scattering(rough, eps, k: float, theta_i, theta_s, dphi, phi_i, *, 
     si, cs, ss, css = np.sin(ti), np.cos(ti), np.sin(ts), np.cos(ts)
     sf, cf = np.sin(dp), np.cos(dp)
     rh, rv = fresnel_cos("pec" if pec else eps_g, cs)
-    rh_r, rv_r = fresnel_cos("pec" if pec else eps_g, css)
     gam = kernel_coefficients(0.5 * (rv - rh), "pec" if pec else eps_g)
-    gam_r = kernel_coefficients(0.5 * (rv_r - rh_r), "pec" if pec else eps_g)
+    if np.array_equal(ti, ts):  # (θs = θi: the reversed path's coefficients are the same)
+        gam_r = gam
+    else:
+        rh_r, rv_r = fresnel_cos("pec" if pec else eps_g, css)
+        gam_r = kernel_coefficients(0.5 * (rv_r - rh_r), "pec" if pec else eps_g)
     ks = k * rough.sigma
     table = series_table(rough, float(k))
     Qs = ((ks * css) ** 2, (ks * cs) ** 2, ks * ks * cs * css)  # last, first point; crossed
@@ -334,6 +337,36 @@ def multiple_scattering(rough, eps, k: float, theta_i, theta_s, dphi, phi_i, *, 
     hv = np.where(own, 0.5 * (hv + vh), hv)
     vh = np.where(own, hv, vh)
     return norm * sh * hv, norm * sh * vh
+
+
+def backscatter(rough, eps, k: float, theta, phi_i, *, slope, order: int = 8) -> np.ndarray:
+    """Multiple-scattering ``σ⁰_hv = σ⁰_vh`` [-] in backscatter (``θs = θi``, ``φs = φi + π``)
+    at the flat angles ``theta``, ``phi_i`` [rad] (broadcast together; checked by the caller),
+    ``eps`` complex (scalar or per angle) or ``"pec"``, ``slope`` the nominal rms slopes
+    ``(s_x, s_y)``: what :func:`emscatter.solvers.iem.model.bistatic` adds there
+    (``_add_crosspol`` on that geometry, with its direction-correlated outer shadowing
+    ``1/(1 + max Λ + c(ψ) min Λ)``, :mod:`emscatter.solvers.iem.shadowing`), without building
+    the bistatic geometry (tested equal)."""
+    ti, pi_ = np.broadcast_arrays(*(np.asarray(a, dtype=float).ravel() for a in (theta, phi_i)))
+    ps = pi_ + math.pi
+    dp = ps - pi_  # φs − φi as the geometry has it
+    si, ci = _trig(ti)
+    sx, sy = slope
+
+    def lam(phi):  # shadowing._shadowing's Smith Λ of one direction
+        s2 = (sx * np.cos(phi)) ** 2 + (sy * np.sin(phi)) ** 2 if sx != sy else sx * sx
+        den = si * np.sqrt(2.0 * s2)
+        a = np.where(den > ci * 1e-300, ci / np.where(den > 0, den, 1.0), 1e300)
+        return smith_lambda(np.minimum(a, 1e300))
+
+    lam_i = lam(pi_)
+    lam_s = lam_i if sx == sy else lam(ps)
+    psi = np.abs(np.mod(ps - pi_ - math.pi + math.pi, 2 * math.pi) - math.pi)
+    corr = 4.41 * psi / (4.41 * psi + 1.0)
+    shadow = 1.0 / (1.0 + np.maximum(lam_i, lam_s) + corr * np.minimum(lam_i, lam_s))
+    hv, _ = multiple_scattering(rough, eps, k, ti, ti, dp, pi_, slope=(sx, sy), shadow=shadow,
+                                order=order)  # fmt: skip
+    return hv
 
 
 def _integrate_numpy(rough, k, table, args, slope, w, w_rim, order, pec):

@@ -1,17 +1,24 @@
-"""The compiled path of first-order SPM σ⁰ (:mod:`.kernel`), behind the shared gate
-(:mod:`emscatter.kernels.gate`): :func:`spm1_sigma0` returns ``True`` after filling ``out`` or
-``False`` (nothing touched) so that :mod:`.model` runs its numpy reference."""
+"""The compiled paths of SPM, behind the shared gate (:mod:`emscatter.kernels.gate`):
+first-order σ⁰ (:mod:`.kernel`; :func:`spm1_sigma0` returns ``True`` after filling ``out`` or
+``False``, nothing touched, so that :mod:`.model` runs its numpy reference) and the
+second-order backscatter cross-pol (:mod:`.kernel_crosspol`; :func:`spm2_backscatter_hv`
+returns the values or None, so that :mod:`.crosspol` runs its numpy reference)."""
 
 from __future__ import annotations
 
 import functools
+import os
 
 import numpy as np
 
 from emscatter.kernels import SPM_EXPONENTIAL, SPM_GAUSSIAN, backend
 from emscatter.kernels.gate import azimuth_ok, flat, scalar_eps, worth_it
 
-__all__ = ["spm1_sigma0", "covered_spm1"]
+__all__ = ["spm1_sigma0", "covered_spm1", "spm2_backscatter_hv", "SPM2_ANGLE_WEIGHT"]
+
+#: One SPM2 backscatter angle counted as this many geometries by :func:`worth_it`: ~5000
+#: kernel nodes, 1.5–5 ms in numpy, so ≥ 64 angles (≈ 0.1–0.3 s) pay for loading numba.
+SPM2_ANGLE_WEIGHT = 64
 
 
 @functools.cache
@@ -48,3 +55,33 @@ def spm1_sigma0(rough, eps, k: float, ti, ts, dphi, out: np.ndarray) -> bool:
         k=k, sigma=rough.sigma, length=rough.length, spectrum=code, out=out,
     )  # fmt: skip
     return True
+
+
+def spm2_backscatter_hv(rough, eps: complex, k: float, theta, phi_i: float, n_radial: int,
+                        n_azimuth: int):  # fmt: skip
+    """Second-order SPM backscatter hv [-] at the flat angles ``theta`` [rad] (checked by
+    :func:`emscatter.solvers.spm.crosspol.backscatter_hv`, whose arguments these are), or None
+    where the numpy reference runs: backend numpy, a correlation other than Gaussian or
+    exponential, a small call before the kernels are loaded. Angles whose azimuth rule lacks
+    the point symmetry come back as NaN (the caller computes them in numpy)."""
+    from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
+
+    n = int(np.size(theta))
+    codes = {GaussianCorrelation: SPM_GAUSSIAN, ExponentialCorrelation: SPM_EXPONENTIAL}
+    if (
+        n == 0
+        or backend() != "numba"
+        or type(rough) not in codes
+        or rough.dimension != 2
+        or not worth_it(n * SPM2_ANGLE_WEIGHT)
+    ):
+        return None
+    from emscatter.solvers.spm.kernel_crosspol import backscatter_hv as kernel
+
+    vals, done = kernel(
+        np.asarray(theta, dtype=float).ravel(), complex(eps), float(k), rough.sigma,
+        rough.length, rough.length_y, float(phi_i), codes[type(rough)], int(n_radial),
+        int(n_azimuth), threads=min(os.cpu_count() or 1, 8),
+    )  # fmt: skip
+    vals[~done] = np.nan
+    return vals

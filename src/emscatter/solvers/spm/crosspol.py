@@ -250,6 +250,20 @@ def backscatter_hv(roughness, eps, k: float, theta, phi_i=0.0, *, n_radial: int 
     if not math.isfinite(d):
         raise ValueError(f"phi_i must be a finite angle [rad], got {phi_i!r}")
     uniq, inv = np.unique(th, return_inverse=True)
+    from emscatter.solvers.spm.compiled import spm2_backscatter_hv
+
+    out = spm2_backscatter_hv(rough, eps, k, uniq, d, n_radial, n_azimuth)
+    if out is None:
+        out = _backscatter_hv_numpy(rough, eps, k, uniq, d, n_radial, n_azimuth)
+    elif np.isnan(out).any():  # angles whose node rule lacks the point symmetry
+        miss = np.isnan(out)
+        out[miss] = _backscatter_hv_numpy(rough, eps, k, uniq[miss], d, n_radial, n_azimuth)
+    return out[inv.reshape(th.shape)]
+
+
+def _backscatter_hv_numpy(rough, eps, k, uniq, d, n_radial, n_azimuth):
+    """The numpy reference of :func:`backscatter_hv` at the sorted distinct angles ``uniq``
+    [rad] (azimuth ``d`` [rad]); the compiled path is :mod:`.kernel_crosspol`."""
     cphi, sphi = math.cos(math.pi), math.sin(math.pi)  # φs − φi = π, as sigma0_22 has it
     cr, sr = math.cos(d), math.sin(d)
 
@@ -292,4 +306,4 @@ def backscatter_hv(roughness, eps, k: float, theta, phi_i=0.0, *, n_radial: int 
             out[j] = 0.5 * (s[0, 1] + s[1, 0])
             continue
         out[j] = 4.0 * math.pi * k * k * ci * ci * sigma4 * val
-    return out[inv.reshape(th.shape)]
+    return out
