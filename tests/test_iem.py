@@ -388,3 +388,20 @@ def test_copol_ratio_in_backscatter_hh_below_vv():
             s = iem.bistatic(rough, eps, K, th, th, math.pi, complementary="aiem", **kw).sigma0
             worst_default = max(worst_default, float(np.max(_db(s[0, 0] / s[1, 1]))))
     assert worst_default > 1.0
+
+
+@pytest.mark.parametrize("backend", ["numpy", "auto"])
+def test_exact_grazing_gives_zero_and_no_numpy_warning(backend, monkeypatch):
+    """Issue 23: θ = 90° exactly leaked ~50 raw numpy RuntimeWarnings per call (division by
+    cos θ = 0 in the upper-medium complementary terms). The suite turns warnings into errors,
+    so any leak fails here; the grazing σ⁰ is (numerically) zero and finite."""
+    import emscatter as em
+
+    monkeypatch.setenv("EMSCATTER_KERNELS", backend)
+    rough = GaussianCorrelation(0.01, 0.1)
+    ts = np.radians(np.linspace(0.0, 90.0, 7))
+    for ti in (np.radians(40.0), np.pi / 2):
+        s = em.bistatic(rough, 15 + 2j, frequency=5e9, theta_i=ti, theta_s=ts, phi_s=0.0,
+                        method="iem", out_of_range="ignore")  # fmt: skip
+        assert np.all(np.isfinite(s.sigma0)) and np.all(s.sigma0 >= 0)
+        assert np.all(s.sigma0[..., -1] < 1e-250)

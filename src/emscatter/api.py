@@ -45,10 +45,10 @@ from .conventions import (
 from .emissivity import (
     Emissivity,
     TimeBudgetError,
+    call_deadline,
     energy_balance,
     hemispherical_reflectivity,
     lobe_width,
-    one_deadline,
 )
 from .frequency import Group, as_eps_or_material, eps_at, frequency_groups
 from .fresnel import is_pec
@@ -586,7 +586,6 @@ def _check_tol(tol) -> float:
     return float(tol)
 
 
-@one_deadline
 def emissivity(
     surface: Roughness,
     eps,
@@ -616,49 +615,51 @@ def emissivity(
     ``"spm+go"``): the rest of the curve keeps the best method for the regime, and the angles
     that an approximation gets wrong (typically near grazing) get one that holds there.
     """
-    rough = _check_roughness(surface)
-    eps = as_eps_or_material(eps)
-    k = wavenumber(frequency, wavelength)
-    select.check_out_of_range(out_of_range)
-    method = _check_method(method)
-    ti = check_angle("theta_i", theta_i)
-    pi_ = check_finite("phi_i", phi_i).astype(float)
-    tol = _check_tol(tol)
-    spec = frequency_groups(k, eps, theta_i=ti, phi_i=pi_)
-    if spec is None:
-        ti_b, pi_b = broadcast_angles(theta_i=ti, phi_i=pi_)
-        return _emissivity_one(
-            rough, eps_at(eps, k), k, ti_b, pi_b, method, tol, out_of_range, options
-        )
-    shape, k_b, groups = spec
-    parts = []
-    for g in groups:
-        sub_ti, sub_pi = g.take((ti, pi_))
-        parts.append(
-            (
-                g,
-                _emissivity_one(
-                    rough, g.eps, g.k, sub_ti, sub_pi, method, tol, out_of_range, options
-                ),
+    with call_deadline():  # one budget for the whole call, fallbacks included
+        rough = _check_roughness(surface)
+        eps = as_eps_or_material(eps)
+        k = wavenumber(frequency, wavelength)
+        select.check_out_of_range(out_of_range)
+        method = _check_method(method)
+        ti = check_angle("theta_i", theta_i)
+        pi_ = check_finite("phi_i", phi_i).astype(float)
+        tol = _check_tol(tol)
+        spec = frequency_groups(k, eps, theta_i=ti, phi_i=pi_)
+        if spec is None:
+            ti_b, pi_b = broadcast_angles(theta_i=ti, phi_i=pi_)
+            return _emissivity_one(
+                rough, eps_at(eps, k), k, ti_b, pi_b, method, tol, out_of_range, options
             )
+        shape, k_b, groups = spec
+        parts = []
+        for g in groups:
+            sub_ti, sub_pi = g.take((ti, pi_))
+            parts.append(
+                (
+                    g,
+                    _emissivity_one(
+                        rough, g.eps, g.k, sub_ti, sub_pi, method, tol, out_of_range, options
+                    ),
+                )
+            )
+        fields = {
+            name: np.empty((2, *shape))
+            for name in ("emissivity", "coherent", "incoherent", "error")
+        }
+        energy_ok = np.empty(shape, dtype=bool)
+        methods = np.empty(shape, dtype=object)
+        for g, res in parts:
+            for name, arr in fields.items():
+                arr[:, g.mask] = getattr(res, name)
+            energy_ok[g.mask] = res.energy_ok
+            methods[g.mask] = res.info["methods"]
+        info = {"validity": _merged_validity(parts), "methods": methods}
+        return Emissivity(
+            **fields,
+            method=_merge_methods(res.method for _, res in parts),
+            theta_i=np.broadcast_to(ti, shape),
+            evaluations=sum(res.evaluations for _, res in parts),
+            info=info,
+            k=k_b,
+            energy_ok=energy_ok,
         )
-    fields = {
-        name: np.empty((2, *shape)) for name in ("emissivity", "coherent", "incoherent", "error")
-    }
-    energy_ok = np.empty(shape, dtype=bool)
-    methods = np.empty(shape, dtype=object)
-    for g, res in parts:
-        for name, arr in fields.items():
-            arr[:, g.mask] = getattr(res, name)
-        energy_ok[g.mask] = res.energy_ok
-        methods[g.mask] = res.info["methods"]
-    info = {"validity": _merged_validity(parts), "methods": methods}
-    return Emissivity(
-        **fields,
-        method=_merge_methods(res.method for _, res in parts),
-        theta_i=np.broadcast_to(ti, shape),
-        evaluations=sum(res.evaluations for _, res in parts),
-        info=info,
-        k=k_b,
-        energy_ok=energy_ok,
-    )

@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-import functools
 import math
 import os
 import time
@@ -157,24 +156,23 @@ def time_budget(seconds: float | None):
 _DEADLINE = contextvars.ContextVar("emscatter_call_deadline", default=None)
 
 
-def one_deadline(fn):
-    """Decorator: one time budget for the whole call of ``fn`` (e.g. :func:`emscatter.emissivity`
-    with ``method="auto"``, whose per-angle fallbacks are integrals of their own): every
-    hemispherical integral inside it gets what is left of :func:`current_time_budget`
-    counted from the call's start; calls nested in it share the outer deadline."""
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        if _DEADLINE.get() is not None:
-            return fn(*args, **kwargs)
-        budget = current_time_budget()
-        token = _DEADLINE.set((None if budget is None else time.perf_counter() + budget,))
-        try:
-            return fn(*args, **kwargs)
-        finally:
-            _DEADLINE.reset(token)
-
-    return wrapper
+@contextlib.contextmanager
+def call_deadline():
+    """One time budget for a whole call (e.g. :func:`emscatter.emissivity` with
+    ``method="auto"``, whose per-angle fallbacks are integrals of their own): every
+    hemispherical integral inside the ``with`` block gets what is left of
+    :func:`current_time_budget` counted from its start; blocks nested in it share the outer
+    deadline. A context manager, not a decorator: it adds no frame between the user's call and
+    the library, so warnings still point at the caller's line."""
+    if _DEADLINE.get() is not None:
+        yield
+        return
+    budget = current_time_budget()
+    token = _DEADLINE.set((None if budget is None else time.perf_counter() + budget,))
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
 
 
 def _budget_left() -> float | None:

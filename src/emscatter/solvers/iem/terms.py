@@ -224,7 +224,11 @@ def complementary_terms(si, cs, ss, css, sf, cf, eps, rh, rv, *, lower=True, pha
         fn = _reduced_i if side == "i" else _reduced_s
         C, B = fn(si, cs, ss, css, sf, cf, q, alpha)
         qfix = cs if side == "i" else css
-        terms.append((name, _combine(C, B, R, Rx, qfix, eps, False), qph, side))
+        # at exact grazing (cos = 0) these divide by zero: the geometry's prefactor vanishes
+        # there and the model returns σ⁰ = 0 (tested), so the inf/nan is not a result
+        with np.errstate(divide="ignore", invalid="ignore"):
+            F = _combine(C, B, R, Rx, qfix, eps, False)
+        terms.append((name, F, qph, side))
     if not lower:
         return terms
     q2i = branch_root(eps - si * si)
@@ -307,8 +311,9 @@ def transition_factor(eps, cs, ks: float, log_w, K, *, rtol: float = 1e-10):
         rtol=rtol,
     )  # fmt: skip
     l1, l2, l4 = ls[:n], ls[n : 2 * n], ls[2 * n :]  # S(βQ) = β c² exp(l_β)
-    return transition_from_sums(eps, cs, ks, l1 + np.log(cs * cs), l2 + np.log(2 * cs * cs),
-                                l4 + np.log(4 * cs * cs))  # fmt: skip
+    with np.errstate(divide="ignore"):  # log 0 = −inf at exact grazing: S = 0 there
+        lc1, lc2, lc4 = np.log(cs * cs), np.log(2 * cs * cs), np.log(4 * cs * cs)
+    return transition_from_sums(eps, cs, ks, l1 + lc1, l2 + lc2, l4 + lc4)
 
 
 def transition_from_sums(eps, cs, ks: float, l1, l2, l4):
