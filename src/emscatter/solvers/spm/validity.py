@@ -124,6 +124,16 @@ def _fraction_bound(rough: Roughness, k: float, eps, ti: np.ndarray) -> float | 
     return float(np.max(g[:, j0 : j1 + 1])) / c_hi * (1.0 + 1e-12)
 
 
+def _safe_angle(rough: Roughness, k: float, eps, limit: float) -> float:
+    """θ_safe [rad]: every angle ≤ θ_safe passes the scattered-fraction check (scalar
+    ``eps``) — the grid segments from 0° up, each bounded as in :func:`_fraction_bound`, until
+    the first whose bound exceeds ``limit``; the angles above it are checked one by one."""
+    g = _fraction_on_grid(rough, k, eps if is_pec(eps) else complex(np.asarray(eps).item()))
+    seg = np.maximum(g[:, :-1], g[:, 1:]).max(axis=0) / np.cos(_GRID[1:]) * (1.0 + 1e-12)
+    over = np.flatnonzero(seg > limit)
+    return float(_GRID[over[0]] if over.size else _GRID[-1])
+
+
 def check_validity(
     roughness: Roughness, k: float, *, eps=None, theta_i=None, **solver_options
 ) -> dict:
@@ -164,6 +174,10 @@ def check_validity(
             bound = _fraction_bound(rough, k, eps_c, ti)
             if bound is not None and bound <= v["scattered_fraction_max"]:
                 r1 = np.array([bound])  # every angle passes: its upper bound stands for them
+            elif bound is not None and ti.size > 4096:  # many angles: exact only above θ_safe
+                rest = ti > _safe_angle(rough, k, eps_c, v["scattered_fraction_max"])
+                r1 = np.zeros((2, *ti.shape))  # below θ_safe every angle passes: 0 stands in
+                r1[:, rest] = scattered_fraction(rough, k, eps_c, ti[rest])
             elif is_pec(eps_c):
                 r1 = scattered_fraction(rough, k, eps_c, ti)
             else:
