@@ -176,8 +176,8 @@ def check_validity(
                 r1 = np.array([bound])  # every angle passes: its upper bound stands for them
             elif bound is not None and ti.size > 4096:  # many angles: exact only above θ_safe
                 rest = ti > _safe_angle(rough, k, eps_c, v["scattered_fraction_max"])
-                r1 = np.zeros((2, *ti.shape))  # below θ_safe every angle passes: 0 stands in
-                r1[:, rest] = scattered_fraction(rough, k, eps_c, ti[rest])
+                r1 = np.zeros((1, *ti.shape))  # below θ_safe every angle passes: 0 stands in
+                r1[0, rest] = np.max(scattered_fraction(rough, k, eps_c, ti[rest]), axis=0)
             elif is_pec(eps_c):
                 r1 = scattered_fraction(rough, k, eps_c, ti)
             else:
