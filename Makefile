@@ -22,10 +22,14 @@ test: setup
 
 setup: llvm $(STAMP)
 
+# after the install: compile every numba kernel into its disk cache (python -m emscatter.warm,
+# ~1 min of CPU once; never fails the setup), so a method's first call in a fresh process
+# loads its kernels instead of compiling them (~20 s for IEM)
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[all]"
+	$(PY) -m emscatter.warm || true
 	touch $(STAMP)
 
 # Dr.Jit's LLVM backend (used by Mitsuba 3 and Sionna RT on the CPU) needs libLLVM >= 17 (libllvm19 on Debian 12).

@@ -42,7 +42,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("solvers.measured", "solvers.select", "solvers.auto_crosspol"),
     ("method_resolution", "api", "coherent"),
     ("brdf", "radio", "render"),
-    ("validation", "validity_maps", "demo", "cli", "__main__"),
+    ("validation", "validity_maps", "demo", "warm", "cli", "__main__"),
 ]
 
 

@@ -99,7 +99,8 @@ def resolve_method(
     name = _check_method(method)
     if name == "auto":
         name = rank_methods(roughness, k, eps=eps)[0][0]
-    report = call_report(name, roughness, k, eps=eps, theta_i=theta_i)
+    # the per-angle checks are skipped where the policy does not need them (call_report)
+    report = call_report(name, roughness, k, eps=eps, theta_i=theta_i, out_of_range=out_of_range)
     # the roughness-level policy sees the roughness-level verdict (angles: angle_policy)
     whole = {"valid": report["roughness_valid"], "reasons": report.get("reasons", [])}
     make_nan = select.enforce(name, whole, out_of_range, stacklevel=stacklevel)

@@ -27,6 +27,7 @@ from emscatter import solvers
 from emscatter.conventions import fmt
 from emscatter.fresnel import is_pec
 from emscatter.solvers import select
+from emscatter.solvers.validity import with_angle_total
 
 __all__ = [
     "validity_report", "angle_report", "call_report", "rank_methods", "angle_policy",
@@ -102,42 +103,125 @@ def validity_report(name: str, roughness, k: float, *, eps=None, theta_i=None, *
     return dict(report)
 
 
+#: above this many angles (after the axes along which θi is constant are dropped) the report
+#: is not built on ``np.unique``'s sorted angles (module docstring of :func:`angle_report`)
+_DISTINCT_MAX = 4096
+_PROBES = 257
+
+
+def _varying_part(ti: np.ndarray) -> tuple[np.ndarray, tuple]:
+    """``(part, index)``: ``ti`` with the axes along which it is constant (broadcast axes —
+    stride 0 — or equal values, as in a meshgrid) cut to length 1, and the index that takes
+    ``part`` back to ``ti``'s shape by broadcasting. One comparison pass per non-broadcast
+    axis, stopped at the first difference."""
+    part = ti
+    for axis in range(ti.ndim):
+        if part.shape[axis] <= 1:
+            continue
+        first = part[(slice(None),) * axis + (slice(0, 1),)]
+        if part.strides[axis] == 0 or np.array_equal(part, np.broadcast_to(first, part.shape)):
+            part = first
+    return part, part.shape
+
+
+def _threshold_report(name, roughness, k, eps, flat: np.ndarray) -> dict | None:
+    """The angle entries at every angle of ``flat`` (1-D) for a solver whose angle checks all
+    grow with θi (``angle_monotone``), or None when they do not. The report at
+    :data:`_PROBES` angles spanning ``[min, max]`` finds the largest probe ``a`` that passes:
+    every angle ≤ ``a`` passes (the checks grow with θi), the angles above ``a`` (they hold
+    every failing angle) are checked one by one — no sort; the cost follows the angles that
+    can fail, not the call's size."""
+    lo, hi = float(flat.min()), float(flat.max())
+    probe = np.unique(np.linspace(lo, hi, _PROBES))
+    probed = validity_report(name, roughness, k, eps=eps, theta_i=probe)
+    if not probed.get("angle_monotone") or "angle_valid" not in probed:
+        return None
+    ok = np.asarray(probed["angle_valid"], dtype=bool)
+    j = ok.size if ok.all() else int(np.argmin(ok))  # first failing probe
+    if ok[j:].any():  # a pass above a failure: not monotone after all
+        return None
+    out = {"angle_valid": np.ones(flat.shape, dtype=bool), "angle_excess": np.zeros(flat.shape)}
+    out["angle_reasons"] = []
+    if j == ok.size:
+        return out
+    rest = flat > probe[j - 1] if j else np.ones(flat.shape, dtype=bool)
+    sub = validity_report(name, roughness, k, eps=eps, theta_i=flat[rest])
+    out["angle_valid"][rest] = sub["angle_valid"]
+    out["angle_excess"][rest] = sub["angle_excess"]
+    out["angle_reasons"] = [with_angle_total(r, flat.size) for r in sub["angle_reasons"]]
+    return out
+
+
 def angle_report(name: str, roughness, k: float, *, eps=None, theta_i) -> dict:
     """The per-angle entries (``angle_valid``, ``angle_excess`` in ``theta_i``'s shape,
-    ``angle_reasons``) of :func:`validity_report` for incidence angles ``theta_i`` [rad],
-    evaluated at the distinct angles and mapped back; cached on the angles themselves, so a
-    repeated call does not sort them again. Fresh arrays each call."""
+    ``angle_reasons``) of :func:`validity_report` for incidence angles ``theta_i`` [rad];
+    cached on the angles themselves. Fresh arrays each call.
+
+    The cost follows what is decided, not the call's size: the axes along which θi does not
+    change are dropped first (a grid's θs, φs axes); up to :data:`_DISTINCT_MAX` angles remain
+    → the report at the distinct angles (``np.unique``), mapped back; more → without a sort:
+    for checks that all grow with θi (GO, PO) a threshold found on a few probe angles, with
+    only the angles above it checked one by one (:func:`_threshold_report`); other checks are
+    evaluated at each angle, vectorized (SPM's scattered fraction is first bounded over
+    ``[min θi, max θi]``: two passes when every angle passes). The verdicts are those of the
+    solver's own ``check_validity`` at each angle; the "(n of m angles)" of a reason then
+    counts the angles given (after the constant axes are dropped), not the distinct ones."""
     ti = np.asarray(theta_i, dtype=float)
     parts = ("angles", name, roughness, float(k), _key_of(eps), _key_of(ti))
     key = None if _UNCACHEABLE in parts else parts
     hit = _recall(key)
     if hit is not None:
         return {n: v.copy() if isinstance(v, np.ndarray) else v for n, v in hit.items()}
-    uniq, inverse = np.unique(ti, return_inverse=True)
-    angular = validity_report(name, roughness, k, eps=eps, theta_i=uniq)
-    out = {}
-    for entry in ("angle_valid", "angle_excess"):
-        if entry in angular:
-            out[entry] = np.asarray(angular[entry])[inverse.reshape(ti.shape)]
+    part, part_shape = _varying_part(ti)
+    if part.size <= _DISTINCT_MAX:
+        uniq, inverse = np.unique(part, return_inverse=True)
+        angular = validity_report(name, roughness, k, eps=eps, theta_i=uniq)
+        index = inverse.reshape(part_shape)
+        take = {e: np.asarray(angular[e])[index] for e in ("angle_valid", "angle_excess")
+                if e in angular}  # fmt: skip
+    else:
+        flat = part.ravel()
+        angular = _threshold_report(name, roughness, k, eps, flat)
+        if angular is None:
+            angular = validity_report(name, roughness, k, eps=eps, theta_i=flat)
+        take = {
+            e: np.broadcast_to(np.asarray(angular[e]), flat.shape).reshape(part_shape)
+            for e in ("angle_valid", "angle_excess")
+            if e in angular
+        }
+    out = {e: np.array(np.broadcast_to(v, ti.shape)) for e, v in take.items()}
     if "angle_reasons" in angular:
         out["angle_reasons"] = angular["angle_reasons"]
+    if key is None:  # not cached (a large call): these arrays are already this call's own
+        return out
     _remember(key, out)
     return {n: v.copy() if isinstance(v, np.ndarray) else v for n, v in out.items()}
 
 
-def call_report(name: str, roughness, k: float, *, eps=None, theta_i=None) -> dict:
+def call_report(name: str, roughness, k: float, *, eps=None, theta_i=None, out_of_range=None):
     """:func:`validity_report` with ``"roughness_valid"`` (its own ``valid``) and, when
     ``theta_i`` [rad] is given, :func:`angle_report`'s entries merged in (``valid`` then also
     requires every angle); cached on the inputs as one entry. A fresh dict each call; its
-    arrays are read-only (shared between calls)."""
+    arrays are read-only (shared between calls).
+
+    ``out_of_range``: the caller's policy, when the per-angle checks may be skipped where it
+    does not need them — ``"nan"`` or ``"raise"`` with the roughness itself outside the
+    method's validity (every angle is blanked, or the call stops): no ``angle_*`` entries
+    then, and ``"angle_check"`` says ``"not checked: …"`` and why."""
     ti = None if theta_i is None else np.asarray(theta_i, dtype=float)
-    parts = ("call", name, roughness, float(k), _key_of(eps), _key_of(ti))
+    parts = ("call", name, roughness, float(k), _key_of(eps), _key_of(ti), out_of_range)
     key = None if _UNCACHEABLE in parts else parts
     hit = _recall(key)
     if hit is None:
         hit = validity_report(name, roughness, k, eps=eps)
         hit["roughness_valid"] = bool(hit.get("valid", False))
-        if ti is not None:  # checked at the distinct angles, mapped back to theta_i's shape
+        if ti is not None and not hit["roughness_valid"] and out_of_range in ("nan", "raise"):
+            hit["angle_check"] = (
+                f"not checked: the roughness is outside method {name!r}'s validity and "
+                f"out_of_range={out_of_range!r} " + ("blanks every angle" if out_of_range ==
+                "nan" else "stops the call")
+            )  # fmt: skip
+        elif ti is not None:  # checked at the distinct angles, mapped back to theta_i's shape
             hit.update(angle_report(name, roughness, k, eps=eps, theta_i=ti))
             if "angle_valid" in hit:
                 hit["valid"] = hit["roughness_valid"] and bool(np.all(hit["angle_valid"]))

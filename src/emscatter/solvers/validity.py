@@ -37,6 +37,7 @@ slope matches the method of moments on exponential profiles is on the validity m
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -57,6 +58,7 @@ __all__ = [
     "cutoff_slope_variances",
     "wave_slope_variances",
     "check_solver_options",
+    "with_angle_total",
 ]
 
 #: ``k_max = SLOPE_CUTOFF_FACTOR · k``: the Bragg band ``|K| ≤ 2k`` (module docstring).
@@ -114,6 +116,9 @@ class AngleCheck:
     what: str
     source: str = ""
     relation: str = "≤"
+    #: ``ratio`` never decreases as θi grows on [0, π/2] (the check fails above one angle):
+    #: lets :func:`emscatter.method_resolution.angle_report` decide 1e6 angles by a threshold
+    increasing: bool = False
 
     def reason(self, theta_i: np.ndarray) -> str | None:
         bad = self.ratio > 1
@@ -132,17 +137,28 @@ class AngleCheck:
         )
 
 
-def angle_upper(name, value, limit, what, source="") -> AngleCheck:
+def angle_upper(name, value, limit, what, source="", *, increasing=False) -> AngleCheck:
+    """Per-angle ``value ≤ limit``; ``increasing``: ``value`` grows with θi (see AngleCheck)."""
     value = np.asarray(value, dtype=float)
     ratio = value / limit if limit > 0 else np.full(value.shape, math.inf)
-    return AngleCheck(name, ratio, value, float(limit), what, source, "≤")
+    return AngleCheck(name, ratio, value, float(limit), what, source, "≤", increasing)
 
 
-def angle_lower(name, value, limit, what, source="") -> AngleCheck:
+def angle_lower(name, value, limit, what, source="", *, increasing=False) -> AngleCheck:
+    """Per-angle ``value ≥ limit``; ``increasing``: ``value`` falls as θi grows."""
     value = np.asarray(value, dtype=float)
     with np.errstate(divide="ignore"):
         ratio = np.where(value > 0, limit / np.where(value > 0, value, 1.0), math.inf)
-    return AngleCheck(name, ratio, value, float(limit), what, source, "≥")
+    return AngleCheck(name, ratio, value, float(limit), what, source, "≥", increasing)
+
+
+_ANGLE_COUNT = re.compile(r"\((\d+) of \d+ angles\)")
+
+
+def with_angle_total(reason: str, total: int) -> str:
+    """An :meth:`AngleCheck.reason` text with its "(n of m angles)" count out of ``total``
+    angles (a report checked on a subset that holds every failing angle)."""
+    return _ANGLE_COUNT.sub(lambda m: f"({m[1]} of {int(total)} angles)", reason, count=1)
 
 
 def build_report(
@@ -179,20 +195,24 @@ def build_report(
     }
     if theta_i is not None:
         ti = np.asarray(theta_i, dtype=float)
-        if angle_checks:
+        # one reduction per check decides whether any angle fails; only then the stack
+        passes = [not a.ratio.size or bool(np.max(a.ratio) <= 1) for a in angle_checks]
+        if not all(passes):
             ratios = np.stack([np.broadcast_to(a.ratio, ti.shape) for a in angle_checks])
             with np.errstate(divide="ignore"):
                 a_exc = np.max(np.log(np.maximum(ratios, 1.0)), axis=0)
-        else:
-            a_exc = np.zeros(ti.shape)
-        a_ok = a_exc == 0
-        a_reasons = [r for r in (a.reason(ti) for a in angle_checks) if r]
-        for a in angle_checks:
-            report["checks"][a.name] = bool(np.all(np.broadcast_to(a.ratio, ti.shape) <= 1))
+            a_ok = a_exc == 0
+        else:  # every angle passes: excess 0, valid everywhere (what the stack would give)
+            a_exc, a_ok = np.zeros(ti.shape), np.ones(ti.shape, dtype=bool)
+        a_reasons = [a.reason(ti) for a, ok in zip(angle_checks, passes, strict=True) if not ok]
+        a_reasons = [r for r in a_reasons if r]
+        for a, ok in zip(angle_checks, passes, strict=True):
+            report["checks"][a.name] = ok
         report["angle_valid"] = a_ok
         report["angle_excess"] = a_exc
         report["angle_reasons"] = a_reasons
         report["angle_sources"] = {a.name: a.source for a in angle_checks}
+        report["angle_monotone"] = all(a.increasing for a in angle_checks)
         report["reasons"] = reasons + a_reasons
         report["valid"] = report["valid"] and bool(np.all(a_ok))
         if a_exc.size:

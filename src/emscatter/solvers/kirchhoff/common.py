@@ -536,8 +536,10 @@ def grazing_parameter(theta_i, s2: float) -> np.ndarray:
 
 
 def shadowing_angle_check(name, theta_i, sx, sy, limit, what, source):
-    """Per-angle ``G1(θi) ≥ limit`` with the larger per-direction slope variance."""
-    return angle_lower(name, illuminated_fraction(theta_i, max(sx, sy)), limit, what, source)
+    """Per-angle ``G1(θi) ≥ limit`` with the larger per-direction slope variance (G1 falls as
+    θi grows: an ``increasing`` check, decided by a threshold at many angles)."""
+    g1 = illuminated_fraction(theta_i, max(sx, sy))
+    return angle_lower(name, g1, limit, what, source, increasing=True)
 
 
 def validity_report(roughness: Roughness, k: float, checks: list[tuple]) -> dict:

@@ -142,7 +142,7 @@ def check_validity(
         ci = np.cos(ti)
         angle_checks.append(
             angle_lower("stationary_phase_angle", q0 * ci * ci, v["phase_q_min"],
-                        "Q = (2kσ cosθi)²", _SRC_Q)
+                        "Q = (2kσ cosθi)²", _SRC_Q, increasing=True)
         )  # fmt: skip
         limit = v["illuminated_min"] if mode else v["illuminated_min_unshadowed"]
         angle_checks.append(

@@ -183,7 +183,8 @@ def check_validity(roughness, k: float, *, eps=None, theta_i=None, **solver_opti
         a_min = v["grazing_a_min"] if _conductor_like(eps) else v["grazing_a_min_dielectric"]
         angle_checks.append(
             angle_lower("grazing", grazing_parameter(ti, max(sx, sy)), a_min,
-                        "a = cotθi/(√2 s) (grazing angle against the facet tilts)", _SRC_SH)
+                        "a = cotθi/(√2 s) (grazing angle against the facet tilts)", _SRC_SH,
+                        increasing=True)
         )  # fmt: skip
     return build_report(
         rough, k, checks, theta_i=ti, angle_checks=angle_checks, rms_slope=m, slope_cutoff=k_cut

@@ -106,6 +106,34 @@ def scattered_fraction(roughness: Roughness, k: float, eps, theta_i) -> np.ndarr
         return np.where(ci > 0, out / np.where(ci > 0, ci, 1.0), np.inf)
 
 
+def _fraction_bound(rough: Roughness, k: float, eps, ti: np.ndarray) -> float | None:
+    """An upper bound of :func:`scattered_fraction` (larger of h, v) over every angle of
+    ``ti`` [rad], or None (an array ``eps``, no angles): the linear interpolation between
+    grid nodes never exceeds the nodes, and ``1/cosθ ≤ 1/cos(max θi)``. Costs two passes
+    over ``ti``, so that 1e6 angles well inside the limit are decided without interpolating
+    at each (a relative margin of 1e-12 covers the rounding of the interpolation)."""
+    if not ti.size or not (is_pec(eps) or np.ndim(eps) == 0):
+        return None
+    lo, hi = float(ti.min()), float(ti.max())
+    c_hi = math.cos(hi)
+    if not c_hi > 0:
+        return None
+    g = _fraction_on_grid(rough, k, eps if is_pec(eps) else complex(np.asarray(eps).item()))
+    j0 = max(int(np.searchsorted(_GRID, lo, side="right")) - 1, 0)
+    j1 = int(np.searchsorted(_GRID, hi, side="left"))
+    return float(np.max(g[:, j0 : j1 + 1])) / c_hi * (1.0 + 1e-12)
+
+
+def _safe_angle(rough: Roughness, k: float, eps, limit: float) -> float:
+    """θ_safe [rad]: every angle ≤ θ_safe passes the scattered-fraction check (scalar
+    ``eps``) — the grid segments from 0° up, each bounded as in :func:`_fraction_bound`, until
+    the first whose bound exceeds ``limit``; the angles above it are checked one by one."""
+    g = _fraction_on_grid(rough, k, eps if is_pec(eps) else complex(np.asarray(eps).item()))
+    seg = np.maximum(g[:, :-1], g[:, 1:]).max(axis=0) / np.cos(_GRID[1:]) * (1.0 + 1e-12)
+    over = np.flatnonzero(seg > limit)
+    return float(_GRID[over[0]] if over.size else _GRID[-1])
+
+
 def check_validity(
     roughness: Roughness, k: float, *, eps=None, theta_i=None, **solver_options
 ) -> dict:
@@ -143,7 +171,14 @@ def check_validity(
             notes.append("eps not given: the per-angle scattered-fraction check was skipped")
         else:
             eps_c = check_eps(eps)
-            if is_pec(eps_c):
+            bound = _fraction_bound(rough, k, eps_c, ti)
+            if bound is not None and bound <= v["scattered_fraction_max"]:
+                r1 = np.array([bound])  # every angle passes: its upper bound stands for them
+            elif bound is not None and ti.size > 4096:  # many angles: exact only above θ_safe
+                rest = ti > _safe_angle(rough, k, eps_c, v["scattered_fraction_max"])
+                r1 = np.zeros((1, *ti.shape))  # below θ_safe every angle passes: 0 stands in
+                r1[0, rest] = np.max(scattered_fraction(rough, k, eps_c, ti[rest]), axis=0)
+            elif is_pec(eps_c):
                 r1 = scattered_fraction(rough, k, eps_c, ti)
             else:
                 e_b, t_b = np.broadcast_arrays(np.asarray(eps_c, dtype=complex), ti)

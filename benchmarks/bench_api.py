@@ -1,0 +1,226 @@
+"""What users call, timed: ``emscatter.bistatic`` against the solver and the kernel, and the
+first call of every method in a fresh process (empty caches, and after ``make setup``).
+
+    python benchmarks/bench_api.py [--sizes 10000 1000000] [--repeat 7] [--parts speed cold]
+    → benchmarks/results/api.json
+
+speed — SPM1, GO and PO on random full-polarization geometries (θi, θs uniform in [0°, 89.9°],
+φs uniform; one dielectric ε = 17 + 2i), at each size: the compiled kernel alone (SPM1, GO;
+PO has no single kernel), the solver's ``bistatic`` and the public ``emscatter.bistatic``
+(``out_of_range="ignore"``: every validity check runs and is recorded), each with
+``EMSCATTER_KERNELS=numba`` and ``=numpy``. The contenders are alternated in one process
+(round after round, one call each), result cache off (``EMSCATTER_CACHE=0``); medians of
+``--repeat`` rounds after one warm-up round (compilation excluded: that is ``cold``).
+Throughput = geometries per second (one geometry = all four σ⁰_pq).
+
+cold — per method, a fresh Python process times ``import emscatter`` and then its first call:
+``backscatter`` at 91 angles (the default kernel selection) and ``bistatic`` at 1e5 geometries
+(compiled path), twice: with an empty numba cache folder (``EMSCATTER_NUMBA_CACHE_DIR`` new)
+and after ``python -m emscatter.warm`` filled that folder (what ``make setup`` runs). ``auto``
+is the newcomer's call: ``backscatter(rough, "medium_dry_ground", frequency=5.4e9, ...)``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import numpy as np  # noqa: E402
+from common import ROOT, command, machine, write  # noqa: E402
+
+EPS = 17 + 2j
+LAM = 0.1  # wavelength [m]
+K = 2 * math.pi / LAM
+
+
+def _roughness(method):
+    from emscatter.spectra import GaussianCorrelation
+
+    return {
+        "spm": GaussianCorrelation(0.1 / K, 2.0 / K),  # kσ = 0.1, kℓ = 2
+        "go": GaussianCorrelation(0.3, 1.5),  # kσ ≈ 19, rms slope ≈ 0.28
+        "po": GaussianCorrelation(0.4 / K, 6.0 / K),  # kσ = 0.4, kℓ = 6
+        "iem": GaussianCorrelation(0.5 / K, 4.0 / K),
+        "auto": GaussianCorrelation(0.01, 0.1),
+    }[method]
+
+
+def _contenders(method, n):
+    """``{name: callable}`` for one method and size (module docstring)."""
+    import emscatter as em
+    from emscatter import solvers
+
+    rng = np.random.default_rng(0)
+    ti = rng.uniform(0, math.radians(89.9), n)
+    ts = rng.uniform(0, math.radians(89.9), n)
+    ps = rng.uniform(-math.pi, math.pi, n)
+    rough, mod = _roughness(method), solvers.get(method)
+    out = np.empty((2, 2, n))
+
+    def api():
+        em.bistatic(rough, EPS, wavelength=LAM, theta_i=ti, theta_s=ts, phi_s=ps,
+                    method=method, out_of_range="ignore")  # fmt: skip
+
+    def solver():
+        mod.bistatic(rough, EPS, K, ti, ts, ps, coherent=False)
+
+    runs = {}
+    if method == "spm":
+        from emscatter.kernels import SPM_GAUSSIAN
+        from emscatter.solvers.spm.kernel import spm1_sigma0
+
+        def kernel():
+            spm1_sigma0(ti, ts, ps, EPS, k=K, sigma=rough.sigma, length=rough.length,
+                        spectrum=SPM_GAUSSIAN, out=out)  # fmt: skip
+
+        runs["kernel"] = ("numba", kernel)
+    if method == "go":
+        from emscatter.solvers.kirchhoff.go_kernel import go_sigma0
+
+        s2 = rough.mean_square_slope()[0]
+
+        def kernel():
+            go_sigma0(ti, ts, ps, EPS, slope_variance=s2, shadowing="smith", out=out)
+
+        runs["kernel"] = ("numba", kernel)
+    for backend in ("numba", "numpy"):
+        runs[f"solver_{backend}"] = (backend, solver)
+        runs[f"api_{backend}"] = (backend, api)
+    return runs
+
+
+def speed(sizes, repeat) -> dict:
+    os.environ["EMSCATTER_CACHE"] = "0"
+    results = {}
+    for method in ("spm", "go", "po"):
+        for n in sizes:
+            runs = _contenders(method, n)
+            times = {name: [] for name in runs}
+            rounds = repeat if n < 10**6 or method != "po" else max(3, repeat // 2)
+            for r in range(rounds + 1):  # round 0: warm-up (compile / load), not counted
+                for name, (backend, fn) in runs.items():
+                    os.environ["EMSCATTER_KERNELS"] = backend
+                    t0 = time.perf_counter()
+                    fn()
+                    if r:
+                        times[name].append(time.perf_counter() - t0)
+            os.environ["EMSCATTER_KERNELS"] = "auto"
+            row = {}
+            for name, ts_ in times.items():
+                med = statistics.median(ts_)
+                row[name] = {"median_s": med, "min_s": min(ts_), "per_s": n / med}
+            row["api_over_solver_numba"] = (
+                row["api_numba"]["median_s"] / row["solver_numba"]["median_s"]
+            )
+            row["api_numba_over_numpy"] = (
+                row["api_numpy"]["median_s"] / row["api_numba"]["median_s"]
+            )
+            row["rounds"] = rounds
+            results[f"{method}_{n}"] = row
+            print(f"{method:4s} n={n:>8d}  " + "  ".join(
+                f"{name} {v['per_s']:.3g}/s" for name, v in row.items() if isinstance(v, dict)
+            ) + f"  API/solver ×{row['api_over_solver_numba']:.2f}"
+                f"  API numba/numpy ×{row['api_numba_over_numpy']:.1f}", flush=True)  # fmt: skip
+    return results
+
+
+_CHILD = r"""
+import json, math, sys, time, warnings
+import numpy as np
+t0 = time.perf_counter()
+import emscatter as em
+t1 = time.perf_counter()
+sys.path.insert(0, {bench!r})
+from bench_api import _roughness, EPS, LAM
+method, kind = {method!r}, {kind!r}
+rough = _roughness(method)
+warnings.simplefilter("ignore")
+if kind == "backscatter":
+    th = np.radians(np.linspace(0.0, 60.0, 91))
+    if method == "auto":
+        call = lambda: em.backscatter(rough, "medium_dry_ground", frequency=5.4e9, theta_i=th)
+    else:
+        call = lambda: em.backscatter(rough, EPS, wavelength=LAM, theta_i=th, method=method,
+                                      out_of_range="ignore")
+else:
+    n = 100_000
+    rng = np.random.default_rng(0)
+    ti, ts = rng.uniform(0, 1.5, n), rng.uniform(0, 1.5, n)
+    ps = rng.uniform(-math.pi, math.pi, n)
+    kw = dict(crosspol=False) if method == "iem" else {{}}
+    if method == "iem":
+        ti, ts, ps = ti[:2000], ts[:2000], ps[:2000]
+    call = lambda: em.bistatic(rough, EPS, wavelength=LAM, theta_i=ti, theta_s=ts, phi_s=ps,
+                               method=method, out_of_range="ignore", **kw)
+call()
+t2 = time.perf_counter()
+call()
+t3 = time.perf_counter()
+print(json.dumps({{"import_s": t1 - t0, "first_call_s": t2 - t1, "second_call_s": t3 - t2}}))
+"""
+
+
+def _child(method, kind, cache) -> dict:
+    env = {**os.environ, "EMSCATTER_NUMBA_CACHE_DIR": str(cache), "EMSCATTER_CACHE": "0"}
+    env.pop("NUMBA_CACHE_DIR", None)
+    env.pop("EMSCATTER_KERNELS", None)
+    env["PYTHONPATH"] = str(ROOT / "src")
+    code = _CHILD.format(bench=str(Path(__file__).resolve().parent), method=method, kind=kind)
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True)  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def cold() -> dict:
+    cases = [(m, kind) for m in ("spm", "go", "po", "iem") for kind in ("backscatter", "bistatic")]
+    cases.append(("auto", "backscatter"))
+    results = {}
+    with tempfile.TemporaryDirectory(prefix="emscatter-bench-numba-") as tmp:
+        for state in ("empty_cache", "after_setup"):
+            if state == "after_setup":  # what `make setup` runs, into the same folder
+                env = {**os.environ, "EMSCATTER_NUMBA_CACHE_DIR": tmp,
+                       "PYTHONPATH": str(ROOT / "src")}  # fmt: skip
+                t0 = time.perf_counter()
+                subprocess.run([sys.executable, "-m", "emscatter.warm", "--quiet"], env=env,
+                               check=True)  # fmt: skip
+                results["warm_s"] = time.perf_counter() - t0
+                print(f"python -m emscatter.warm: {results['warm_s']:.1f} s", flush=True)
+            for method, kind in cases:
+                cache = (
+                    Path(tmp) if state == "after_setup" else Path(tmp) / f"empty-{method}-{kind}"
+                )
+                row = _child(method, kind, cache)
+                results[f"{state}/{method}/{kind}"] = row
+                print(f"{state:12s} {method:5s} {kind:12s} import {row['import_s']:.2f} s, "
+                      f"first call {row['first_call_s']:.2f} s, "
+                      f"second {row['second_call_s']:.3f} s", flush=True)  # fmt: skip
+    return results
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10_000, 1_000_000])
+    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--parts", nargs="+", default=["speed", "cold"], choices=["speed", "cold"])
+    ap.add_argument("--out", default="api", help="results file name (results/NAME.json)")
+    args = ap.parse_args()
+    data = {"machine": machine(), "command": command()}
+    if "speed" in args.parts:
+        data["speed"] = speed(args.sizes, args.repeat)
+    if "cold" in args.parts:
+        data["cold"] = cold()
+    data["machine"]["load_average_end"] = list(os.getloadavg())
+    print(write(args.out, data))
+
+
+if __name__ == "__main__":
+    main()
