@@ -19,7 +19,8 @@ spec, so the tables are the same, bit for bit, serially, on a process pool or on
 Every spec is checked before any work (surface, material at every wavelength, method, the
 keyword names): a bad one raises a ``ValueError`` naming the spec, the field, the value and
 what is allowed. Warnings raised in the workers are passed on once each in this process,
-prefixed with the spec. Progress: a tqdm bar over the tables (stderr; quiet when stderr is
+prefixed with the spec (use process pools or dask: Python's warnings state is per
+process, so a thread pool's tables may lose theirs). Progress: a tqdm bar over the tables (stderr; quiet when stderr is
 not a terminal unless ``progress=True``); on a dask cluster the tasks also show on its
 dashboard.
 """

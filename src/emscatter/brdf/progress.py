@@ -33,7 +33,12 @@ def bar(total: float, desc: str, progress=None, unit: str = "it"):
     from tqdm.auto import tqdm
 
     return tqdm(
-        total=total, desc=desc, unit=unit, disable=not wanted(progress), leave=False, delay=0.5
+        total=total,
+        desc=desc,
+        unit=unit,
+        disable=not wanted(progress),
+        leave=False,
+        delay=0.5 if progress is None else 0.0,
     )
 
 
