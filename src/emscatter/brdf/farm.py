@@ -20,7 +20,8 @@ Every spec is checked before any work (surface, material at every wavelength, me
 keyword names): a bad one raises a ``ValueError`` naming the spec, the field, the value and
 what is allowed. Warnings raised in the workers are passed on once each in this process,
 prefixed with the spec (use process pools or dask: Python's warnings state is per
-process, so a thread pool's tables may lose theirs). Progress: a tqdm bar over the tables (stderr; quiet when stderr is
+process, so a thread pool's tables may lose theirs). Progress: a tqdm bar over the tables
+(stderr; quiet when stderr is
 not a terminal unless ``progress=True``); on a dask cluster the tasks also show on its
 dashboard.
 """
