@@ -3,6 +3,8 @@
 * :class:`BrdfTable` (:mod:`.table`): f_r [1/sr] on (θi, θo, Δφ) or (θi, φi, θo, φo) grids in
   the renderer frame (:mod:`.frames`), per wavelength, coherent delta lobe kept apart.
 * :func:`build_table` (:mod:`.build`): from any solver or ``"auto"``, energy remedy applied.
+* :func:`build_tables` (:mod:`.farm`): many tables (materials × wavelengths × roughness,
+  :func:`table_specs`) serially, on an Executor or a dask.distributed cluster.
 
 * :mod:`.analytic`: the seed's analytic models (Cook–Torrance, Ward, Phong, …, ch. 2),
   their slope distributions (:mod:`.analytic.distributions`, ch. 3), roughness equivalences
@@ -18,9 +20,10 @@ Layout, interpolation and conventions: :mod:`.table` and ``docs/brdf.md``. The 0
 from __future__ import annotations
 
 from .build import build_table
+from .farm import build_tables, table_specs
 from .table import Albedo, BrdfTable
 
-__all__ = ["BrdfTable", "Albedo", "build_table"]
+__all__ = ["BrdfTable", "Albedo", "build_table", "build_tables", "table_specs"]
 
 _MOVED = {
     "distributions": "emscatter.brdf.analytic.distributions",

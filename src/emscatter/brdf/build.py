@@ -40,6 +40,8 @@ from ..solvers import select
 from ..spectra import check_roughness
 from . import chunks, frames, grid, sizing
 from .energy import apply_energy_remedy
+from .progress import build_progress
+from .progress import tick as _tick
 from .table import FORMAT_VERSION, BrdfTable
 
 __all__ = ["build_table", "default_theta", "default_phi_d", "default_phi", "material_eps"]
@@ -178,6 +180,7 @@ def build_table(
     tol_floor: float = 1e-2,
     dtype="float64",
     memory_limit: int | None = None,
+    progress: bool | None = None,
     **options,
 ) -> BrdfTable:
     """A BRDF table of ``surface`` (2-D roughness) over ``material`` at ``wavelengths`` [m].
@@ -214,6 +217,8 @@ def build_table(
         available memory, :func:`.sizing.memory_limit`). The build's peak is estimated before
         any work (:func:`.sizing.estimate_bytes`); over the limit a ``MemoryError`` names the
         estimate, the limit and what reduces it.
+    progress : a tqdm bar over the wavelengths on stderr, advanced per chunk (:mod:`.progress`):
+        None (default) only when stderr is a terminal, True always, False never.
     options : passed to the solver (e.g. ``shadowing=False`` for GO).
     """
     rough = check_roughness(surface, "surface")
@@ -258,7 +263,8 @@ def build_table(
         )
         too_large = None
         try:
-            table, reports = _build(*args)
+            with build_progress(wl.size, progress):
+                table, reports = _build(*args)
         except sizing.TableTooLarge as exc:
             too_large = exc
     if too_large is not None:  # the resolution note (if any) still reaches the caller
@@ -592,6 +598,7 @@ def _fill_isotropic(rough, eps, lam, name, theta, phi_d, out_of_range, options, 
             out_pol[:, :, iu[sl], ou[sl]] = fp
             out_pol[:, :, ou[sl], iu[sl]] = fp.transpose(1, 0, 2, 3)  # f_pq(ωi→ωo) = f_qp(ωo→ωi)
         infos.append(chunks.slim(info))
+        _tick((sl.stop - sl.start) / iu.size)  # one wavelength = 1 on the bar
     return chunks.merge_info(infos, theta)
 
 
@@ -615,6 +622,7 @@ def _fill_anisotropic(rough, eps, lam, name, theta, phi, out_of_range, options, 
             p2[:, :, aa, bb] = fp
             p2[:, :, bb, aa] = fp.transpose(1, 0, 2)
         infos.append(chunks.slim(info))
+        _tick(2 * aa.size / (nd * (nd + 1)))
     return chunks.merge_info(infos, theta)
 
 

@@ -12,6 +12,11 @@ paths (:mod:`.paths`), the format against the extension, the height map (read an
 the material at every wavelength, the method name, and options that do not apply
 (``--fit-json`` without ``--fit``, ``--rgl-channels`` for a non-RGL file,
 ``--n-theta``/``--n-phi`` with ``--tol``) are errors, never ignored.
+
+A progress bar over the wavelengths (advanced per chunk) is drawn on stderr when it is a
+terminal; ``--quiet`` turns it off. Many tables (materials × wavelength sets × roughness) on a
+dask cluster are the Python entry :func:`emscatter.brdf.build_tables` (one output per table
+does not fit this command's one output path).
 """
 
 from __future__ import annotations
@@ -197,6 +202,12 @@ def register(subparsers) -> None:
         help="also fit a microfacet model and print its Mitsuba dict (JSON)",
     )
     p.add_argument("--fit-json", type=OutputPath(suffixes=(".json",)), help="write the fit here")
+    p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar (the bar is drawn only when stderr is a terminal anyway); many "
+        "tables on a dask cluster: emscatter.brdf.build_tables(specs, client='tcp://…')",
+    )
     p.set_defaults(func=run)
 
 
@@ -221,6 +232,7 @@ def run(a) -> int:
             energy=a.energy,
             out_of_range=a.out_of_range,
             dtype="float32" if a.float32 else "float64",
+            progress=False if a.quiet else None,
         )
     except MemoryError as exc:  # the estimate, before any work: a user error, not a crash
         raise ValueError(exc.cli() if hasattr(exc, "cli") else str(exc)) from None

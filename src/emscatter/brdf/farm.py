@@ -1,0 +1,278 @@
+"""Many BRDF tables at once (materials × wavelength sets × roughness), serially, on any
+:class:`concurrent.futures.Executor` or on a dask.distributed cluster.
+
+Each table is one task: :func:`~emscatter.brdf.build_table` with the spec's arguments, in a
+worker whose compiled-kernel threads are capped (``threads`` per task: the solvers' own
+``threads=`` option where they take one — GO, PO, IEM — and ``NUMBA_NUM_THREADS`` /
+``numba.set_num_threads`` for numba's own layer), so ``n_workers × threads`` stays within the
+cores instead of every worker starting a thread per core. A task is a pure function of its
+spec, so the tables are the same, bit for bit, serially, on a process pool or on a cluster
+(tested); they come back in the order of ``specs``::
+
+    from emscatter.brdf import build_tables, table_specs
+    specs = table_specs([rough_a, rough_b], ["Au", "Ag", "Cu"], [[450e-9, 550e-9, 650e-9]],
+                        method="go", resolution=(30, 60))
+    tables = build_tables(specs, client="local")           # a 2-worker-per-core LocalCluster
+    tables = build_tables(specs, client="tcp://host:8786")  # a running scheduler
+    tables = build_tables(specs, client=my_dask_client)     # or a ProcessPoolExecutor
+
+Every spec is checked before any work (surface, material at every wavelength, method, the
+keyword names): a bad one raises a ``ValueError`` naming the spec, the field, the value and
+what is allowed. Warnings raised in the workers are passed on once each in this process,
+prefixed with the spec (use process pools or dask: Python's warnings state is per
+process, so a thread pool's tables may lose theirs). Progress: a tqdm bar over the tables
+(stderr; quiet when stderr is
+not a terminal unless ``progress=True``); on a dask cluster the tasks also show on its
+dashboard.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import inspect
+import itertools
+import numbers
+import os
+import warnings
+from collections.abc import Iterable, Mapping
+
+from ..spectra import check_roughness
+from . import build as _build_mod
+from .progress import bar
+
+__all__ = ["build_tables", "table_specs", "check_spec", "SPEC_FIELDS"]
+
+#: The keywords of :func:`build_table` a spec may set (besides ``surface``, ``material``,
+#: ``wavelengths``); solver options go in ``options`` (a dict).
+BUILD_KEYWORDS = tuple(
+    name
+    for name, p in inspect.signature(_build_mod.build_table).parameters.items()
+    if p.kind is p.KEYWORD_ONLY and name != "progress"
+)
+#: Every field a spec (a mapping) may have.
+SPEC_FIELDS = ("surface", "material", "wavelengths", "name", "options", *BUILD_KEYWORDS)
+_REQUIRED = ("surface", "material", "wavelengths")
+
+
+def table_specs(surfaces, materials, wavelength_sets, **common) -> list[dict]:
+    """Specs for every (surface, material, wavelength set), surfaces outermost, with the
+    :func:`build_table` keywords ``common`` shared by all (``name``: ``"s{i}-{material}-w{k}"``)."""
+    surfaces, materials, wavelength_sets = list(surfaces), list(materials), list(wavelength_sets)
+    out = []
+    for (i, s), m, (k, w) in itertools.product(
+        enumerate(surfaces), materials, enumerate(wavelength_sets)
+    ):
+        label = m if isinstance(m, str) else type(m).__name__
+        out.append(
+            {"surface": s, "material": m, "wavelengths": w, "name": f"s{i}-{label}-w{k}", **common}
+        )
+    return out
+
+
+def check_spec(spec, index: int = 0) -> dict:
+    """``spec`` (a mapping with :data:`SPEC_FIELDS`) checked without computing: the keyword
+    arguments of its :func:`build_table` call. ValueError naming the spec and the field."""
+    where = f"specs[{index}]"
+    if not isinstance(spec, Mapping):
+        raise ValueError(
+            f"{where} must be a dict with the fields {list(_REQUIRED)} (and optionally "
+            f"{list(SPEC_FIELDS[3:])}), got {type(spec).__name__} {spec!r:.80}"
+        )
+    where = f"{where} ({spec['name']!r})" if isinstance(spec.get("name"), str) else where
+    missing = [f for f in _REQUIRED if f not in spec]
+    if missing:
+        raise ValueError(f"{where} lacks the field(s) {missing}; a spec needs {list(_REQUIRED)}")
+    unknown = [f for f in spec if f not in SPEC_FIELDS]
+    if unknown:
+        raise ValueError(
+            f"{where} has unknown field(s) {unknown}; allowed: {list(SPEC_FIELDS)} (solver "
+            "options go in 'options', a dict)"
+        )
+    kw = {k: v for k, v in spec.items() if k != "name"}
+    try:
+        rough = check_roughness(kw["surface"], "surface")
+        if rough.dimension != 2:
+            raise ValueError(f"must be 2-D (dimension=2), got dimension {rough.dimension}")
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{where} field 'surface': {exc}") from None
+    try:
+        wl = _build_mod._check_wavelengths(kw["wavelengths"])
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{where} field 'wavelengths': {exc}") from None
+    for lam in wl:
+        try:
+            _build_mod.material_eps(kw["material"], float(lam))
+        except (ValueError, TypeError, KeyError) as exc:
+            raise ValueError(
+                f"{where} field 'material' = {kw['material']!r} at λ = {lam:.6g} m: {exc}"
+            ) from None
+    method = kw.get("method", "auto")
+    from ..solvers import available
+
+    allowed = ["auto", *available()]
+    if not isinstance(method, str) or method not in allowed:
+        raise ValueError(f"{where} field 'method' must be one of {allowed}, got {method!r}")
+    options = kw.pop("options", None) or {}
+    if not isinstance(options, Mapping):
+        raise ValueError(
+            f"{where} field 'options' must be a dict of solver options, got {options!r:.80}"
+        )
+    clash = sorted(set(options) & set(SPEC_FIELDS))
+    if clash:
+        raise ValueError(f"{where} field 'options' repeats spec field(s) {clash}")
+    return {**kw, "wavelengths": wl, **options}
+
+
+def _check_threads(threads) -> int | None:
+    if threads is None:
+        return None
+    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
+        raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
+    return int(threads)
+
+
+def _cap_threads(kwargs: dict, threads: int | None, in_worker: bool) -> dict:
+    """The solver's ``threads=`` set to the cap where it takes one and the caller did not;
+    in a worker also numba's own thread count (this thread's, never the caller's process)."""
+    if threads is None:
+        return kwargs
+    if in_worker:
+        try:
+            import numba
+
+            numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        except ImportError:
+            pass
+    method = kwargs.get("method", "auto")
+    if method != "auto" and "threads" not in kwargs:
+        from .. import solvers
+
+        if "threads" in inspect.signature(solvers.get(method).bistatic).parameters:
+            return {**kwargs, "threads": threads}
+    return kwargs
+
+
+def _build_one(kwargs: dict, threads: int | None, in_worker: bool = True):
+    """One table in a worker: ``(table, [(category, message), ...])`` — its warnings come back
+    with it instead of being lost in the worker's log."""
+    kwargs = _cap_threads(kwargs, threads, in_worker)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = _build_mod.build_table(progress=False, **kwargs)
+    return table, [(w.category, str(w.message)) for w in caught]
+
+
+def _executor(client, n_workers, threads):
+    """``(executor or None, close)`` for ``client``; ``close()`` shuts down what we started."""
+    if client is None:
+        return None, lambda: None
+    if isinstance(client, cf.Executor):
+        return client, lambda: None
+    if isinstance(client, str):
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise ValueError(
+                f"client={client!r} needs dask.distributed (pip install 'emscatter[distributed]'); "
+                "or pass a concurrent.futures Executor, or None (serial)"
+            ) from None
+        if client == "local":
+            n = n_workers or max(1, (os.cpu_count() or 1) // (threads or 1))
+            env = {"NUMBA_NUM_THREADS": str(threads or 1)}
+            cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                env=env,
+            )
+            dc = Client(cluster)
+
+            def close():
+                dc.close()
+                cluster.close()
+
+            return dc.get_executor(), close
+        if client.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
+            dc = Client(client)
+            return dc.get_executor(), dc.close
+        raise ValueError(
+            f"client must be None, 'local', a scheduler address 'tcp://host:port', a "
+            f"dask.distributed Client or a concurrent.futures Executor, got {client!r}"
+        )
+    if hasattr(client, "get_executor") and callable(client.get_executor):
+        return client.get_executor(), lambda: None  # a dask.distributed Client
+    raise ValueError(
+        f"client must be None, 'local', a scheduler address 'tcp://host:port', a "
+        f"dask.distributed Client or a concurrent.futures Executor, got {client!r}"
+    )
+
+
+def build_tables(
+    specs: Iterable[Mapping],
+    *,
+    client=None,
+    threads: int | None = 1,
+    n_workers: int | None = None,
+    progress: bool | None = None,
+) -> list:
+    """One :class:`~emscatter.brdf.BrdfTable` per spec, in the order of ``specs``.
+
+    Parameters
+    ----------
+    specs : mappings with ``surface``, ``material``, ``wavelengths`` [m] and optionally ``name``,
+        ``options`` (solver options, a dict) and any :func:`build_table` keyword (``method``,
+        ``resolution``, ``dtype``, …); :func:`table_specs` makes the product of several.
+    client : None (serial, in this process), ``"local"`` (a LocalCluster of ``n_workers``
+        single-threaded worker processes, closed at the end), a scheduler address
+        ``"tcp://host:port"``, a dask.distributed ``Client`` or any
+        :class:`concurrent.futures.Executor` (the task function is module-level, picklable).
+    threads : compiled-kernel threads per task (default 1: one task per core); None leaves
+        the solvers' default (the CPU count, at most 8) — oversubscribes a cluster's workers.
+    n_workers : workers of ``client="local"`` (default: the CPU count ÷ ``threads``).
+    progress : tqdm bar over the tables: None → only when stderr is a terminal.
+    """
+    threads = _check_threads(threads)
+    if n_workers is not None and (
+        isinstance(n_workers, bool) or not isinstance(n_workers, numbers.Integral) or n_workers < 1
+    ):
+        raise ValueError(f"n_workers must be a positive integer or None, got {n_workers!r}")
+    if isinstance(specs, Mapping):
+        raise ValueError("specs must be a list of spec dicts, got a single dict (wrap it: [spec])")
+    specs = list(specs)
+    if not specs:
+        raise ValueError("specs is empty: give at least one spec (see table_specs)")
+    calls = [check_spec(s, i) for i, s in enumerate(specs)]  # every spec before any work
+    names = [s.get("name") or f"specs[{i}]" for i, s in enumerate(specs)]
+    executor, close = _executor(client, n_workers, threads)
+    results: list = [None] * len(calls)
+    try:
+        with bar(len(calls), "BRDF tables", progress, unit="table") as b:
+            if executor is None:
+                for j, kw in enumerate(calls):
+                    results[j] = _build_one(kw, threads, in_worker=False)
+                    b.update(1)
+            else:
+                submit = executor.submit
+                futures = {submit(_build_one, kw, threads): j for j, kw in enumerate(calls)}
+                try:
+                    for fut in cf.as_completed(futures):
+                        j = futures[fut]
+                        try:
+                            results[j] = fut.result()
+                        except Exception as exc:
+                            raise RuntimeError(f"build_tables: {names[j]} failed: {exc}") from exc
+                        b.update(1)
+                except BaseException:
+                    for fut in futures:
+                        fut.cancel()
+                    raise
+    finally:
+        close()
+    seen = set()
+    for name, (_, caught) in zip(names, results, strict=True):
+        for category, message in caught:
+            if (category, message) not in seen:
+                seen.add((category, message))
+                warnings.warn(f"{name}: {message}", category, stacklevel=2)
+    return [table for table, _ in results]

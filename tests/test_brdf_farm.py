@@ -1,0 +1,155 @@
+"""``emscatter.brdf.build_tables``: many tables serially, on a process pool and on a dask
+LocalCluster, bit-identical; every spec checked before any work; the build's progress bar."""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import warnings
+
+import numpy as np
+import pytest
+
+from emscatter.brdf import build_table, build_tables, farm, table_specs
+from emscatter.cli import main
+from emscatter.solvers.select import ValidityWarning
+from emscatter.spectra import GaussianCorrelation
+
+GRID = {"method": "go", "resolution": (12, 16)}
+
+
+def _surfaces():
+    return [GaussianCorrelation(sigma=s * 1e-6, length=1e-6, dimension=2) for s in (0.2, 0.35)]
+
+
+def _specs(**kw):
+    return table_specs(_surfaces(), ["Au", 2.25], [[450e-9, 650e-9], [550e-9]], **GRID, **kw)
+
+
+def _same(a, b):
+    assert a.values.dtype == b.values.dtype and a.values.tobytes() == b.values.tobytes()
+    assert np.array_equal(a.coherent, b.coherent)
+    assert a.metadata["per_wavelength"] == b.metadata["per_wavelength"]
+
+
+def test_serial_farm_equals_build_table_in_order():
+    specs = _specs(out_of_range="ignore")
+    assert len(specs) == 8 and specs[0]["name"] == "s0-Au-w0"
+    tables = build_tables(specs, progress=False)
+    for spec, table in zip(specs, tables, strict=True):
+        kw = {k: v for k, v in spec.items() if k != "name"}
+        _same(table, build_table(**kw))
+        assert np.array_equal(table.wavelengths, spec["wavelengths"])
+
+
+def test_process_pool_bit_identical_to_serial():
+    specs = _specs(out_of_range="ignore", dtype="float32")
+    serial = build_tables(specs, progress=False)
+    with cf.ProcessPoolExecutor(2) as pool:
+        parallel = build_tables(specs, client=pool, progress=False)
+    for a, b in zip(serial, parallel, strict=True):
+        _same(a, b)
+
+
+def test_dask_local_cluster_bit_identical_to_serial():
+    pytest.importorskip("dask.distributed")
+    specs = _specs(out_of_range="ignore")[:4]
+    serial = build_tables(specs, progress=False)
+    parallel = build_tables(specs, client="local", n_workers=2, progress=False)
+    for a, b in zip(serial, parallel, strict=True):
+        _same(a, b)
+
+
+def test_worker_warnings_come_back_once_with_the_spec_name():
+    specs = _specs()[:2]  # out_of_range="warn": GO's stationary-phase check fails at grazing θ
+    with cf.ProcessPoolExecutor(2) as pool, warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        build_tables(specs, client=pool, progress=False)
+    texts = [str(w.message) for w in caught if issubclass(w.category, ValidityWarning)]
+    assert texts and all(t.startswith(("s0-Au-w0: ", "s0-Au-w1: ")) for t in texts)
+    assert len(texts) == len(set(texts))
+
+
+class _Recording(cf.ThreadPoolExecutor):
+    """A real executor that counts what it is given (a bad spec must stop before any)."""
+
+    submitted = 0
+
+    def submit(self, *a, **k):
+        type(self).submitted += 1
+        return super().submit(*a, **k)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"wavelengths": None}, "lacks the field(s) ['wavelengths']"),
+        ({"colour": "red"}, "unknown field(s) ['colour']"),
+        ({"material": "unobtainium"}, "field 'material' = 'unobtainium'"),
+        ({"method": "nope"}, "field 'method' must be one of"),
+        ({"wavelengths": [650e-9, 450e-9]}, "field 'wavelengths'"),
+        ({"surface": GaussianCorrelation(sigma=1e-7, length=1e-6, dimension=1)}, "field 'surface'"),
+        ({"options": ["threads"]}, "field 'options' must be a dict"),
+    ],
+)
+def test_bad_spec_names_the_field_before_any_work(change, message):
+    specs = _specs()
+    bad = {**specs[5], **change}
+    if change.get("wavelengths", 0) is None:
+        del bad["wavelengths"]
+    specs[5] = bad
+    _Recording.submitted = 0
+    with _Recording(1) as pool, pytest.raises(ValueError) as err:
+        build_tables(specs, client=pool, progress=False)
+    assert message in str(err.value) and "specs[5]" in str(err.value)
+    assert _Recording.submitted == 0
+
+
+@pytest.mark.parametrize(
+    "kw, message",
+    [
+        ({"client": "mpi://x"}, "client must be None, 'local', a scheduler address"),
+        ({"threads": 0}, "threads must be a positive integer"),
+        ({"n_workers": -1}, "n_workers must be a positive integer"),
+        ({"progress": "yes"}, "progress must be True, False or None"),
+    ],
+)
+def test_bad_arguments(kw, message):
+    with pytest.raises(ValueError, match=message.replace("(", r"\(")):
+        build_tables(_specs()[:1], **kw)
+
+
+def test_threads_cap_reaches_solvers_that_take_it():
+    go = farm._cap_threads({"method": "go"}, 1, in_worker=False)
+    assert go["threads"] == 1
+    assert "threads" not in farm._cap_threads({"method": "spm"}, 1, in_worker=False)
+    assert "threads" not in farm._cap_threads({"method": "auto"}, 1, in_worker=False)
+    assert farm._cap_threads({"method": "go", "threads": 4}, 1, in_worker=False)["threads"] == 4
+
+
+def test_build_table_bar_on_request_quiet_off_a_terminal(capsys):
+    rough = _surfaces()[0]
+    build_table(rough, "Au", [450e-9, 550e-9], **GRID, out_of_range="ignore", progress=True)
+    assert "BRDF table" in capsys.readouterr().err
+    build_table(rough, "Au", [450e-9, 550e-9], **GRID, out_of_range="ignore")  # stderr: no tty
+    assert "BRDF table" not in capsys.readouterr().err
+    build_tables(_specs(out_of_range="ignore")[:2], progress=True)
+    err = capsys.readouterr().err
+    assert "BRDF tables" in err and "/2" in err
+
+
+def test_cli_quiet(tmp_path, monkeypatch):
+    from emscatter.brdf import build
+
+    seen = []
+    real = build.build_progress
+
+    def spy(n, progress=None):  # records what the command asked for, then draws as usual
+        seen.append(progress)
+        return real(n, progress)
+
+    monkeypatch.setattr(build, "build_progress", spy)
+    argv = ["--material", "pec", "--wavelengths-nm", "550", "--method", "go"]
+    argv += ["--n-theta", "8", "--n-phi", "12", "--out-of-range", "ignore"]
+    assert main(["brdf", str(tmp_path / "a.npz"), *argv, "--quiet"]) == 0
+    assert main(["brdf", str(tmp_path / "b.npz"), *argv]) == 0
+    assert seen == [False, None]  # --quiet: never; default: only on a terminal
