@@ -152,9 +152,27 @@ def _cap_threads(kwargs: dict, threads: int | None, in_worker: bool) -> dict:
     return kwargs
 
 
-def _build_one(kwargs: dict, threads: int | None, in_worker: bool = True):
+def _load_compiled() -> bool:
+    """Load the compiled-kernel runtime when the numba backend is selected (returns whether).
+
+    The solvers take the compiled path for a small call only once the runtime is loaded in the
+    process (:mod:`emscatter.kernels.gate`), and the compiled and numpy paths agree to ~1e-12,
+    not bit for bit: loading it in the caller and in every worker makes each table take the
+    same path wherever it is built, so a farm's tables are identical to the serial run's."""
+    from .. import kernels
+
+    if kernels.backend() != "numba":
+        return False
+    import emscatter.kernels._runtime  # noqa: F401
+
+    return True
+
+
+def _build_one(kwargs: dict, threads: int | None, in_worker: bool = True, compiled=False):
     """One table in a worker: ``(table, [(category, message), ...])`` — its warnings come back
     with it instead of being lost in the worker's log."""
+    if compiled:
+        _load_compiled()
     kwargs = _cap_threads(kwargs, threads, in_worker)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -244,6 +262,7 @@ def build_tables(
         raise ValueError("specs is empty: give at least one spec (see table_specs)")
     calls = [check_spec(s, i) for i, s in enumerate(specs)]  # every spec before any work
     names = [s.get("name") or f"specs[{i}]" for i, s in enumerate(specs)]
+    compiled = _load_compiled()  # the same kernel path in this process and every worker
     executor, close = _executor(client, n_workers, threads)
     results: list = [None] * len(calls)
     try:
@@ -254,7 +273,9 @@ def build_tables(
                     b.update(1)
             else:
                 submit = executor.submit
-                futures = {submit(_build_one, kw, threads): j for j, kw in enumerate(calls)}
+                futures = {
+                    submit(_build_one, kw, threads, True, compiled): j for j, kw in enumerate(calls)
+                }
                 try:
                     for fut in cf.as_completed(futures):
                         j = futures[fut]
