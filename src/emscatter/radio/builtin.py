@@ -25,6 +25,12 @@ angle θi and summed over polarizations (Sionna's S is one number for both):
   fitted angle range, no built-in model can stand in and the result says so (``"valid": False``,
   ``"flags"``).
 
+* the **diffuse polarization error** ``10 log10(S² |R_p|² / r_incoh,p)`` [dB] per incident
+  polarization: Sionna scatters ``S² Γ²`` with Fresnel's h/v ratio, emscatter another (first-order
+  small-perturbation lobes put more into v than h). Beyond ``polarization_tolerance_db`` at the
+  fit angle it is flagged too: one S cannot serve both polarizations (the error grows towards
+  Brewster's angle, where ``|R_v|² → 0``; its worst value in range is reported).
+
 One set of built-in values (what Sionna takes) is fitted at ``fit_angle_deg`` (S, K_x) and over
 the angle range (the lobe's integers: least mean misplaced power); the per-angle values and their
 spread are reported beside it. :func:`builtin_equivalent` returns plain JSON types;
@@ -39,8 +45,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fresnel import fresnel_cos
 from .. import io
+from ..fresnel import fresnel_cos
 from .convention import sionna_eps_conductivity
 from .medium import real_number
 from .tables import RadioTables, lobe_directions
@@ -178,23 +184,24 @@ def builtin_equivalent(
     angle_range_deg: tuple[float, float] = (30.0, 60.0),
     alpha_max: int = 100,
     transmission_tolerance_db: float = 0.5,
+    polarization_tolerance_db: float = 1.0,
     tables: RadioTables | None = None,
 ) -> dict:
     """Sionna's built-in parameters equivalent to ``spec`` (a
     :class:`~emscatter.radio.MaterialSpec`) at ``frequency`` [Hz] (module docstring).
 
     Returns a JSON-ready dict: ``schema``, ``frequency_hz``, the medium as Sionna takes it
-    (``relative_permittivity``, ``conductivity`` [S/m], ``thickness`` [m]), ``scattering_coefficient``
-    S, ``xpd_coefficient`` K_x and ``xpd_db`` at ``fit_angle_deg``, ``scattering_pattern``
+    (``relative_permittivity``, ``conductivity`` [S/m], ``thickness`` [m]),
+    ``scattering_coefficient`` S, ``xpd_coefficient`` K_x and ``xpd_db`` at ``fit_angle_deg``,
+    ``scattering_pattern``
     (``{"name", params}``, the pattern with the least mean misplaced power over
     ``angle_range_deg``), ``patterns`` (every pattern's fit), ``per_angle`` (θ [deg], S, S_h, S_v,
-    K_x, best α_R, misplaced power, reflected-power error [dB]), ``error`` (misplaced power at
-    the fit angle and worst in range, S spread in range, worst reflected-power error), ``valid``
+    K_x, best α_R, misplaced power, reflected-power and per-polarization diffuse errors [dB]),
+    ``error`` (misplaced power at the fit angle and worst in range, S spread in range, worst
+    reflected-power and diffuse polarization errors), ``valid``
     and ``flags`` (why no built-in model stands in, when it does not), and the emscatter
     ``method`` that made the tables."""
-    from . import MaterialSpec
-
-    if not isinstance(spec, MaterialSpec):
+    if not all(hasattr(spec, a) for a in ("tables", "material", "surface", "thickness")):
         raise TypeError(f"spec must be a radio.MaterialSpec, got {type(spec).__name__}")
     frequency = real_number("frequency", frequency)
     if not frequency > 0:
@@ -209,8 +216,10 @@ def builtin_equivalent(
     if isinstance(alpha_max, bool) or not isinstance(alpha_max, int) or alpha_max < 1:
         raise ValueError(f"alpha_max must be an integer >= 1, got {alpha_max!r}")
     tol = real_number("transmission_tolerance_db", transmission_tolerance_db)
-    if tol <= 0:
-        raise ValueError(f"transmission_tolerance_db must be > 0 dB, got {tol!r}")
+    pol_tol = real_number("polarization_tolerance_db", polarization_tolerance_db)
+    for pname, v in (("transmission_tolerance_db", tol), ("polarization_tolerance_db", pol_tol)):
+        if not v > 0:
+            raise ValueError(f"{pname} must be > 0 dB, got {v!r}")
     tab = tables if tables is not None else spec.tables(frequency, label="builtin-fit")
     eps = complex(spec.material().eps(frequency=frequency))
     er, sig = sionna_eps_conductivity(eps, frequency)
@@ -242,6 +251,11 @@ def builtin_equivalent(
         s2 = np.where(refl > 0, inc.sum(axis=0) / refl, 0.0)
         s2_p = np.where(cp + inc > 0, inc / (cp + inc), 0.0)
         err_db = 10.0 * np.log10(refl / fres)
+    # Sionna's diffuse power per incident polarization is S² |R_p|² (its XPD matrix is unitary)
+    fres_p = np.stack([np.abs(rh) ** 2, np.abs(rv) ** 2])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pol_db = 10.0 * np.log10((s2 * fres_p) / inc)
+    pol_db = np.where(np.isfinite(pol_db), pol_db, 0.0)
     w = lobe_weights(tab)
     ch = np.einsum("tasc,tas->ct", tab.lobe, w)  # (4, n_theta) per [pol_s, pol_i] channel
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -253,6 +267,8 @@ def builtin_equivalent(
         "S_v": np.sqrt(s2_p[1, idx]).tolist(),
         "xpd_coefficient": kx[idx].tolist(),
         "reflected_power_error_db": err_db[idx].tolist(),
+        "diffuse_error_db_h": pol_db[0, idx].tolist(),
+        "diffuse_error_db_v": pol_db[1, idx].tolist(),
     }
 
     def at_fit(x):
@@ -272,16 +288,28 @@ def builtin_equivalent(
         flags.append(
             f"reflected power differs from Fresnel by {err_db[k]:+.2f} dB at θi = {th_deg[k]:.0f}° "
             f"(> {tol:g} dB): emscatter's rough face sends that power into the medium "
-            "(transmission), which the built-in S model (it conserves |R|²) cannot represent; "
+            "(transmission, absorption), which the built-in S model (it conserves |R|²) cannot "
+            "represent; "
             "no built-in model stands in here — ship the emscatter material"
+        )
+    pol_fit = np.array([np.interp(fit_angle_deg, th_deg, pol_db[p]) for p in (0, 1)])
+    worst_pol = float(np.max(np.abs(pol_fit))) if np.any(inc[:, idx] > 0) else 0.0
+    if worst_pol > pol_tol:
+        p = int(np.argmax(np.abs(pol_fit)))
+        flags.append(
+            f"diffuse power of incident {'hv'[p]} differs by {pol_fit[p]:+.2f} dB at the fit angle "
+            f"θi = {fit_angle_deg:g}° (> {pol_tol:g} dB): the built-in model scatters S² |R_p|² "
+            "per polarization (Fresnel's h/v ratio), emscatter's rough face another ratio "
+            "(e.g. small-perturbation lobes, v above h); no single S stands in for both"
         )
     result = {
         **base,
         "scattering_coefficient": s_fit,
         "xpd_coefficient": kx_fit,
         "xpd_db": (
-            10.0 * math.log10((1.0 - kx_fit) / kx_fit) if 0.0 < kx_fit < 1.0 else
-            (math.inf if kx_fit == 0.0 else -math.inf)
+            10.0 * math.log10((1.0 - kx_fit) / kx_fit)
+            if 0.0 < kx_fit < 1.0
+            else (math.inf if kx_fit == 0.0 else -math.inf)
         ),  # fmt: skip
         "per_angle": per,
     }
@@ -290,7 +318,8 @@ def builtin_equivalent(
             scattering_pattern={"name": "lambertian"},
             patterns={},
             error={"lobe_misplaced_at_fit": 0.0, "lobe_misplaced_max": 0.0, "S_spread": 0.0,
-                   "reflected_power_error_db_max": worst_db},
+                   "reflected_power_error_db_max": worst_db,
+                   "diffuse_polarization_error_db_at_fit": worst_pol},
             valid=not flags, flags=flags,
         )  # fmt: skip
         per["alpha_r"], per["lobe_misplaced"] = [], []
@@ -308,8 +337,11 @@ def builtin_equivalent(
     result.update(
         scattering_pattern={"name": name, **fits[name]["params"]},
         patterns={
-            n: {**v["params"], "misplaced_mean": float(np.mean(v["misplaced"])),
-                "misplaced_max": float(np.max(v["misplaced"]))}
+            n: {
+                **v["params"],
+                "misplaced_mean": float(np.mean(v["misplaced"])),
+                "misplaced_max": float(np.max(v["misplaced"])),
+            }
             for n, v in fits.items()
         },  # fmt: skip
         error={
@@ -317,6 +349,8 @@ def builtin_equivalent(
             "lobe_misplaced_max": float(np.max(mis)),
             "S_spread": float(np.ptp(np.sqrt(s2[idx]))),
             "reflected_power_error_db_max": worst_db,
+            "diffuse_polarization_error_db_at_fit": worst_pol,
+            "diffuse_polarization_error_db_max": float(np.max(np.abs(pol_db[:, idx]))),
         },
         valid=not flags,
         flags=flags,
