@@ -22,7 +22,8 @@ the functions that run Sionna), so ``import emscatter.radio`` stays light. Modul
 :mod:`.roughening` (any Sionna scene rough in one call, flat again, and rough − flat path
 gains and radio maps in one call: ``roughen``, ``flatten``, ``compare_rough_flat``),
 :mod:`.builtin` (Sionna's built-in S, lobe and XPD fitted to the tables, and where no
-built-in model stands in: ``builtin_equivalent``), :mod:`.plate`, :mod:`.indoor` and :mod:`.sweep` (the three cross-checks), :mod:`.demo`.
+built-in model stands in: ``builtin_equivalent``), :mod:`.plate`, :mod:`.indoor` and
+:mod:`.sweep` (the three cross-checks), :mod:`.demo`.
 """
 
 from __future__ import annotations
