@@ -259,7 +259,7 @@ def builtin_equivalent(
     w = lobe_weights(tab)
     ch = np.einsum("tasc,tas->ct", tab.lobe, w)  # (4, n_theta) per [pol_s, pol_i] channel
     with np.errstate(divide="ignore", invalid="ignore"):
-        kx = np.where(inc.sum(axis=0) > 0, (ch[1] + ch[2]) / inc.sum(axis=0), 0.0)
+        kx = np.where(ch.sum(axis=0) > 0, (ch[1] + ch[2]) / ch.sum(axis=0), 0.0)
     per = {
         "theta_deg": th_deg[idx].tolist(),
         "S": np.sqrt(s2[idx]).tolist(),
