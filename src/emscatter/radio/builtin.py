@@ -154,7 +154,7 @@ def _fit_lobe(tables, idx, f_em, w, alpha_max):
     best = (math.inf, None, None)
     base_i = 0.5 * (1.0 + cos_i)
     near = sorted({int(a) for a in np.unique(np.round(alphas[j] * np.geomspace(0.5, 2.0, 7)))})
-    near = [a for a in near if 1 <= a]
+    near = [a for a in near if 1 <= a <= alpha_max]
     for ai in _ALPHA_I:
         gi = base_i**ai
         fi_norm = np.einsum("tas,tas->t", gi, w)
@@ -182,7 +182,7 @@ def builtin_equivalent(
     *,
     fit_angle_deg: float = 45.0,
     angle_range_deg: tuple[float, float] = (30.0, 60.0),
-    alpha_max: int = 100,
+    alpha_max: int = 200,
     transmission_tolerance_db: float = 0.5,
     polarization_tolerance_db: float = 1.0,
     tables: RadioTables | None = None,
@@ -200,7 +200,8 @@ def builtin_equivalent(
     ``error`` (misplaced power at the fit angle and worst in range, S spread in range, worst
     reflected-power and diffuse polarization errors), ``valid``
     and ``flags`` (why no built-in model stands in, when it does not), and the emscatter
-    ``method`` that made the tables."""
+    ``method`` that made the tables. ``alpha_max`` bounds the lobes' integers α_R (Sionna's
+    normalization sums ``α`` terms per ray: large values cost time there)."""
     if not all(hasattr(spec, a) for a in ("tables", "material", "surface", "thickness")):
         raise TypeError(f"spec must be a radio.MaterialSpec, got {type(spec).__name__}")
     frequency = real_number("frequency", frequency)
