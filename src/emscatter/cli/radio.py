@@ -16,7 +16,7 @@ import math
 import re
 from pathlib import Path
 
-from .args import Integer, Number, OutputFolder, add_command
+from .args import Integer, Number, OutputFolder, OutputPath, add_command
 
 SCENES = ("room", "floor_wall", "box")
 #: Transmitters [m] for the scenes that need none on the command line (simple_street_canyon:
@@ -167,6 +167,18 @@ def register(subparsers) -> None:
             "without it such a run is an error before anything is computed"
         ),
     )
+    r.add_argument(
+        "--builtin-json",
+        type=OutputPath(suffixes=(".json",)),
+        default=None,
+        metavar="FILE",
+        help=(
+            "write Sionna's built-in parameters (scattering coefficient S, lobe, XPD coefficient) "
+            "fitted to emscatter per --medium (default: emscatter's roughness table, media in "
+            "band) and frequency, with the fit's error and flags where no built-in model stands "
+            "in (emscatter.radio.builtin_equivalent); no ray is traced"
+        ),
+    )
     r.add_argument("--quick", action="store_true", help="few rays, coarse maps and tables")
     r.add_argument("--plate", action="store_true", help="run the large-plate cross-check")
     r.add_argument("--out", type=OutputFolder(), default="out/radio", help="output folder")
@@ -177,6 +189,12 @@ def run(a) -> int:
     from pathlib import Path
 
     out = Path(a.out)
+    if a.builtin_json is not None:
+        if a.plate or a.tx is not None or a.extrapolate:
+            raise ValueError(
+                "--builtin-json fits materials only: drop --plate, --tx and --extrapolate"
+            )
+        return run_builtin_json(a)
     if a.plate and a.extrapolate:
         raise ValueError(
             "--extrapolate applies to the indoor scenes, not to --plate (its media are in band)"
@@ -311,4 +329,42 @@ def run_any_scene(a) -> int:
             f"{stem} {f / 1e9:g} GHz: rough − flat median {med:+.2f} dB over {int(lit.sum())} "
             f"cells lit in both ({cell:g} m cells, {samples} rays, depth {depth})"
         )
+    return 0
+
+
+def run_builtin_json(a) -> int:
+    """``--builtin-json FILE``: one fit per medium and frequency (no Sionna needed)."""
+    from ..materials import OutOfBandError
+    from ..radio import MaterialSpec, builtin
+    from ..radio.roughening import DEFAULT_ROUGHNESS
+    from ..spectra import GaussianCorrelation
+
+    opts = _quick_tables() if a.quick else None
+    given = {n: (None if v is None else GaussianCorrelation(sigma=v[0], length=v[1]))
+             for n, v in a.medium}  # fmt: skip
+    media = given or {n: r for n, r in DEFAULT_ROUGHNESS.items() if r is not None}
+    fits = []
+    for name, rough in media.items():
+        spec = MaterialSpec(surface=rough, medium=name, thickness=None, options=opts)
+        spec.material()  # an unknown medium fails here, naming it
+        for f in a.frequencies_ghz:
+            try:
+                eq = builtin.builtin_equivalent(spec, f)
+            except OutOfBandError:
+                if given:
+                    raise
+                print(f"  skipped {name} at {f / 1e9:g} GHz: outside its ITU-R P.2040 bands")
+                continue
+            fits.append(eq)
+            pat = eq["scattering_pattern"]
+            lobe = ", ".join(f"{k}={v}" for k, v in pat.items() if k != "name")
+            state = "valid" if eq["valid"] else "NOT valid: " + " | ".join(eq["flags"])
+            print(
+                f"{name} {f / 1e9:g} GHz: S = {eq['scattering_coefficient']:.3f}, "
+                f"{pat['name']}({lobe}), K_x = {eq['xpd_coefficient']:.3f}, lobe power misplaced "
+                f"{100 * eq['error']['lobe_misplaced_at_fit']:.0f} % ({state})"
+            )
+    if not fits:
+        raise ValueError("no medium in band at the frequencies given; name one with --medium")
+    print(f"  {builtin.write_json(a.builtin_json, fits)}")
     return 0
