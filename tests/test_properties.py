@@ -266,20 +266,30 @@ def test_auto_is_continuous_across_method_switches(switch, other, eps, theta_i):
         assert jump <= MAX_JUMP_DB
 
 
-@settings(max_examples=examples("continuity"))
-@given(
-    switch=st.sampled_from(SWITCHES),
-    other=log_uniform(1.0, 300.0),
-    eps=st.sampled_from(["pec", 3.0, 17 + 2j]),
-    theta_i=st.floats(math.radians(5), math.radians(60)),
-)
-@example(switch=("k_sigma", math.sqrt(10) / 2), other=7.5, eps=3.0, theta_i=0.8125)
-@example(switch=("k_sigma", 0.3), other=5.0, eps=17 + 2j, theta_i=0.7)  # spm ↔ po/iem: hv
-@example(switch=("k_sigma", 0.3), other=17.8, eps=3.0, theta_i=1.0)  # was xfail (issue 20)
-# a corner: above SPM's kσ = 0.3 the IEM for kℓ < 4, PO beyond (0.53 dB hh step before the
-# tensor-product blend of select.blend_weights)
-@example(switch=("k_l", 4.0), other=10**0.875, eps="pec", theta_i=1.0)
-@example(switch=("k_sigma", 0.3), other=10**0.125, eps=3.0, theta_i=1.0)  # fresh-run find
+def _backscatter_switch_cases(test):
+    """The backscatter continuity cases: any switch of :data:`SWITCHES` (random other
+    parameter, medium, angle) and the examples found so far."""
+    for ex in (
+        dict(switch=("k_sigma", math.sqrt(10) / 2), other=7.5, eps=3.0, theta_i=0.8125),
+        dict(switch=("k_sigma", 0.3), other=5.0, eps=17 + 2j, theta_i=0.7),  # spm ↔ po/iem: hv
+        dict(switch=("k_sigma", 0.3), other=17.8, eps=3.0, theta_i=1.0),  # was xfail (issue 20)
+        # a corner: above SPM's kσ = 0.3 the IEM for kℓ < 4, PO beyond (0.53 dB hh step
+        # before the tensor-product blend of select.blend_weights)
+        dict(switch=("k_l", 4.0), other=10**0.875, eps="pec", theta_i=1.0),
+        # a fresh-example find: SPM's slope and kσ limits meet (cross-pol steps 1.9 dB)
+        dict(switch=("k_sigma", 0.3), other=10**0.125, eps=3.0, theta_i=1.0),
+    ):
+        test = example(**ex)(test)
+    test = given(
+        switch=st.sampled_from(SWITCHES),
+        other=log_uniform(1.0, 300.0),
+        eps=st.sampled_from(["pec", 3.0, 17 + 2j]),
+        theta_i=st.floats(math.radians(5), math.radians(60)),
+    )(test)
+    return settings(max_examples=examples("continuity"))(test)
+
+
+@_backscatter_switch_cases
 def test_auto_backscatter_is_continuous_with_crosspol(switch, other, eps, theta_i):
     """Backscatter co-pol (hh, vv) with the cross-pol terms on: continuous at every switch. The
     first example stepped 0.69 dB (hh) while the blend's ray search skipped the IEM region
@@ -309,20 +319,7 @@ def _backscatter_sides(switch, other, eps, theta_i):
     "(0.53/0.47 → 0.77/0.23 between IEM and SPM) and, with the IEM multiple-scattering hv "
     "7.7 dB below SPM's (2,2) hv there, hv steps 1.9 dB (co-pol 0.09 dB)",
 )
-@settings(max_examples=examples("continuity"))
-@example(switch=("k_sigma", 0.3), other=10**0.125, eps=3.0, theta_i=1.0)
-@given(
-    switch=st.sampled_from(SWITCHES),
-    other=log_uniform(1.0, 300.0),
-    eps=st.sampled_from(["pec", 3.0, 17 + 2j]),
-    theta_i=st.floats(math.radians(5), math.radians(60)),
-)
-@example(switch=("k_sigma", math.sqrt(10) / 2), other=7.5, eps=3.0, theta_i=0.8125)
-@example(switch=("k_sigma", 0.3), other=5.0, eps=17 + 2j, theta_i=0.7)  # spm ↔ po/iem: hv
-@example(switch=("k_sigma", 0.3), other=17.8, eps=3.0, theta_i=1.0)  # was xfail (issue 20)
-# a corner: above SPM's kσ = 0.3 the IEM for kℓ < 4, PO beyond (0.53 dB hh step before the
-# tensor-product blend of select.blend_weights)
-@example(switch=("k_l", 4.0), other=10**0.875, eps="pec", theta_i=1.0)
+@_backscatter_switch_cases
 def test_auto_backscatter_crosspol_is_continuous(switch, other, eps, theta_i):
     """The same, cross-pol (hv, vh: SPM2 / IEM multiple scattering by branch)."""
     a, b = _backscatter_sides(switch, other, eps, theta_i)

@@ -2,7 +2,7 @@
 
 Every writer goes to a temporary file in the destination folder and is moved into place with
 :func:`os.replace` (atomic on POSIX) only once it is complete. A destination that cannot be
-written (a folder, a path under a file, a read-only or virtual folder such as ``/proc``) is an
+written (a folder, a path under a file, a read-only or virtual folder such as procfs) is an
 :class:`OutputPathError` naming the destination — never the temporary file — and what to do;
 :func:`output_problem` says the same *before* any work, which is how the command line checks
 every output path up front.
@@ -54,7 +54,7 @@ def _probe(folder: Path) -> str | None:
     """``None`` when a file can be created in the existing ``folder``, else why not.
 
     Creates and removes one empty temporary file: ``os.access`` says yes to root everywhere
-    and to read-only or virtual file systems (``/proc``), so only a real attempt is sure."""
+    and to read-only or virtual file systems (procfs), so only a real attempt is sure."""
     try:
         fd, tmp = tempfile.mkstemp(prefix=".emscatter-probe-", dir=folder)
     except OSError as exc:

@@ -4,8 +4,8 @@ One place for the rules (the command modules and :mod:`emscatter.cli.radio` call
 
 * :class:`OutputPath` / :class:`OutputFolder` — argparse ``type=`` callables: a file the
   command writes (not a folder, its nearest existing folder takes new files — tried with a
-  real temporary file, since ``os.access`` says yes to root and to ``/proc`` — and, with
-  ``suffixes``, a known extension) or a folder it writes into;
+  real temporary file, since ``os.access`` says yes to root and to the kernel's virtual file
+  systems (procfs) — and, with ``suffixes``, a known extension) or a folder it writes into;
 * :func:`check_format` — the extension agrees with ``--format`` (``x.npz --format rgl`` is an
   error, never an RGL tensor in a ``.npz``);
 * :func:`check_distinct` — two options never name the same file.

@@ -157,10 +157,16 @@ import math
 import numpy as np
 
 from emscatter.conventions import check_positive
-from emscatter.fresnel import PEC, fresnel_cos, is_pec
+from emscatter.fresnel import fresnel_cos, is_pec
 from emscatter.scattering import Scattering
 from emscatter.solvers.iem import compiled as iem_jit
 from emscatter.solvers.iem import terms as kern
+from emscatter.solvers.iem.amplitudes import (
+    _amplitudes,
+    _Options,
+    _series,
+    _spectral_args,
+)
 from emscatter.solvers.iem.series import _orders_needed as iem_series_orders
 from emscatter.solvers.iem.series import _too_many, direct_sum, iem_series, orders_table
 from emscatter.solvers.iem.shadowing import _SHADOW_MODES, _back_shadow_args, _shadowing
@@ -188,83 +194,6 @@ _MODEL_NAMES = {
     "aiem-faded": "AIEM, lower-medium terms with the upper-medium phase, faded by 1 − γ",
     "fung92": "IEM (Fung et al. 1992)",
 }
-_SPM_SIGN = (-1.0, 1.0, -1.0, 1.0)  # I₁(AIEM) ≈ s · 4 f_SPM (hh, hv, vh, vv): basis signs
-
-
-# ----------------------------------------------------------------------------- amplitudes
-class _Options:
-    __slots__ = ("fresnel", "complementary", "first_order", "rtol", "max_terms", "threads")
-
-
-def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _Options):
-    """Series components for flat geometries (k = 1, φi = 0): ``la, ph`` (4, N, J), ``lx, sx``
-    (N, J) and the first-order amplitude ``d`` (4, N), pols ordered (hh, hv, vh, vv)."""
-    pec = is_pec(eps)
-    n = si.shape[0]
-    rh_i, rv_i = fresnel_cos(eps, cs)
-    cos_l = np.sqrt(np.clip(0.5 * (1.0 + cs * css - si * ss * cf), 0.0, 1.0))
-    rh_l, rv_l = fresnel_cos(eps, cos_l)
-    if opt.fresnel == "transition" and not pec:
-        g_h, g_v = _transition(rough, eps, cs, ks, log_w, K, opt.rtol)
-        rh_t, rv_t = rh_i + (rh_l - rh_i) * g_h, rv_i + (rv_l - rv_i) * g_v
-    else:
-        g_h = g_v = np.zeros(n)
-        rh_t, rv_t = rh_i, rv_i
-    kv = kern.kirchhoff_vector(si, cs, ss, css, sf, cf, rh_l, rv_l)
-    sh, sv = kern.kirchhoff_scalar(si, cs, ss, css, cf, rh_t - rh_l, rv_t - rv_l)
-    xf = (kv[0] + sh, kv[1], kv[2], kv[3] + sv)
-    terms = kern.complementary_terms(
-        si, cs, ss, css, sf, cf, 1.0 if pec else eps, rh_i, rv_i, lower=not pec,
-        phase=opt.complementary,
-    )  # fmt: skip
-    # "aiem-faded": the lower-medium ("G") terms × (1 − γ_v); the first-order defect below
-    # is taken with the unfaded terms (the fade, like the transition, is not undone at n = 1)
-    fade = 1.0 - g_v if opt.complementary == "aiem-faded" and not pec else None
-    ks2 = ks * ks
-    base = -0.5 * ks2 * (cs * cs + css * css)
-    # component 0: Kirchhoff (x = kz + ksz, E = −σ² kz ksz), with the complementary terms of
-    # the same base and exponent merged in (AIEM's q = −kz "i" and q = +ksz "s" terms)
-    x0 = cs + css
-    amps = [list(xf)]
-    xs = [x0]
-    es = [-ks2 * cs * css]
-    merged = ("dn_i", "up_s") if opt.complementary != "fung92" else ()
-    comp_sum = [0.0, 0.0, 0.0, 0.0]
-    for name, F, qph, side in terms:
-        comp_sum = [c + 0.25 * f for c, f in zip(comp_sum, F, strict=True)]
-        if name in merged:
-            amps[0] = [a + 0.25 * f for a, f in zip(amps[0], F, strict=True)]
-            continue
-        w = 0.25 * fade if (fade is not None and name[0] == "G") else 0.25
-        amps.append([w * f for f in F])
-        xs.append((css - qph) if side == "i" else (cs + qph))
-        es.append(-ks2 * (qph * qph - qph * (css - cs)))
-    J = len(xs)
-    a = np.empty((4, n, J), dtype=complex)
-    for j in range(J):
-        for p in range(4):
-            a[p, :, j] = amps[j][p]
-    E = np.stack([np.broadcast_to(e, (n,)) for e in es], axis=1) + base[:, None]
-    x = np.stack([np.broadcast_to(v, (n,)) for v in xs], axis=1)
-    mag = np.abs(a)
-    with np.errstate(divide="ignore"):
-        la = np.log(mag) + E[None]
-        lx = np.log(np.abs(x))
-    ph = np.where(mag > 0, a / np.where(mag > 0, mag, 1.0), 1.0)
-    sx = np.where(x < 0, -1.0, 1.0)
-    # first-order defect to SPM1 (γ = 0 Kirchhoff coefficient, all exponentials → 1)
-    if opt.first_order == "spm":
-        from emscatter.solvers.spm.model import _f_factors  # the closed-form first-order amplitudes
-
-        sh0, sv0 = kern.kirchhoff_scalar(si, cs, ss, css, cf, rh_i - rh_l, rv_i - rv_l)
-        xf0 = (kv[0] + sh0, kv[1], kv[2], kv[3] + sv0)
-        f_spm = _f_factors(PEC if pec else eps, cs, si, css, ss, cf, sf)
-        d = np.empty((4, n), dtype=complex)
-        for p in range(4):
-            d[p] = (4.0 * _SPM_SIGN[p] * f_spm[p] - (xf0[p] + comp_sum[p])) * np.exp(base)
-    else:
-        d = np.zeros((4, n), dtype=complex)
-    return la, lx, ph, sx, d
 
 
 # ----------------------------------------------------------------------------- solver
@@ -274,43 +203,6 @@ def _choice(name, value, allowed):
     if isinstance(value, bool) or value not in allowed:
         raise ValueError(f"{name} must be one of {list(allowed)}, got {value!r}")
     return value
-
-
-def _spectral_args(rough, k, loc, n):
-    """Scaled spectral argument K and log normalization of the series (module docstring)."""
-    qx, qy = iem_jit.flat_n(loc.qx, n), iem_jit.flat_n(loc.qy, n)
-    if rough.dimension == 2:
-        K = np.sqrt((qx * (k * rough.length)) ** 2 + (qy * (k * rough.length_y)) ** 2)
-        return K, math.log(math.pi * (k * rough.length) * (k * rough.length_y))
-    return np.abs(qx) * (k * rough.length), math.log(0.5 * math.pi * k * rough.length)
-
-
-def _transition(rough, eps, cs, ks, log_w, K, rtol):
-    """Fresnel transition factors (γ_h, γ_v), compiled sums where covered."""
-    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
-    if spec is None:
-        return kern.transition_factor(eps, cs, ks, log_w, K)
-    with np.errstate(divide="ignore"):
-        lq = np.log((ks * cs) ** 2)
-    sums = [iem_jit.poisson_sums(lq + math.log(b), K, spec, rough.dimension, rtol=rtol * 1e-2)
-            for b in (1.0, 2.0, 4.0)]  # fmt: skip
-    return kern.transition_from_sums(eps, cs, ks, *sums)
-
-
-def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
-    """The series (:func:`emscatter.solvers.iem.series.iem_series`), compiled where
-    :mod:`emscatter.solvers.iem.compiled` covers it."""
-    spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
-    if spec is not None:
-        ls, lp, status = iem_jit.series_rows(
-            la, lx, ph, sx, d, log_ks2, spec, rough.dimension, K, pref,
-            rtol=opt.rtol, max_terms=opt.max_terms,
-        )  # fmt: skip
-        if status:
-            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, log_ks2))
-        return ls, lp
-    return iem_series(la, lx, ph, sx, d, log_ks2, log_w, K, pref, rtol=opt.rtol,
-                      max_terms=opt.max_terms)  # fmt: skip
 
 
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
