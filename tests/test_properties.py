@@ -289,6 +289,13 @@ def _backscatter_switch_cases(test):
     return settings(max_examples=examples("continuity"))(test)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="open (issue 20): the blend weights are not continuous at corners where two "
+    "limits meet; a fresh-example run found a co-pol step at GO's switch (Gaussian "
+    "kσ = √10/2, kℓ = 10^0.75, PEC, θi = 1 rad), pinned here",
+)
+@example(switch=("k_sigma", math.sqrt(10) / 2), other=10**0.75, eps="pec", theta_i=1.0)
 @_backscatter_switch_cases
 def test_auto_backscatter_is_continuous_with_crosspol(switch, other, eps, theta_i):
     """Backscatter co-pol (hh, vv) with the cross-pol terms on: continuous at every switch. The
