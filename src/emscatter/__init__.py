@@ -12,6 +12,8 @@ A short tour (SI units, radians, ``exp(-iωt)`` so lossy media have ``Im ε ≥ 
     em.emissivity(rough, 17 + 2j, frequency=1e9, theta_i=th).h       # 1 − r_coh − r_incoh
     surf = em.generate_surface(rough, (512, 512), spacing=0.005, rng=0)  # a realization
     surf.measure()                                                   # σ, slopes, ℓ, ...
+    hm = em.surfaces.height_map(surf.heights, surf.spacing)          # or read_height_map(f)
+    em.po_map(hm, 17 + 2j, k=2 * np.pi / 0.3, theta_i=0.5).efficiency  # its grating orders
 
 See ``README.md`` for conventions and the command-line tool (``emscatter --help``).
 """
@@ -38,6 +40,7 @@ __all__ = [
     "backscatter",
     "emissivity",
     "generate_surface",
+    "po_map",
     "materials",
     "Scattering",
     "GaussianCorrelation",
@@ -70,4 +73,8 @@ def __getattr__(name):  # lazy: keep `import emscatter` light
         from .surfaces.generate import generate_surface
 
         return generate_surface
+    if name == "po_map":  # PO on a height map itself (emscatter.solvers.kirchhoff.po_map)
+        from .solvers.kirchhoff.po_map import po_map
+
+        return po_map
     raise AttributeError(f"module 'emscatter' has no attribute {name!r}")
