@@ -16,7 +16,7 @@ import pytest
 import emscatter
 from emscatter.solvers.kirchhoff import go
 from emscatter.solvers.spm import bistatic as spm_bistatic
-from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
+from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 from emscatter.surfaces.heightmap import (
     HeightMapError,
     height_map,
@@ -101,13 +101,15 @@ def test_a_file_without_units_is_an_error_unless_unit_is_given(tmp_path):
         GaussianCorrelation(0.02, 1.0),
         ExponentialCorrelation(0.02, 1.0),
         GaussianCorrelation(0.02, 1.0, length_y=2.0),
+        PowerLawCorrelation(0.02, 1.0, hurst=0.7),
     ],
-    ids=["gaussian", "exponential", "anisotropic"],
+    ids=["gaussian", "exponential", "anisotropic", "fractal-hurst0.7"],
 )
 def test_spm_on_the_read_back_map_within_0p3_db(rough, tmp_path):
     """SPM σ⁰ on the map read back from netCDF within 0.3 dB of SPM on the analytic roughness,
     θs ≤ 70°, in three azimuth planes and two incidence azimuths (the anisotropic map: x and y
-    axes kept through the file). Measured worst: 0.15, 0.20, 0.17 dB (2048², Δ = ℓ/2, 16
+    axes kept through the file); the fractal case is the self-affine (Hurst 0.7 below ℓ)
+    von Kármán spectrum. Measured worst: 0.15, 0.20, 0.17, 0.16 dB (2048², Δ = ℓ/2, 16
     Welch segments per axis, 3×3 smoothing)."""
     hm = _round_trip(rough, (2048, 2048), 0.5, tmp_path)
     m = measured_roughness(hm, segments=16, smooth=1)
