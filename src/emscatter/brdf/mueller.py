@@ -85,6 +85,7 @@ __all__ = [
     "go_jones",
     "spm_jones",
     "to_mitsuba",
+    "to_frames",
     "stokes_basis",
     "power_pairs",
 ]
@@ -377,10 +378,19 @@ def to_mitsuba(mueller, theta_i, phi_i, theta_o, phi_o) -> np.ndarray:
     """Mueller matrices ``(4, 4, ...)`` from emscatter's h/v frames to Mitsuba's Stokes
     frames (module docstring) at renderer angles [rad]: the matrix a Mitsuba polarized BSDF
     returns from ``eval`` divided by the light direction's ``cosθ``."""
+    return to_frames(mueller, theta_i, phi_i, theta_o, phi_o)
+
+
+def to_frames(mueller, theta_i, phi_i, theta_o, phi_o, x_in=None, x_out=None) -> np.ndarray:
+    """Mueller matrices ``(4, 4, ...)`` from emscatter's h/v frames to right-handed Stokes
+    frames (Mitsuba's convention, ``y = k̂ × x``) whose x axes are ``x_in`` (incident wave,
+    propagating along ``−wi``) and ``x_out`` (scattered wave, along ``wo``), each ``(3, ...)``
+    and perpendicular to its propagation direction; ``None`` → Mitsuba's ``stokes_basis``
+    (:func:`to_mitsuba`). Angles are renderer angles [rad]."""
     ti, pi_, ts, ps = np.broadcast_arrays(*_em_angles(theta_i, phi_i, theta_o, phi_o))
     ki, hi, _ = _hv(ti, pi_, -1.0)
     ks, hs, _ = _hv(ts, ps, 1.0)
-    r_in = _rotate_stokes_basis(ki, hi, stokes_basis(ki))
-    r_out = _rotate_stokes_basis(ks, hs, stokes_basis(ks))
+    r_in = _rotate_stokes_basis(ki, hi, stokes_basis(ki) if x_in is None else x_in)
+    r_out = _rotate_stokes_basis(ks, hs, stokes_basis(ks) if x_out is None else x_out)
     m = np.einsum("ij,jk...,kl->il...", D_MITSUBA, np.asarray(mueller, float), D_MITSUBA)
     return np.einsum("ij...,jk...,lk...->il...", r_out, m, r_in)
