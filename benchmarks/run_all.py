@@ -48,6 +48,7 @@ BENCHES = {
     "brdf": ("bench_brdf.py", ["--repeat", "3"], ["--repeat", "1"], False),
     "render": ("bench_render.py", ["--repeat", "7"], ["--repeat", "2", "--width", "128"], False),
     "radio": ("bench_radio.py", [], ["--quick"], False),
+    "radio_scenes": ("bench_radio_scenes.py", [], ["--quick"], False),
 }
 
 

@@ -133,6 +133,18 @@ def register(subparsers) -> None:
         "--tx", type=_point, default=None, metavar="X,Y,Z", help="transmitter position [m]"
     )
     r.add_argument(
+        "--rx",
+        type=_point,
+        action="append",
+        default=None,
+        metavar="X,Y,Z",
+        help=(
+            "receiver position [m], repeat for more (any-scene mode): adds <scene>_<f>_paths.csv "
+            "with flat and rough path gains and cross-polar discrimination per link "
+            "(flat_xpd_db, rough_xpd_db: co- over cross-polar power, isotropic V/H antennas)"
+        ),
+    )
+    r.add_argument(
         "--map-height",
         type=Number(low=-1e4, high=1e4, unit="m"),
         default=1.5,
@@ -199,7 +211,7 @@ def run(a) -> int:
         raise ValueError(
             "--extrapolate applies to the indoor scenes, not to --plate (its media are in band)"
         )
-    if a.plate and (a.medium or a.tx is not None):
+    if a.plate and (a.medium or a.tx is not None or a.rx):
         raise ValueError("--medium and --tx apply to scenes, not to --plate")
     if a.plate:
         from ..radio import demo
@@ -207,7 +219,7 @@ def run(a) -> int:
         for p in demo.run(out, a.quick):
             print(f"  {p}")
         return 0
-    if a.medium or a.tx is not None or a.scene not in (*SCENES, "all"):
+    if a.medium or a.tx is not None or a.rx or a.scene not in (*SCENES, "all"):
         return run_any_scene(a)
     if a.cell_size is None:
         a.cell_size = 0.1
@@ -301,6 +313,8 @@ def run_any_scene(a) -> int:
     arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization="V")
     sc.tx_array = sc.rx_array = arr
     sc.add(rt.Transmitter("tx", position=[float(x) for x in tx]))
+    for i, p in enumerate(a.rx or ()):
+        sc.add(rt.Receiver(f"rx{i}", position=[float(x) for x in p]))
     box = sc.mi_scene.bbox()
     lo, hi = np.array(box.min), np.array(box.max)
     size = hi[:2] - lo[:2]
@@ -314,8 +328,9 @@ def run_any_scene(a) -> int:
     for f in freqs:
         sc.frequency = f
         res = compare_rough_flat(
-            sc, mapping=mapping, paths=False, extrapolate=a.extrapolate, table_options=opts,
-            frequencies=freqs,
+            sc, mapping=mapping, extrapolate=a.extrapolate, table_options=opts,
+            frequencies=freqs, xpd=bool(a.rx),
+            paths={"samples_per_src": samples, "max_depth": depth} if a.rx else False,
             radio_map={"center": (*((lo[:2] + hi[:2]) / 2), a.map_height),
                        "orientation": (0.0, 0.0, 0.0), "size": tuple(size),
                        "cell_size": (cell, cell), "samples_per_tx": samples, "max_depth": depth},
@@ -329,6 +344,12 @@ def run_any_scene(a) -> int:
             f"{stem} {f / 1e9:g} GHz: rough − flat median {med:+.2f} dB over {int(lit.sum())} "
             f"cells lit in both ({cell:g} m cells, {samples} rays, depth {depth})"
         )
+        for i, name in enumerate(res.get("receivers", []) if a.rx else []):
+            pg, x = res["path_gain"], res["xpd"]
+            print(
+                f"  {name}: rough − flat {pg['difference_db'][i, 0]:+.2f} dB, XPD flat "
+                f"{x['flat'][i, 0]:.1f} dB, rough {x['rough'][i, 0]:.1f} dB"
+            )
     return 0
 
 

@@ -22,7 +22,8 @@ the functions that run Sionna), so ``import emscatter.radio`` stays light. Modul
 :mod:`.roughening` (any Sionna scene rough in one call, flat again, and rough − flat path
 gains and radio maps in one call: ``roughen``, ``flatten``, ``compare_rough_flat``),
 :mod:`.builtin` (Sionna's built-in S, lobe and XPD fitted to the tables, and where no
-built-in model stands in: ``builtin_equivalent``), :mod:`.plate`, :mod:`.indoor` and
+built-in model stands in: ``builtin_equivalent``), :mod:`.calibration` (σ and ℓ fitted to
+observed path gains, with their uncertainty: ``calibrate``), :mod:`.plate`, :mod:`.indoor` and
 :mod:`.sweep` (the three cross-checks), :mod:`.demo`.
 """
 
@@ -31,6 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .builtin import builtin_equivalent
+from .calibration import calibrate
 from .convention import from_sionna, sionna_eps_conductivity, sionna_permittivity, to_sionna
 from .medium import ConductiveMedium, check_thickness, real_number, resolve_medium
 from .roughening import (
@@ -55,6 +57,7 @@ from .tables import (
 __all__ = [
     "MaterialSpec",
     "builtin_equivalent",
+    "calibrate",
     "roughen",
     "flatten",
     "compare_rough_flat",

@@ -98,13 +98,32 @@ def path_gains(paths) -> np.ndarray:
     return _finite(p, "path gain")
 
 
-def _solve(scene, path_kw, map_kw, seed):
+def _dual_pol_xpd(scene, path_kw, seed):
+    """Link XPD [dB] (n_rx, n_tx) with the scene's arrays swapped for one isotropic
+    dual-polarized (``"VH"``) element each, restored afterwards (:mod:`..xpd`)."""
+    import sionna.rt as rt
+
+    from ..xpd import path_xpd
+
+    saved = (scene.tx_array, scene.rx_array)
+    try:
+        dual = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization="VH")
+        scene.tx_array = scene.rx_array = dual
+        paths = rt.PathSolver(deterministic=True)(scene, seed=seed, **path_kw)
+        return path_xpd(paths)["link_db"]
+    finally:
+        scene.tx_array, scene.rx_array = saved
+
+
+def _solve(scene, path_kw, map_kw, seed, xpd=False):
     import sionna.rt as rt
 
     out = {}
     if path_kw is not None:
         paths = rt.PathSolver(deterministic=True)(scene, seed=seed, **path_kw)
         out["path_gain"] = path_gains(paths)
+        if xpd:
+            out["xpd"] = _dual_pol_xpd(scene, path_kw, seed)
     if map_kw is not None:
         rm = rt.RadioMapSolver()(scene, seed=seed, **_mi_args(map_kw))
         out["radio_map"] = _finite(np.asarray(rm.path_gain.numpy(), dtype=np.float64), "radio map")
@@ -130,6 +149,7 @@ def compare_rough_flat(
     radio_map=None,
     reference: str = "original",
     seed: int = 1,
+    xpd: bool = False,
     **roughen_kw,
 ) -> dict:
     """Path gains (``paths``: True, False or PathSolver settings over :data:`PATH_DEFAULTS`)
@@ -141,7 +161,14 @@ def compare_rough_flat(
     scene needs its transmitters (and receivers, for path gains) added. Returns ``{"frequency",
     "reference", "transmitters", "receivers", "materials" (one row per object), "settings",
     "path_gain": {"flat", "rough", "difference_db", "lit"}, "radio_map": {..., "cell_centers"}}``
-    (powers linear; the radio map ``(n_tx, ny, nx)``, cell centres ``(ny, nx, 3)`` [m])."""
+    (powers linear; the radio map ``(n_tx, ny, nx)``, cell centres ``(ny, nx, 3)`` [m]).
+
+    ``xpd=True`` (with ``paths``) adds ``"xpd": {"flat", "rough"}``: the cross-polar
+    discrimination per link (n_rx, n_tx) [dB] (:func:`emscatter.radio.xpd.path_xpd`: co- over
+    cross-polar power of all paths, both transmit polarizations), from one more PathSolver run
+    per state with the scene's arrays swapped for one isotropic dual-polarized element
+    each (restored afterwards); ``+inf`` where no cross-polar power arrives, NaN where no
+    path does."""
     if reference not in ("original", "flat"):
         raise ValueError(f"reference must be 'original' or 'flat', got {reference!r}")
     if "flat" in roughen_kw:
@@ -150,6 +177,8 @@ def compare_rough_flat(
         raise TypeError(f"seed must be an integer, got {seed!r}")
     path_kw = _settings(paths, PATH_DEFAULTS, "paths")
     map_kw = _settings(radio_map, MAP_DEFAULTS, "radio_map")
+    if xpd and path_kw is None:
+        raise ValueError("xpd=True needs path gains: give paths=True (or PathSolver settings)")
     if path_kw is None and map_kw is None:
         raise ValueError("nothing to compare: give paths=True and/or radio_map=True (or settings)")
     if not scene.transmitters:
@@ -171,9 +200,9 @@ def compare_rough_flat(
     try:
         if reference == "flat":
             roughen(scene, roughness, mapping, flat=True, **roughen_kw)
-        flat = _solve(scene, path_kw, map_kw, seed)
+        flat = _solve(scene, path_kw, map_kw, seed, xpd)
         handle = roughen(scene, roughness, mapping, **roughen_kw)
-        rough = _solve(scene, path_kw, map_kw, seed)
+        rough = _solve(scene, path_kw, map_kw, seed, xpd)
         rows = handle.rows()
     finally:
         if roughened(scene) is not None:
@@ -192,6 +221,8 @@ def compare_rough_flat(
             out[key] = {"flat": flat[key], "rough": rough[key], "difference_db": d, "lit": lit}
     if "radio_map" in out:
         out["radio_map"]["cell_centers"] = flat["cell_centers"]
+    if xpd:
+        out["xpd"] = {"flat": flat["xpd"], "rough": rough["xpd"]}
     return out
 
 
@@ -203,7 +234,8 @@ def _db(x):
 def write_comparison(result: dict, out_dir, stem: str, *, title: str = "", tx_xy=None) -> list:
     """``<stem>_map.csv`` (per cell: x, y, z [m], flat / rough path gain [dB, −inf unlit],
     rough − flat [dB, nan where either is unlit]), ``<stem>_paths.csv`` (per receiver and
-    transmitter), ``<stem>_materials.csv`` and ``<stem>_map.png`` (flat, rough, rough − flat;
+    transmitter; with ``flat_xpd_db`` / ``rough_xpd_db`` when compared with ``xpd=True``),
+    ``<stem>_materials.csv`` and ``<stem>_map.png`` (flat, rough, rough − flat;
     first transmitter); atomic writes. Returns the paths written."""
     from pathlib import Path
 
@@ -225,11 +257,14 @@ def write_comparison(result: dict, out_dir, stem: str, *, title: str = "", tx_xy
     if "path_gain" in result:
         pg = result["path_gain"]
         rx, tx = np.meshgrid(result["receivers"], result["transmitters"], indexing="ij")
+        x = result.get("xpd")
+        extra = (["flat_xpd_db", "rough_xpd_db"], [x["flat"].ravel(), x["rough"].ravel()]) if x \
+            else ([], [])  # fmt: skip
         written.append(write_csv(
             out / f"{stem}_paths.csv",
-            ["receiver", "transmitter", "flat_db", "rough_db", "rough_minus_flat_db"],
+            ["receiver", "transmitter", "flat_db", "rough_db", "rough_minus_flat_db", *extra[0]],
             [rx.ravel(), tx.ravel(), _db(pg["flat"]).ravel(), _db(pg["rough"]).ravel(),
-             pg["difference_db"].ravel()],
+             pg["difference_db"].ravel(), *extra[1]],
             metadata=meta, schema="emscatter.radio.compare/paths-1",
         ))  # fmt: skip
     if "radio_map" in result:
