@@ -13,6 +13,11 @@ builds its report here, so that all reports read alike::
     "angle_valid"   bool ndarray of theta_i's shape (all angle checks pass at that angle)
     "angle_excess"  float ndarray, max log(ratio) over the angle checks at each angle
     "angle_reasons" list[str]  per failed angle check: the failing range of θi in degrees
+    optional, with theta_i:
+    "angle_safe_below" float [rad]  every θi ≤ it passes every angle check (a bound the
+                    solver proves, e.g. SPM's per-segment bound of r₁): lets
+                    :func:`emscatter.method_resolution.angle_report` check only the angles
+                    above it when the checks do not grow with θi (``angle_monotone`` False)
 
 A check's ``ratio`` is ``value/limit`` for an upper limit and ``limit/value`` for a lower one,
 so ``ratio > 1`` means failed and says by how much; ``excess`` ranks out-of-range methods in
