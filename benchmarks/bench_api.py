@@ -2,6 +2,7 @@
 first call of every method in a fresh process (empty caches, and after ``make setup``).
 
     python benchmarks/bench_api.py [--sizes 10000 1000000] [--repeat 7] [--parts speed cold]
+                                   [--methods spm go po] [--out api]
     → benchmarks/results/api.json
 
 speed — SPM1, GO and PO on random full-polarization geometries (θi, θs uniform in [0°, 89.9°],
@@ -54,6 +55,29 @@ def _roughness(method):
     }[method]
 
 
+def cook_torrance(ti, ts, ps, eps, m2):
+    """A plain numpy Cook–Torrance σ⁰ of one polarization (h) [-], the peer a renderer writes:
+    ``σ⁰ = 4π cosθi cosθs f_r = π D G F`` with ``f_r = D G F/(4 cosθi cosθs)`` — Beckmann
+    ``D = exp(−tan²θh/m²)/(π m² cos⁴θh)``, separable Smith ``G = G1(θi) G1(θs)`` in Walter et
+    al.'s rational form (2007, EGSR, eq. 27), the exact Fresnel ``|R_h|²`` at the half-vector
+    (Cook & Torrance 1982, ACM TOG 1, 7). ``m2`` = total mean-square slope; φi = 0."""
+    si, ci, ss, cs = np.sin(ti), np.cos(ti), np.sin(ts), np.cos(ts)
+    hx, hy, hz = ss * np.cos(ps) - si, ss * np.sin(ps), cs + ci  # wi = (−sinθi, 0, cosθi)
+    hn = np.sqrt(hx * hx + hy * hy + hz * hz)
+    ch = hz / hn
+    c2 = ch * ch
+    d = np.exp(-(1.0 - c2) / (c2 * m2)) / (math.pi * m2 * c2 * c2)
+
+    def g1(c, s):
+        a = c / (math.sqrt(m2) * np.maximum(s, 1e-12))  # cotθ/α, α² = m²
+        return np.where(a < 1.6, (3.535 * a + 2.181 * a * a) / (1 + 2.276 * a + 2.577 * a * a), 1.0)
+
+    cl = (ci * hz - si * hx) / hn  # cos of the local incidence angle, wi·h
+    w = np.sqrt(eps - 1.0 + cl * cl)
+    f = np.abs((cl - w) / (cl + w)) ** 2
+    return math.pi * d * g1(ci, si) * g1(cs, ss) * f
+
+
 def _contenders(method, n):
     """``{name: callable}`` for one method and size (module docstring)."""
     import emscatter as em
@@ -92,16 +116,21 @@ def _contenders(method, n):
             go_sigma0(ti, ts, ps, EPS, slope_variance=s2, shadowing="smith", out=out)
 
         runs["kernel"] = ("numba", kernel)
+
+        def plain():
+            cook_torrance(ti, ts, ps, EPS, 2 * s2)
+
+        runs["cook_torrance_numpy"] = ("numpy", plain)
     for backend in ("numba", "numpy"):
         runs[f"solver_{backend}"] = (backend, solver)
         runs[f"api_{backend}"] = (backend, api)
     return runs
 
 
-def speed(sizes, repeat) -> dict:
+def speed(sizes, repeat, methods=("spm", "go", "po")) -> dict:
     os.environ["EMSCATTER_CACHE"] = "0"
     results = {}
-    for method in ("spm", "go", "po"):
+    for method in methods:
         for n in sizes:
             runs = _contenders(method, n)
             times = {name: [] for name in runs}
@@ -124,6 +153,10 @@ def speed(sizes, repeat) -> dict:
             row["api_numba_over_numpy"] = (
                 row["api_numpy"]["median_s"] / row["api_numba"]["median_s"]
             )
+            if "cook_torrance_numpy" in row:
+                row["api_numba_over_cook_torrance"] = (
+                    row["cook_torrance_numpy"]["median_s"] / row["api_numba"]["median_s"]
+                )
             row["rounds"] = rounds
             results[f"{method}_{n}"] = row
             print(f"{method:4s} n={n:>8d}  " + "  ".join(
@@ -211,11 +244,13 @@ def main() -> None:
     ap.add_argument("--sizes", type=int, nargs="+", default=[10_000, 1_000_000])
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--parts", nargs="+", default=["speed", "cold"], choices=["speed", "cold"])
+    ap.add_argument("--methods", nargs="+", default=["spm", "go", "po"],
+                    choices=["spm", "go", "po"], help="methods of the speed part")  # fmt: skip
     ap.add_argument("--out", default="api", help="results file name (results/NAME.json)")
     args = ap.parse_args()
     data = {"machine": machine(), "command": command()}
     if "speed" in args.parts:
-        data["speed"] = speed(args.sizes, args.repeat)
+        data["speed"] = speed(args.sizes, args.repeat, tuple(args.methods))
     if "cold" in args.parts:
         data["cold"] = cold()
     data["machine"]["load_average_end"] = list(os.getloadavg())
