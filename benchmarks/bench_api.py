@@ -2,6 +2,7 @@
 first call of every method in a fresh process (empty caches, and after ``make setup``).
 
     python benchmarks/bench_api.py [--sizes 10000 1000000] [--repeat 7] [--parts speed cold]
+                                   [--methods spm go po iem auto] [--out api]
     → benchmarks/results/api.json
 
 speed — SPM1, GO and PO on random full-polarization geometries (θi, θs uniform in [0°, 89.9°],
@@ -11,7 +12,11 @@ PO has no single kernel), the solver's ``bistatic`` and the public ``emscatter.b
 ``EMSCATTER_KERNELS=numba`` and ``=numpy``. The contenders are alternated in one process
 (round after round, one call each), result cache off (``EMSCATTER_CACHE=0``); medians of
 ``--repeat`` rounds after one warm-up round (compilation excluded: that is ``cold``).
-Throughput = geometries per second (one geometry = all four σ⁰_pq).
+Throughput = geometries per second (one geometry = all four σ⁰_pq). Each timing also records
+the process CPU time (``cpu_median_s``, all threads): on a shared machine the ratio of CPU times
+(``api_over_solver_numba_cpu``) shows the work the API adds, whatever the wall clock waited.
+GO rows add a plain numpy Cook–Torrance (:func:`cook_torrance`, one polarization), the peer
+the compiled path is compared with.
 
 cold — per method, a fresh Python process times ``import emscatter`` and then its first call:
 ``backscatter`` at 91 angles (the default kernel selection) and ``bistatic`` at 1e5 geometries
@@ -54,6 +59,29 @@ def _roughness(method):
     }[method]
 
 
+def cook_torrance(ti, ts, ps, eps, m2):
+    """A plain numpy Cook–Torrance σ⁰ of one polarization (h) [-], the peer a renderer writes:
+    ``σ⁰ = 4π cosθi cosθs f_r = π D G F`` with ``f_r = D G F/(4 cosθi cosθs)`` — Beckmann
+    ``D = exp(−tan²θh/m²)/(π m² cos⁴θh)``, separable Smith ``G = G1(θi) G1(θs)`` in Walter et
+    al.'s rational form (2007, EGSR, eq. 27), the exact Fresnel ``|R_h|²`` at the half-vector
+    (Cook & Torrance 1982, ACM TOG 1, 7). ``m2`` = total mean-square slope; φi = 0."""
+    si, ci, ss, cs = np.sin(ti), np.cos(ti), np.sin(ts), np.cos(ts)
+    hx, hy, hz = ss * np.cos(ps) - si, ss * np.sin(ps), cs + ci  # wi = (−sinθi, 0, cosθi)
+    hn = np.sqrt(hx * hx + hy * hy + hz * hz)
+    ch = hz / hn
+    c2 = ch * ch
+    d = np.exp(-(1.0 - c2) / (c2 * m2)) / (math.pi * m2 * c2 * c2)
+
+    def g1(c, s):
+        a = c / (math.sqrt(m2) * np.maximum(s, 1e-12))  # cotθ/α, α² = m²
+        return np.where(a < 1.6, (3.535 * a + 2.181 * a * a) / (1 + 2.276 * a + 2.577 * a * a), 1.0)
+
+    cl = (ci * hz - si * hx) / hn  # cos of the local incidence angle, wi·h
+    w = np.sqrt(eps - 1.0 + cl * cl)
+    f = np.abs((cl - w) / (cl + w)) ** 2
+    return math.pi * d * g1(ci, si) * g1(cs, ss) * f
+
+
 def _contenders(method, n):
     """``{name: callable}`` for one method and size (module docstring)."""
     import emscatter as em
@@ -92,43 +120,59 @@ def _contenders(method, n):
             go_sigma0(ti, ts, ps, EPS, slope_variance=s2, shadowing="smith", out=out)
 
         runs["kernel"] = ("numba", kernel)
+
+        def plain():
+            cook_torrance(ti, ts, ps, EPS, 2 * s2)
+
+        runs["cook_torrance_numpy"] = ("numpy", plain)
     for backend in ("numba", "numpy"):
         runs[f"solver_{backend}"] = (backend, solver)
         runs[f"api_{backend}"] = (backend, api)
     return runs
 
 
-def speed(sizes, repeat) -> dict:
+def speed(sizes, repeat, methods=("spm", "go", "po")) -> dict:
     os.environ["EMSCATTER_CACHE"] = "0"
     results = {}
-    for method in ("spm", "go", "po"):
+    for method in methods:
         for n in sizes:
             runs = _contenders(method, n)
             times = {name: [] for name in runs}
+            cpu = {name: [] for name in runs}  # process CPU time (all threads): the work done
             rounds = repeat if n < 10**6 or method != "po" else max(3, repeat // 2)
             for r in range(rounds + 1):  # round 0: warm-up (compile / load), not counted
                 for name, (backend, fn) in runs.items():
                     os.environ["EMSCATTER_KERNELS"] = backend
-                    t0 = time.perf_counter()
+                    t0, c0 = time.perf_counter(), time.process_time()
                     fn()
                     if r:
                         times[name].append(time.perf_counter() - t0)
+                        cpu[name].append(time.process_time() - c0)
             os.environ["EMSCATTER_KERNELS"] = "auto"
             row = {}
             for name, ts_ in times.items():
                 med = statistics.median(ts_)
-                row[name] = {"median_s": med, "min_s": min(ts_), "per_s": n / med}
+                row[name] = {"median_s": med, "min_s": min(ts_), "per_s": n / med,
+                             "cpu_median_s": statistics.median(cpu[name])}  # fmt: skip
             row["api_over_solver_numba"] = (
                 row["api_numba"]["median_s"] / row["solver_numba"]["median_s"]
+            )
+            row["api_over_solver_numba_cpu"] = (
+                row["api_numba"]["cpu_median_s"] / row["solver_numba"]["cpu_median_s"]
             )
             row["api_numba_over_numpy"] = (
                 row["api_numpy"]["median_s"] / row["api_numba"]["median_s"]
             )
+            if "cook_torrance_numpy" in row:
+                row["api_numba_over_cook_torrance"] = (
+                    row["cook_torrance_numpy"]["median_s"] / row["api_numba"]["median_s"]
+                )
             row["rounds"] = rounds
             results[f"{method}_{n}"] = row
             print(f"{method:4s} n={n:>8d}  " + "  ".join(
                 f"{name} {v['per_s']:.3g}/s" for name, v in row.items() if isinstance(v, dict)
             ) + f"  API/solver ×{row['api_over_solver_numba']:.2f}"
+                f" (CPU time ×{row['api_over_solver_numba_cpu']:.2f})"
                 f"  API numba/numpy ×{row['api_numba_over_numpy']:.1f}", flush=True)  # fmt: skip
     return results
 
@@ -180,9 +224,10 @@ def _child(method, kind, cache) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def cold() -> dict:
+def cold(methods=("spm", "go", "po", "iem", "auto")) -> dict:
     cases = [(m, kind) for m in ("spm", "go", "po", "iem") for kind in ("backscatter", "bistatic")]
     cases.append(("auto", "backscatter"))
+    cases = [c for c in cases if c[0] in methods]
     results = {}
     with tempfile.TemporaryDirectory(prefix="emscatter-bench-numba-") as tmp:
         for state in ("empty_cache", "after_setup"):
@@ -211,13 +256,18 @@ def main() -> None:
     ap.add_argument("--sizes", type=int, nargs="+", default=[10_000, 1_000_000])
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--parts", nargs="+", default=["speed", "cold"], choices=["speed", "cold"])
+    ap.add_argument("--methods", nargs="+", default=["spm", "go", "po", "iem", "auto"],
+                    choices=["spm", "go", "po", "iem", "auto"],
+                    help="methods timed (speed: spm, go, po; cold: all five)")  # fmt: skip
     ap.add_argument("--out", default="api", help="results file name (results/NAME.json)")
     args = ap.parse_args()
     data = {"machine": machine(), "command": command()}
     if "speed" in args.parts:
-        data["speed"] = speed(args.sizes, args.repeat)
+        data["speed"] = speed(
+            args.sizes, args.repeat, tuple(m for m in args.methods if m in ("spm", "go", "po"))
+        )
     if "cold" in args.parts:
-        data["cold"] = cold()
+        data["cold"] = cold(tuple(args.methods))
     data["machine"]["load_average_end"] = list(os.getloadavg())
     print(write(args.out, data))
 

@@ -176,6 +176,34 @@ def test_go_grid_kernel_matches_numpy_reference(eps, shadowing, monkeypatch):
         np.testing.assert_allclose(got.coherent, ref.coherent, rtol=1e-12, atol=1e-300)
 
 
+def test_go_direction_weight_in_the_loop_is_the_numpy_weight_and_2pi_periodic():
+    """λ(ψ), ψ = arccos(−cos Δφ), computed in the compiled loop as π − |Δφ mod± 2π| (no
+    arccos): the numpy formula's value (to arccos's conditioning near ψ = 0) over the
+    kernel's whole azimuth range |Δφ| ≤ 1e6, and σ⁰ unchanged by Δφ → Δφ + 2πm."""
+    pytest.importorskip("numba")
+    from emscatter.solvers.kirchhoff import go_kernel as gk
+
+    d = np.concatenate([
+        [0.0, math.pi, -math.pi, math.pi - 1e-9, 2 * math.pi, 1e6, -1e6],
+        np.random.default_rng(1).uniform(-1e6, 1e6, 200),
+        np.random.default_rng(2).uniform(-7.0, 7.0, 200),
+    ])  # fmt: skip
+    got = np.array([gk._direction_weight(x) for x in d])
+    np.testing.assert_allclose(got, gk.directional_weight(d), rtol=0, atol=1e-7)
+    assert np.all((got >= 0) & (got < 4.41 * math.pi / (4.41 * math.pi + 1) + 1e-12))
+    rng = np.random.default_rng(3)
+    n = 4096
+    ti, ts = rng.uniform(0, 1.5, n), rng.uniform(0, 1.5, n)
+    base = rng.uniform(-math.pi, math.pi, n)
+    shifted = base + 2 * math.pi * rng.integers(-1000, 1000, n)
+    a, b = np.empty((2, 2, n)), np.empty((2, 2, n))
+    for dphi, out in ((base, a), (shifted, b)):
+        gk.go_sigma0(ti, ts, dphi, 17 + 2j, slope_variance=0.04,
+                     shadowing="direction-correlated", out=out)  # fmt: skip
+    # base + 2πm is Δφ to its rounding (|Δφ| ≤ 6.3e3: ~1e-12 rad), which σ⁰ feels ~1e-7
+    np.testing.assert_allclose(b, a, rtol=1e-6, atol=1e-12 * a.max())
+
+
 @pytest.mark.parametrize("eps", ["pec", 17 + 2j])
 def test_go_kernels_direction_correlated_shadowing_match_its_numpy_formula(eps, numpy_path):
     """accuracy's continuous default (1/(1 + max Λ + λ(ψ) min Λ), Ginneken et al. 1998) in the

@@ -60,6 +60,36 @@ def test_monotone_checks_are_flagged_and_decided_by_a_threshold(method, module, 
     assert not ok[np.argmin(ok) :].any() or ok.all()  # passes below one angle, fails above
 
 
+def test_spm_safe_angle_decides_the_angles_below_it_and_only_those_above_are_checked(
+    monkeypatch,
+):
+    """SPM's r₁ check does not grow with θi everywhere, but its report proves a θ_safe (the
+    per-segment bound of the interpolated r₁): angle_report checks only the angles above it,
+    with the verdicts, excesses and reasons of the check at every angle."""
+    rough, eps = em.GaussianCorrelation(0.2 / K, 2.0 / K), "pec"  # TM fails near grazing
+    ti = _angles()
+    own = spm.check_validity(rough, K, eps=eps, theta_i=ti)
+    safe = own["angle_safe_below"]
+    assert own["angle_monotone"] is False and 0 < safe < math.radians(89.9)
+    assert own["angle_valid"][ti <= safe].all() and not own["angle_valid"].all()
+    mr.clear_cache()
+    calls = []
+    real = mr.validity_report
+
+    def spy(*args, **kw):
+        calls.append(np.size(kw.get("theta_i")))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(mr, "validity_report", spy)  # counts the angles each check is given
+    rep = mr.angle_report("spm", rough, K, eps=eps, theta_i=ti)
+    monkeypatch.undo()
+    assert max(calls) == np.count_nonzero(ti > safe) < ti.size  # only the angles above
+    np.testing.assert_array_equal(rep["angle_valid"], own["angle_valid"])
+    np.testing.assert_array_equal(rep["angle_excess"], own["angle_excess"])
+    assert rep["angle_reasons"] == own["angle_reasons"]
+    assert rep["angle_valid"].flags.writeable and rep["angle_valid"].base is not ti
+
+
 def test_a_grid_is_checked_at_its_distinct_incidence_angles():
     rough, eps = em.GaussianCorrelation(0.3, 1.5), 17 + 2j
     th = np.radians(np.linspace(0.0, 89.5, 90))

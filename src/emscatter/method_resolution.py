@@ -119,37 +119,62 @@ def _varying_part(ti: np.ndarray) -> tuple[np.ndarray, tuple]:
         if part.shape[axis] <= 1:
             continue
         first = part[(slice(None),) * axis + (slice(0, 1),)]
-        if part.strides[axis] == 0 or np.array_equal(part, np.broadcast_to(first, part.shape)):
+        second = part[(slice(None),) * axis + (slice(1, 2),)]  # differs: not constant (cheap)
+        if part.strides[axis] == 0 or (
+            np.array_equal(second, first)
+            and np.array_equal(part, np.broadcast_to(first, part.shape))
+        ):
             part = first
     return part, part.shape
 
 
 def _threshold_report(name, roughness, k, eps, flat: np.ndarray) -> dict | None:
-    """The angle entries at every angle of ``flat`` (1-D) for a solver whose angle checks all
-    grow with θi (``angle_monotone``), or None when they do not. The report at
-    :data:`_PROBES` angles spanning ``[min, max]`` finds the largest probe ``a`` that passes:
-    every angle ≤ ``a`` passes (the checks grow with θi), the angles above ``a`` (they hold
-    every failing angle) are checked one by one — no sort; the cost follows the angles that
-    can fail, not the call's size."""
+    """The angle entries at every angle of ``flat`` (1-D), or None where no threshold is
+    known. Every angle at or below a threshold passes; the angles above it (they hold every
+    failing angle) are checked one by one — no sort; the cost follows the angles that can
+    fail, not the call's size. The threshold: the solver's proven ``angle_safe_below`` (SPM)
+    when its report has one; else, for a solver whose angle checks all grow with θi
+    (``angle_monotone``), the largest passing one of :data:`_PROBES` angles spanning
+    ``[min, max]``."""
     lo, hi = float(flat.min()), float(flat.max())
     probe = np.unique(np.linspace(lo, hi, _PROBES))
     probed = validity_report(name, roughness, k, eps=eps, theta_i=probe)
-    if not probed.get("angle_monotone") or "angle_valid" not in probed:
+    if "angle_valid" not in probed:
         return None
-    ok = np.asarray(probed["angle_valid"], dtype=bool)
-    j = ok.size if ok.all() else int(np.argmin(ok))  # first failing probe
-    if ok[j:].any():  # a pass above a failure: not monotone after all
+    safe = probed.get("angle_safe_below")
+    if safe is not None and not probed.get("angle_monotone"):
+        safe = float(safe)
+        if hi <= safe:
+            return _all_pass(flat.shape)
+        rest = np.flatnonzero(flat > safe)
+    elif probed.get("angle_monotone"):
+        ok = np.asarray(probed["angle_valid"], dtype=bool)
+        j = ok.size if ok.all() else int(np.argmin(ok))  # first failing probe
+        if ok[j:].any():  # a pass above a failure: not monotone after all
+            return None
+        if j == ok.size:
+            return _all_pass(flat.shape)
+        rest = np.flatnonzero(flat > probe[j - 1]) if j else np.arange(flat.size)
+    else:
         return None
-    out = {"angle_valid": np.ones(flat.shape, dtype=bool), "angle_excess": np.zeros(flat.shape)}
-    out["angle_reasons"] = []
-    if j == ok.size:
-        return out
-    rest = flat > probe[j - 1] if j else np.ones(flat.shape, dtype=bool)
+    out = _all_pass(flat.shape)
     sub = validity_report(name, roughness, k, eps=eps, theta_i=flat[rest])
     out["angle_valid"][rest] = sub["angle_valid"]
     out["angle_excess"][rest] = sub["angle_excess"]
     out["angle_reasons"] = [with_angle_total(r, flat.size) for r in sub["angle_reasons"]]
     return out
+
+
+def _as_shape(value, shape) -> np.ndarray:
+    """``value`` as an array of ``shape``: itself when it has it, else a broadcast view."""
+    arr = np.asarray(value)
+    return arr if arr.shape == shape else np.broadcast_to(arr, shape)
+
+
+def _all_pass(shape) -> dict:
+    """Angle entries where every angle passes (fresh arrays)."""
+    return {"angle_valid": np.ones(shape, dtype=bool), "angle_excess": np.zeros(shape),
+            "angle_reasons": []}  # fmt: skip
 
 
 def angle_report(name: str, roughness, k: float, *, eps=None, theta_i) -> dict:
@@ -173,23 +198,28 @@ def angle_report(name: str, roughness, k: float, *, eps=None, theta_i) -> dict:
     if hit is not None:
         return {n: v.copy() if isinstance(v, np.ndarray) else v for n, v in hit.items()}
     part, part_shape = _varying_part(ti)
+    own = False  # whether the arrays of ``take`` are this call's own (fresh, not shared)
     if part.size <= _DISTINCT_MAX:
         uniq, inverse = np.unique(part, return_inverse=True)
         angular = validity_report(name, roughness, k, eps=eps, theta_i=uniq)
         index = inverse.reshape(part_shape)
         take = {e: np.asarray(angular[e])[index] for e in ("angle_valid", "angle_excess")
                 if e in angular}  # fmt: skip
+        own = True  # (fancy indexing copies)
     else:
         flat = part.ravel()
         angular = _threshold_report(name, roughness, k, eps, flat)
-        if angular is None:
+        own = angular is not None  # fresh arrays of flat's shape
+        if angular is None:  # uncached (> 4096 angles): the report's arrays are fresh too
             angular = validity_report(name, roughness, k, eps=eps, theta_i=flat)
-        take = {
-            e: np.broadcast_to(np.asarray(angular[e]), flat.shape).reshape(part_shape)
-            for e in ("angle_valid", "angle_excess")
-            if e in angular
-        }
-    out = {e: np.array(np.broadcast_to(v, ti.shape)) for e, v in take.items()}
+        take = {e: _as_shape(angular[e], flat.shape).reshape(part_shape)
+                for e in ("angle_valid", "angle_excess") if e in angular}  # fmt: skip
+    # a copy only where the entry is a broadcast view or shared: 1e6 angles cost no pass here
+    out = {
+        e: v if own and v.shape == ti.shape and v.flags.writeable
+        else np.array(np.broadcast_to(v, ti.shape))
+        for e, v in take.items()
+    }  # fmt: skip
     if "angle_reasons" in angular:
         out["angle_reasons"] = angular["angle_reasons"]
     if key is None:  # not cached (a large call): these arrays are already this call's own

@@ -13,6 +13,11 @@ builds its report here, so that all reports read alike::
     "angle_valid"   bool ndarray of theta_i's shape (all angle checks pass at that angle)
     "angle_excess"  float ndarray, max log(ratio) over the angle checks at each angle
     "angle_reasons" list[str]  per failed angle check: the failing range of θi in degrees
+    optional, with theta_i:
+    "angle_safe_below" float [rad]  every θi ≤ it passes every angle check (a bound the
+                    solver proves, e.g. SPM's per-segment bound of r₁): lets
+                    :func:`emscatter.method_resolution.angle_report` check only the angles
+                    above it when the checks do not grow with θi (``angle_monotone`` False)
 
 A check's ``ratio`` is ``value/limit`` for an upper limit and ``limit/value`` for a lower one,
 so ``ratio > 1`` means failed and says by how much; ``excess`` ranks out-of-range methods in
@@ -124,16 +129,20 @@ class AngleCheck:
         bad = self.ratio > 1
         if not np.any(bad):
             return None
-        deg = np.degrees(np.broadcast_to(theta_i, bad.shape))
-        worst = int(np.argmax(np.where(bad, self.ratio, -np.inf)))
-        lo, hi = float(deg[bad].min()), float(deg[bad].max())
+        ratio = np.asarray(self.ratio)
+        worst = int(np.argmax(ratio))  # the largest ratio is > 1, so a failing angle ...
+        if not ratio.flat[worst] > 1:  # ... unless a NaN came first: the failing ones only
+            worst = int(np.argmax(np.where(bad, ratio, -np.inf)))
+        failing = np.broadcast_to(theta_i, bad.shape)[bad]  # [rad]; degrees are monotone
+        lo, hi = math.degrees(float(failing.min())), math.degrees(float(failing.max()))
         span = f"θi = {lo:.4g}°" if lo == hi else f"θi ∈ [{lo:.4g}°, {hi:.4g}°]"
         v = np.broadcast_to(self.value, bad.shape).ravel()[worst]
-        r = np.broadcast_to(self.ratio, bad.shape).ravel()[worst]
+        r = np.broadcast_to(ratio, bad.shape).ravel()[worst]
+        at = math.degrees(float(np.broadcast_to(theta_i, bad.shape).ravel()[worst]))
         return (
             f"{self.name}: fails for {span} ({np.count_nonzero(bad)} of {bad.size} angles); "
             f"{self.what} must be {self.relation} {_fmt(self.limit)}, worst "
-            f"{_fmt(v)} at θi = {deg.ravel()[worst]:.4g}° (×{r:.3g})"
+            f"{_fmt(v)} at θi = {at:.4g}° (×{r:.3g})"
         )
 
 

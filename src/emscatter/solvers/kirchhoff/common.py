@@ -406,8 +406,12 @@ def smith_lambda(a: np.ndarray) -> np.ndarray:
     IEEE TAP 15, 668; Walter et al. 2007, eq. 27; ``G1 = 1/(1+Λ)``), ``a = cotθ/(√2 s)``.
     ``Λ < 1e-17`` (so ``G1 = 1`` in double precision) for ``a > 6``: not evaluated there."""
     a = np.asarray(a, dtype=float)
-    out = np.zeros(a.shape)
     need = a < 6.0
+    if a.ndim and need.all():  # near grazing (the angles a validity check is left with)
+        an = np.maximum(a, 1e-300)
+        lam = 0.5 * (np.exp(-an * an) / (an * math.sqrt(math.pi)) - special.erfc(an))
+        return np.maximum(lam, 0.0)
+    out = np.zeros(a.shape)
     if np.any(need):
         an = np.maximum(a[need], 1e-300)
         lam = 0.5 * (np.exp(-an * an) / (an * math.sqrt(math.pi)) - special.erfc(an))

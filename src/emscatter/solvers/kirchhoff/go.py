@@ -242,7 +242,7 @@ def bistatic(
         Gaussian Λ with the measured slope variances (an approximation, stated in
         ``info["slope_pdf"]``).
     threads : worker threads for large inputs (default: the CPU count, at most 8).
-    coherent : False skips the coherent part (``coherent`` is then NaN and
+    coherent : False skips the coherent part (``coherent`` is then a read-only NaN array and
         ``info["coherent"]`` says so; BOARD interface 3).
 
     Returns
@@ -275,7 +275,8 @@ def _bistatic(
     shape = g.shape
     n = g.size
     flat = np.empty((2, 2, n))
-    coh = np.empty((2, n)) if coherent else np.full((2, n), np.nan)
+    # coherent=False: a read-only NaN placeholder (no 2n-element fill the caller throws away)
+    coh = np.empty((2, n)) if want_coh else np.broadcast_to(np.nan, (2, n))
     # a measured roughness (emscatter.surfaces.measured) brings its own slope density
     pdf = getattr(rough, "slope_pdf", None) if slope_variance is None else None
     signed = (sx != sy or pdf is not None) and dim == 2

@@ -251,11 +251,25 @@ def _go_point(si, ci, ss, cs, cd, sd2, ni, di, ns, ds, corr, er, ei, pref, inv_s
     return hh, hv, vh, vv
 
 
+_TWO_PI = 2.0 * math.pi
+_INV_TWO_PI = 1.0 / _TWO_PI
+
+
 @inline
-def _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, pec, shadowed):
+def _direction_weight(dphi):
+    """``λ(ψ) = 4.41ψ/(4.41ψ + 1)`` [-] with ``ψ = arccos(−cos Δφ) = π − |Δφ mod± 2π|`` (as
+    :func:`directional_weight`, without the transcendental calls: the wrap is exact to
+    ``|Δφ|·2⁻⁵²``, and better conditioned than ``arccos`` near ``ψ = 0``)."""
+    n = math.floor(dphi * _INV_TWO_PI + 0.5)
+    psi = max(math.pi - abs(dphi - n * _TWO_PI), 0.0)
+    return 4.41 * psi / (4.41 * psi + 1.0)
+
+
+@inline
+def _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, pec, shadowed):
     """σ⁰ [-] into the four 1-D outputs; ``pec`` and ``shadowed`` are constants of the
-    compiled loop (see the ``_go_*`` kernels); ``corr``: λ(ψ) per geometry for
-    ``DIRECTIONAL`` (any array of the same length otherwise, e.g. ``dphi``: never used)."""
+    compiled loop (see the ``_go_*`` kernels); the direction-correlation weight λ(ψ) of
+    ``DIRECTIONAL`` is computed per geometry from ``dphi`` (:func:`_direction_weight`)."""
     pref = 0.5 / math.sqrt(s2 * s2)  # π · 1/(2π√(sx sy))
     inv_s2 = 1.0 / s2
     kappa = math.sqrt(2.0 * s2)
@@ -271,30 +285,31 @@ def _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, pec, sha
             ai, as_ = _shadow_pair(ci, si, cs, ss, kappa)
             ni, di = _lambda_parts(ai)
             ns, ds = _lambda_parts(as_)
+        corr = _direction_weight(dphi[j]) if shadowing == DIRECTIONAL else 0.0
         hh[j], hv[j], vh[j], vv[j] = _go_point(
-            si, ci, ss, cs, cd, sd2, ni, di, ns, ds, corr[j], er, ei, pref, inv_s2, shadowing,
+            si, ci, ss, cs, cd, sd2, ni, di, ns, ds, corr, er, ei, pref, inv_s2, shadowing,
             pec, shadowed,
         )  # fmt: skip
 
 
 @jit
-def _go_pec(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv):
-    _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, True, False)
+def _go_pec(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, True, False)
 
 
 @jit
-def _go_pec_shadowed(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv):
-    _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, True, True)
+def _go_pec_shadowed(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, True, True)
 
 
 @jit
-def _go_dielectric(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv):
-    _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, False, False)
+def _go_dielectric(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, False, False)
 
 
 @jit
-def _go_dielectric_shadowed(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv):
-    _go_loop(ti, ts, dphi, corr, er, ei, s2, shadowing, hh, hv, vh, vv, False, True)
+def _go_dielectric_shadowed(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv):
+    _go_loop(ti, ts, dphi, er, ei, s2, shadowing, hh, hv, vh, vv, False, True)
 
 
 _KERNELS = {
@@ -473,8 +488,7 @@ def go_sigma0(
     kernel = _KERNELS[(pec, code != NO_SHADOWING)]
     consts = (e.real, e.imag, float(slope_variance), code)
     outs = (out[0, 0], out[0, 1], out[1, 0], out[1, 1])
-    corr = directional_weight(dphi) if code == DIRECTIONAL else dphi
-    run_fused(kernel, (ti, ts, dphi, corr), consts, outs, threads)
+    run_fused(kernel, (ti, ts, dphi), consts, outs, threads)
     if coherent_out is not None:
         consts = (pec, e.real, e.imag, 2.0 * k * sigma)
         run_fused(_coherent_kernel, (ti,), consts, (coherent_out[0], coherent_out[1]), threads)

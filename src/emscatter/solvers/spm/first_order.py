@@ -354,10 +354,10 @@ def sigma0_broadcast(rough, eps, k, ti, ts, phi_s, phi_i=0.0, *, fresnel=False):
     sig = np.empty((2, 2, n))
     fi, fs = ti_b.ravel(), ts_b.ravel()
     dphi = (ps_b - pi_b).ravel()
-    fpi = pi_b.ravel()
     fe = eps_c if scalar_eps else eps_b.ravel()
     coh = np.empty((2, n)) if fresnel else None
     compiled = scalar_eps and spm_compiled.spm1_sigma0(rough, eps_c, k, fi, fs, dphi, sig)
+    fpi = None if compiled else pi_b.ravel()  # (a copy when φi is a number: numpy path only)
     for s in range(0, n, _CHUNK):
         sl = slice(s, s + _CHUNK)
         e = fe if scalar_eps else fe[sl]

@@ -75,8 +75,8 @@ def bistatic(
         spectrum; :func:`coherent_reflectivity`). σ⁰ does not depend
         on it (first order uses the spectrum at the Bragg wavenumber only).
     coherent : ``False`` skips the coherent part (its quadrature dominates the cost when only
-        σ⁰ is needed, e.g. inside the hemispherical integral); ``coherent`` is then NaN and
-        ``info["coherent"]`` says so.
+        σ⁰ is needed, e.g. inside the hemispherical integral); ``coherent`` is then a
+        read-only NaN array and ``info["coherent"]`` says so.
 
     Returns
     -------
@@ -112,7 +112,8 @@ def _bistatic_checked(
     )
     shape = ti_b.shape
     if not coherent:
-        coh, clipped = np.full((2, *shape), np.nan), 0
+        # a read-only NaN placeholder (no fill, no copy: the API discards it)
+        coh, clipped = np.broadcast_to(np.nan, (2, *shape)), 0
     elif order < 2:
         clipped = 0
     else:
@@ -130,7 +131,7 @@ def _bistatic_checked(
         info["coherent"] = "not computed (coherent=False)"
     return Scattering(
         sigma0=sig,
-        coherent=np.array(coh),
+        coherent=np.array(coh) if coherent else coh,
         method="spm",
         theta_i=ti_b,
         theta_s=ts_b,

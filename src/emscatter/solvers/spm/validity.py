@@ -164,6 +164,7 @@ def check_validity(
     ]
     angle_checks = []
     notes = []
+    extra = {}
     ti = None
     if theta_i is not None:
         ti = check_angle("theta_i", theta_i)
@@ -172,10 +173,13 @@ def check_validity(
         else:
             eps_c = check_eps(eps)
             bound = _fraction_bound(rough, k, eps_c, ti)
+            if bound is not None:  # scalar eps: every angle ≤ θ_safe passes (the API's cue)
+                safe = _safe_angle(rough, k, eps_c, v["scattered_fraction_max"])
+                extra["angle_safe_below"] = safe
             if bound is not None and bound <= v["scattered_fraction_max"]:
                 r1 = np.array([bound])  # every angle passes: its upper bound stands for them
             elif bound is not None and ti.size > 4096:  # many angles: exact only above θ_safe
-                rest = ti > _safe_angle(rough, k, eps_c, v["scattered_fraction_max"])
+                rest = ti > safe
                 r1 = np.zeros((1, *ti.shape))  # below θ_safe every angle passes: 0 stands in
                 r1[0, rest] = np.max(scattered_fraction(rough, k, eps_c, ti[rest]), axis=0)
             elif is_pec(eps_c):
@@ -196,7 +200,6 @@ def check_validity(
                     _SRC_R1,
                 )
             )
-    extra = {}
     if eps is not None and rough._mss_closed() is None:
         e = check_eps(eps)
         lossy = not is_pec(e) and bool(np.any(np.imag(np.asarray(e)) > 0))
