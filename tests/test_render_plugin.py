@@ -179,9 +179,11 @@ def test_errors_name_the_problem():
         mi.load_dict({"type": "emscatter", "table": "nope"})
     with pytest.raises(Exception, match="give 'table'"):
         mi.load_dict({"type": "emscatter"})
-    with pytest.raises(ValueError, match="polarized"):
-        em_mi.channels_of_variant("llvm_ad_spectral_polarized")
-    with pytest.raises(TypeError, match="BrdfTable or BrdfFunction"):
+    assert em_mi.channels_of_variant("llvm_ad_spectral_polarized") == "spectral"
+    assert em_mi.channels_of_variant("scalar_rgb_polarized") == "rgb"
+    with pytest.raises(ValueError, match="unknown Mitsuba variant"):
+        em_mi.channels_of_variant("llvm_ad_xyz")
+    with pytest.raises(TypeError, match="BrdfTable, BrdfFunction or MuellerTable"):
         em_mi.register_table(42)
     with pytest.raises(ValueError, match="sampling_resolution"):
         prepare(go_table(), "rgb", sampling_resolution=3)

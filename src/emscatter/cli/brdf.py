@@ -2,8 +2,12 @@
 
 Formats from the output's extension (or ``--format``): ``.npz`` (the table with its full
 metadata), ``.binary`` (MERL), ``.bsdf`` (RGL, Mitsuba's ``measured``; the render bridge's
-exporter). ``--fit`` also fits a Beckmann/GGX microfacet model and prints (or writes) the
-Mitsuba dict — the quick path when a dict is all you need.
+exporter), ``.pbsdf`` (a Mueller table for Mitsuba's ``measured_polarized``,
+:mod:`emscatter.brdf.export_pbsdf`: ``--method go`` or ``spm`` only — the formulations whose
+amplitudes give the phase between polarizations, :mod:`emscatter.brdf.mueller` — exactly five
+whole-nanometre wavelengths, default 450,500,550,600,650; ``--anisotropic``, ``--tol`` and
+``--float32`` do not apply to it). ``--fit`` also fits a Beckmann/GGX microfacet model and
+prints (or writes) the Mitsuba dict — the quick path when a dict is all you need.
 
 ``--height-map FILE`` (with ``--detrend``, ``--unit``, ``--segments``, ``--tail``;
 :mod:`.heightmap_args`) takes the surface from a measured height map instead of
@@ -36,7 +40,10 @@ from .args import (
 from .heightmap_args import add_height_map_args, height_map_roughness
 from .paths import OutputPath, check_format
 
-FORMATS = {".npz": "npz", ".binary": "merl", ".bsdf": "rgl"}
+FORMATS = {".npz": "npz", ".binary": "merl", ".bsdf": "rgl", ".pbsdf": "pbsdf"}
+#: Default wavelengths [nm]: every format, and ``.pbsdf`` (the five ``measured_polarized`` reads).
+DEFAULT_WAVELENGTHS_NM = "450,550,650"
+PBSDF_WAVELENGTHS_NM = "450,500,550,600,650"
 
 
 def _material(text: str):
@@ -90,6 +97,12 @@ def check_inputs(a) -> tuple[str, object, object]:
     from ..brdf.build import material_eps
 
     fmt_name = check_format(a.output, a.format, FORMATS, "output")
+    if a.wavelengths_nm is None:
+        a.wavelengths_nm = _wavelengths_nm(
+            PBSDF_WAVELENGTHS_NM if fmt_name == "pbsdf" else DEFAULT_WAVELENGTHS_NM
+        )
+    if fmt_name == "pbsdf":
+        _check_pbsdf(a)
     reject_unless(a, a.fit is not None, ("--fit-json",), "only with --fit (beckmann or ggx)")
     reject_unless(a, fmt_name == "rgl", ("--rgl-channels",), "to RGL .bsdf output only")
     reject_unless(
@@ -111,16 +124,47 @@ def check_inputs(a) -> tuple[str, object, object]:
     return fmt_name, rough, wl
 
 
+def _check_pbsdf(a) -> None:
+    """The options a ``.pbsdf`` (Mueller) output allows, before anything is computed."""
+    import numpy as np
+
+    from ..brdf.mueller import _REFUSED, SUPPORTED
+
+    if a.method not in SUPPORTED:
+        why = _REFUSED.get(a.method, "no phase between the polarization pairs' amplitudes")
+        why = why if a.method != "auto" else "auto may pick a method without a Mueller matrix"
+        raise ValueError(
+            f"--method {a.method} gives no Mueller table for a .pbsdf output ({why}); allowed "
+            f"with --format pbsdf: --method {' or '.join(SUPPORTED)}"
+        )
+    wl = np.asarray(a.wavelengths_nm, float)
+    if wl.size != 5 or np.any(wl != np.round(wl)) or wl[-1] > 65535:
+        raise ValueError(
+            f"--wavelengths-nm {','.join(fmt(float(v)) for v in wl)}: a .pbsdf holds exactly 5 "
+            "rising whole-nanometre wavelengths (measured_polarized reads five, as uint16); "
+            f"allowed: 5 whole numbers, e.g. {PBSDF_WAVELENGTHS_NM} (the default)"
+        )
+    for opts, why in (
+        (("--anisotropic",), "to npz/merl/rgl output only; a .pbsdf stores isotropic tables"),
+        (("--tol",), "to npz/merl/rgl output only; a .pbsdf table uses a fixed grid "
+         "(--n-theta/--n-phi)"),
+        (("--float32",), "to npz/merl/rgl output only; a .pbsdf is float32 always"),
+    ):  # fmt: skip
+        reject_unless(a, False, opts, why)
+
+
 def register(subparsers) -> None:
     p = add_command(
         subparsers,
         "brdf",
-        help="build a BRDF table (surface + material) and export it (npz, MERL, RGL .bsdf)",
+        help="build a BRDF table (surface + material) and export it (npz, MERL, RGL .bsdf, "
+        "polarized .pbsdf)",
     )
     p.add_argument(
         "output",
         type=OutputPath(suffixes=tuple(FORMATS)),
-        help="output file: .npz (table + metadata), .binary (MERL) or .bsdf (RGL)",
+        help="output file: .npz (table + metadata), .binary (MERL), .bsdf (RGL) or .pbsdf "
+        "(Mueller table for measured_polarized; --method go or spm)",
     )
     add_roughness_args(p, sigma=0.15e-6, length=1.0e-6)
     add_height_map_args(p)
@@ -134,8 +178,9 @@ def register(subparsers) -> None:
     p.add_argument(
         "--wavelengths-nm",
         type=_wavelengths_nm,
-        default="450,550,650",
-        help="wavelengths [nm]: 'a,b,c' or 'start:stop:count'",
+        default=None,
+        help=f"wavelengths [nm]: 'a,b,c' or 'start:stop:count' (default {DEFAULT_WAVELENGTHS_NM}; "
+        f".pbsdf: exactly five, default {PBSDF_WAVELENGTHS_NM})",
     )
     p.add_argument(
         "--method",
@@ -188,7 +233,8 @@ def register(subparsers) -> None:
     p.add_argument(
         "--format",
         choices=sorted(set(FORMATS.values())),
-        help="the format, which must match the extension (npz: .npz, merl: .binary, rgl: .bsdf)",
+        help="the format, which must match the extension (npz: .npz, merl: .binary, rgl: .bsdf, "
+        "pbsdf: .pbsdf)",
     )
     p.add_argument(
         "--rgl-channels",
@@ -219,6 +265,8 @@ def run(a) -> int:
     if a.n_theta is not None or a.n_phi is not None:
         n_theta = 90 if a.n_theta is None else a.n_theta
         resolution = (n_theta, max(180, 2 * n_theta) if a.n_phi is None else a.n_phi)
+    if fmt_name == "pbsdf":
+        return _run_pbsdf(a, rough, wl, resolution)
     try:
         table = build_table(
             rough,
@@ -244,6 +292,27 @@ def run(a) -> int:
         print(f"energy remedy applied: albedo up to {fmt(worst)} brought to ≤ 1 (see metadata)")
     if a.fit:
         _fit(table, a.fit, a.fit_json)
+    return 0
+
+
+def _run_pbsdf(a, rough, wl, resolution) -> int:
+    """``.pbsdf`` output: a Mueller table (:func:`~emscatter.brdf.mueller.build_mueller_table`)
+    written by :func:`~emscatter.brdf.export_pbsdf.write_pbsdf` at its own five wavelengths."""
+    from ..brdf.export_pbsdf import write_pbsdf
+    from ..brdf.mueller import build_mueller_table
+
+    mt = build_mueller_table(
+        rough, a.material, wl, method=a.method, resolution=resolution, energy=a.energy,
+        out_of_range=a.out_of_range,
+    )  # fmt: skip
+    path = write_pbsdf(mt, a.output)
+    print(f"wrote {path} (pbsdf, Mueller {a.method}): {mt.table.describe()}")
+    energy = mt.table.metadata.get("energy", {})
+    if energy.get("remedy_applied"):
+        worst = max(energy["max_albedo_before"])
+        print(f"energy remedy applied: albedo up to {fmt(worst)} brought to ≤ 1 (see metadata)")
+    if a.fit:
+        _fit(mt.table, a.fit, a.fit_json)
     return 0
 
 

@@ -30,7 +30,10 @@ What it does (numpy preparation in :mod:`emscatter.render.plugin_data`):
   ``R_coh / (R_coh + albedo)`` — a ``blendbsdf`` of a delta and a glossy lobe is biased.
 
 One-sided like Mitsuba's ``measured``: black from below (wrap it in ``twosided`` if needed).
-Polarized variants are not supported. Dr.Jit variants are per process: render in a process
+Polarized variants (``*_polarized``) take a :class:`~emscatter.brdf.mueller.MuellerTable` and
+return Mueller matrices in Mitsuba's Stokes frames (:mod:`emscatter.render.polarized`); a
+MuellerTable in an unpolarized variant renders its ``M₀₀`` (the unpolarized table).
+Dr.Jit variants are per process: render in a process
 that does not also run Sionna RT.
 """
 
@@ -43,6 +46,7 @@ import weakref
 
 import numpy as np
 
+from ..brdf.mueller import MuellerTable
 from .plugin_data import Axis, PluginData, prepare
 
 __all__ = [
@@ -75,11 +79,11 @@ def _mitsuba():
 
 
 def channels_of_variant(variant: str) -> str:
-    """``"spectral"``, ``"rgb"`` or ``"mono"`` for a Mitsuba variant name (polarized: error)."""
-    if "polarized" in variant:
-        raise ValueError(f"the emscatter plugin does not support polarized variants ({variant})")
+    """``"spectral"``, ``"rgb"`` or ``"mono"`` for a Mitsuba variant name (``*_polarized``:
+    the colour representation under the Mueller matrices)."""
+    name = variant.removesuffix("_polarized")
     for kind in ("spectral", "rgb", "mono"):
-        if variant.endswith(kind):
+        if name.endswith(kind):
             return kind
     raise ValueError(f"unknown Mitsuba variant {variant!r}")
 
@@ -91,8 +95,14 @@ def register_table(table, key: str | None = None) -> str:
     With a Mitsuba variant set it also registers the plugin for that variant (:func:`register`),
     so ``{"type": "emscatter", "table": register_table(t)}`` loads as written; a variant set
     later needs :func:`register` (or :func:`bsdf_dict`) once in it."""
-    if not (hasattr(table, "evaluate") or callable(getattr(table, "_fr", None))):
-        raise TypeError(f"table must be a BrdfTable or BrdfFunction, got {type(table).__name__}")
+    if not (
+        isinstance(table, MuellerTable)
+        or hasattr(table, "evaluate")
+        or callable(getattr(table, "_fr", None))
+    ):
+        raise TypeError(
+            f"table must be a BrdfTable, BrdfFunction or MuellerTable, got {type(table).__name__}"
+        )
     if key is None:
         key = f"emscatter-table-{next(_COUNTER)}"
     if not isinstance(key, str) or not key:
@@ -165,7 +175,22 @@ def _prepared(key: str, channels: str, resolution: int) -> PluginData:
         )
     cache_key = (key, channels, resolution)
     if cache_key not in _PREPARED:
-        _PREPARED[cache_key] = prepare(_TABLES[key], channels, sampling_resolution=resolution)
+        t = _TABLES[key]
+        t = t.table if isinstance(t, MuellerTable) else t  # s0: the unpolarized table
+        _PREPARED[cache_key] = prepare(t, channels, sampling_resolution=resolution)
+    return _PREPARED[cache_key]
+
+
+def _prepared_mueller(key: str, channels: str):
+    """``(flat Mueller array, n_channels, wavelengths [nm] or None)`` for the polarized class."""
+    from .polarized import mueller_channels
+
+    cache_key = (key, channels, "mueller")
+    if cache_key not in _PREPARED:
+        t = _TABLES[key]
+        arr = mueller_channels(t, channels)
+        lam = None if channels != "spectral" else [float(x) * 1e9 for x in t.table.wavelengths]
+        _PREPARED[cache_key] = (arr, arr.shape[-2], lam)
     return _PREPARED[cache_key]
 
 
@@ -584,5 +609,12 @@ def _bsdf_class(mi):
                 f"{grid} nodes, {d.n_channels} {d.channels} channels, delta lobe={self._use_delta}]"
             )
 
-    _CLASSES[variant] = EmscatterBSDF
-    return EmscatterBSDF
+    cls = EmscatterBSDF
+    if "polarized" in variant:
+        from .polarized import polarized_class
+
+        cls = polarized_class(
+            mi, EmscatterBSDF, position, elevation, lambda key: _prepared_mueller(key, channels)
+        )
+    _CLASSES[variant] = cls
+    return cls

@@ -1,0 +1,79 @@
+"""Mitsuba evaluations for tests/test_render_polarized.py in a fresh interpreter (Dr.Jit
+variants are per process): ``python tests/plugin_polarized_worker.py JSON`` with ``{"variant",
+"step_deg", "wi": [[x, y, z], ...] (towards the light), "wo": [...] (towards the viewer),
+"wavelength" [nm], "mode": "radiance" | "importance"}`` builds the GO gold Mueller table of
+tests/test_brdf_pbsdf.py (Beckmann m = 0.3, separable Smith shadowing: Mitsuba's
+``roughconductor`` within GO), registers it with the emscatter plugin and prints ``{"em": [...],
+"rc": [...]}`` (polarized variants: each a 4×4 Mueller matrix of ``bsdf.eval``, cosθ of the
+light included; others: the scalar s0) as JSON on its last line.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import warnings
+
+import numpy as np
+
+EPS_AU = (0.2 + 3.0j) ** 2  # n + ik = 0.2 + 3i (Mitsuba's eta, k)
+M_SLOPE = 0.3
+
+
+def go_table(step_deg: float):
+    from emscatter.brdf.mueller import build_mueller_table
+    from emscatter.spectra import GaussianCorrelation
+
+    s2 = M_SLOPE**2 / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return build_mueller_table(
+            GaussianCorrelation(sigma=1e-6, length=6e-6, dimension=2), EPS_AU,
+            [450e-9, 650e-9], method="go", theta=np.radians(np.arange(0, 90, step_deg)),
+            phi=np.radians(np.arange(0, 180.01, step_deg)), energy="off",
+            shadowing="separable", slope_variance=(s2, s2),
+        )  # fmt: skip
+
+
+def main(arg: str) -> None:
+    import mitsuba as mi
+
+    args = json.loads(arg)
+    mi.set_variant(args["variant"])
+    from emscatter.render import mitsuba as em_mi
+
+    polarized = "polarized" in args["variant"]
+    key = em_mi.register_table(go_table(float(args["step_deg"])))
+    em_mi.register()
+    bsdfs = {
+        "em": mi.load_dict({"type": "emscatter", "table": key}),
+        "rc": mi.load_dict({"type": "roughconductor", "distribution": "beckmann",
+                            "alpha": M_SLOPE, "eta": 0.2, "k": 3.0}),
+    }  # fmt: skip
+    ctx = mi.BSDFContext(
+        mi.TransportMode.Importance
+        if args.get("mode") == "importance"
+        else mi.TransportMode.Radiance
+    )
+    out = {}
+    for name, bsdf in bsdfs.items():
+        vals = []
+        for wi, wo in zip(args["wi"], args["wo"], strict=True):
+            si = mi.SurfaceInteraction3f()
+            si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+            si.n = mi.Vector3f(0, 0, 1)
+            si.wavelengths = [float(args["wavelength"])] * 4
+            # radiance: si.wi towards the viewer, wo towards the light; importance: swapped
+            a, b = (wi, wo) if args.get("mode") == "importance" else (wo, wi)
+            si.wi = mi.Vector3f(a)
+            m = np.array(bsdf.eval(ctx, si, mi.Vector3f(b)))
+            if polarized:
+                vals.append(m.reshape(4, 4, -1)[:, :, 0].tolist())
+            else:
+                vals.append(float(np.ravel(m)[0]))
+        out[name] = vals
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
