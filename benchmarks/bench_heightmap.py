@@ -174,8 +174,9 @@ def main(repeat: int) -> dict:
             out["cases"][name] = row
             stages = ", ".join(f"{st} {row['warm_median_s'][st]:.2f}" for st in STAGES)
             print(
-                f"{name:8s} cold {runs[0]['total_s']:6.1f} s, warm {row['warm_total_median_s']:6.1f}"
-                f" s (target {TARGET_S:g} s) | warm stages [s]: {stages} | albedo 30° Mitsuba/"
+                f"{name:8s} cold {runs[0]['total_s']:6.1f} s, warm "
+                f"{row['warm_total_median_s']:6.1f} s (target {TARGET_S:g} s) | "
+                f"warm stages [s]: {stages} | albedo 30° Mitsuba/"
                 f"table − 1 = {runs[-1]['albedo_rel_diff']:+.2%}",
                 flush=True,
             )
