@@ -138,7 +138,8 @@ def test_bad_maps_are_clear_errors(tmp_path, gauss_map):
 def test_sionna_plate_with_the_map_material():
     """A real Sionna RT solve (the plate, 45°, 28 GHz, half-space concrete): the diffuse path
     gain of the map's material within 0.5 dB of the analytic roughness's, VV and HH (Monte Carlo
-    noise of 300 000 samples and the tables' difference above)."""
+    noise of 300 000 samples and the tables' difference above). Measured: −0.06 dB (VV),
+    −0.18 dB (HH)."""
     pytest.importorskip("sionna.rt")
     path = os.pathsep.join([str(HERE.parent / "src"), os.environ.get("PYTHONPATH", "")])
     env = {**os.environ, "PYTHONPATH": path}
