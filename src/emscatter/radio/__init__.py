@@ -24,7 +24,8 @@ gains and radio maps in one call: ``roughen``, ``flatten``, ``compare_rough_flat
 :mod:`.builtin` (Sionna's built-in S, lobe and XPD fitted to the tables, and where no
 built-in model stands in: ``builtin_equivalent``), :mod:`.calibration` (σ and ℓ fitted to
 observed path gains, with their uncertainty: ``calibrate``), :mod:`.plate`, :mod:`.indoor` and
-:mod:`.sweep` (the three cross-checks), :mod:`.demo`.
+:mod:`.sweep` (the three cross-checks), :mod:`.demo`, :mod:`.from_map` (the roughness of a
+measured height map: ``MaterialSpec.from_height_map``).
 """
 
 from __future__ import annotations
@@ -99,6 +100,38 @@ class MaterialSpec:
     def __post_init__(self):
         # checked where it enters (a wrong thickness would otherwise surface only in Sionna)
         object.__setattr__(self, "thickness", check_thickness(self.thickness))
+
+    @classmethod
+    def from_height_map(
+        cls,
+        source,
+        *,
+        model: str = "measured",
+        family: str = "best",
+        segments: int = 8,
+        tail: str = "none",
+        unit=None,
+        detrend="plane",
+        holes: str = "reject",
+        frequencies=None,
+        **spec,
+    ) -> MaterialSpec:
+        """A spec whose ``surface`` is a measured height map's roughness (a file, a
+        :class:`~emscatter.surfaces.heightmap.HeightMap` or an isotropic
+        :class:`~emscatter.surfaces.measured.MeasuredRoughness`): the map's ring-averaged
+        spectrum (``model="measured"``) or σ, ℓ of a fitted correlation ``family``
+        (``model="fit"``), see :func:`emscatter.radio.from_map.surface_from_map` (which and
+        why; ``frequencies`` [Hz] checks the band each needs). ``spec``: the other fields
+        (``medium``, ``thickness``, …). The choices are in ``spec.map_record``."""
+        from .from_map import surface_from_map
+
+        rough, record = surface_from_map(
+            source, model=model, family=family, segments=segments, tail=tail, unit=unit,
+            detrend=detrend, holes=holes, frequencies=frequencies,
+        )  # fmt: skip
+        out = cls(surface=rough, **spec)
+        object.__setattr__(out, "map_record", record)
+        return out
 
     def material(self):
         """The :class:`~emscatter.materials.Material` (checks the inputs)."""
