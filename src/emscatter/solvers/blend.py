@@ -30,6 +30,10 @@ roughness — of every parameter the criteria read — with no search for the sw
    closest (a soft argmin of ``ē`` with width Δ, weighted by availability) — the rule of
    :func:`emscatter.solvers.select.rank_methods` with each ``if`` made a weight.
 
+3. **Small weights** fade out (:data:`FADE_WEIGHTS`: below 1 % a method is not run; between 1
+   and 3 % its weight is tapered by a smoothstep), and the rest is renormalized: a blend of
+   four methods where one carries 0.1 % would cost four solver calls for nothing.
+
 Every factor is a continuous function of the margins and of the interpolated errors, which
 are continuous in the roughness, so the weights are; pure (one method, weight 1) wherever every
 margin is at least ``δ`` from its limit and every measured error at least Δ from the
@@ -55,11 +59,13 @@ __all__ = ["BLEND_FACTOR", "MEASURED_WIDTH_DB", "blend_weights", "margins"]
 #: within a factor :data:`BLEND_FACTOR` of a limit the methods on both sides are blended.
 BLEND_FACTOR = 1.25
 #: Half-width [dB] of the transition at the measured tolerance (``TOL_DB ± Δ``).
-MEASURED_WIDTH_DB = 0.25
+MEASURED_WIDTH_DB = 0.1
 #: Checks of the spectrum's kind (not of kσ, kℓ): held fully or not at all, never blended.
 CATEGORY_CHECKS = frozenset({"smoothness"})
-#: Weights below this are dropped (and the rest renormalized): a method is not run for less.
-MIN_WEIGHT = 1e-6
+#: Small weights fade out, continuously, before a method is run for them: a weight ``w`` becomes
+#: ``w s((w − lo)/(hi − lo))`` (0 below ``lo``, untouched above ``hi``) and the rest is
+#: renormalized (the heaviest weight, ≥ 1/4, is never touched, so the sum stays ≥ 1/4).
+FADE_WEIGHTS = (0.01, 0.03)
 
 
 def _smooth(t):
@@ -113,7 +119,7 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
 
     Returns ``{"weights": {name: w}, "pick": name, "soft_valid": {name: vₘ},
     "margins": {name: cₘ}, "measured": {...} or None}``: weights sum to 1, names in
-    decreasing weight (at least :data:`MIN_WEIGHT`); ``pick`` is the heaviest, whose
+    decreasing weight (small ones faded out: :data:`FADE_WEIGHTS`); ``pick`` is the heaviest, whose
     validity the blend reports; ``measured`` the interpolated errors and availabilities used."""
     methods = tuple(methods)
     c, reports = margins(roughness, k, eps=eps, methods=methods)
@@ -145,7 +151,8 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
             keep_if_invalid = mapped * closest + (1.0 - mapped) * eye[i]
             fallback = v[i] * eye[i] + (1.0 - v[i]) * keep_if_invalid
             w += crit[i] * (g[i] * eye[i] + (1.0 - g[i]) * (cheapest_good + none_good * fallback))
-    w = np.where(w >= MIN_WEIGHT, w, 0.0)
+    lo, hi = FADE_WEIGHTS
+    w = w * _smooth((w - lo) / (hi - lo))
     w = w / w.sum()
     order = sorted((i for i in range(len(methods)) if w[i] > 0), key=lambda i: (-w[i], i))
     weights = {methods[i]: float(w[i]) for i in order}
