@@ -225,7 +225,7 @@ def _lobe_rms_db(a: np.ndarray, b: np.ndarray) -> float:
 
 
 #: Largest σ⁰ change [dB] allowed across a switch (issue 20): auto blends the methods over a
-#: transition band (emscatter.solvers.select.blend_weights), so the answer is continuous.
+#: transition band with weights continuous by construction (emscatter.solvers.blend).
 MAX_JUMP_DB = 0.5
 
 
@@ -274,9 +274,10 @@ def _backscatter_switch_cases(test):
         dict(switch=("k_sigma", 0.3), other=5.0, eps=17 + 2j, theta_i=0.7),  # spm ↔ po/iem: hv
         dict(switch=("k_sigma", 0.3), other=17.8, eps=3.0, theta_i=1.0),  # was xfail (issue 20)
         # a corner: above SPM's kσ = 0.3 the IEM for kℓ < 4, PO beyond (0.53 dB hh step
-        # before the tensor-product blend of select.blend_weights)
+        # before the blend's weights were continuous)
         dict(switch=("k_l", 4.0), other=10**0.875, eps="pec", theta_i=1.0),
-        # a fresh-example find: SPM's slope and kσ limits meet (cross-pol steps 1.9 dB)
+        # a fresh-example find: SPM's slope and kσ limits meet (cross-pol stepped 1.9 dB with
+        # the probing blend: weights 0.53/0.47 → 0.77/0.23 between IEM and SPM)
         dict(switch=("k_sigma", 0.3), other=10**0.125, eps=3.0, theta_i=1.0),
     ):
         test = example(**ex)(test)
@@ -289,18 +290,14 @@ def _backscatter_switch_cases(test):
     return settings(max_examples=examples("continuity"))(test)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open (issue 20): the blend weights are not continuous at corners where two "
-    "limits meet; a fresh-example run found a co-pol step at GO's switch (Gaussian "
-    "kσ = √10/2, kℓ = 10^0.75, PEC, θi = 1 rad), pinned here",
-)
+# a fresh-example find: a co-pol step at GO's switch where the probing blend (before the
+# continuous weights of emscatter.solvers.blend) changed its set of methods
 @example(switch=("k_sigma", math.sqrt(10) / 2), other=10**0.75, eps="pec", theta_i=1.0)
 @_backscatter_switch_cases
 def test_auto_backscatter_is_continuous_with_crosspol(switch, other, eps, theta_i):
     """Backscatter co-pol (hh, vv) with the cross-pol terms on: continuous at every switch. The
-    first example stepped 0.69 dB (hh) while the blend's ray search skipped the IEM region
-    (kσ 1.50–1.58) between PO and GO on the GO side (select._ray_switches)."""
+    first example stepped 0.69 dB (hh) while an earlier, probing blend skipped the IEM region
+    (kσ 1.50–1.58) between PO and GO on the GO side."""
     a, b = _backscatter_sides(switch, other, eps, theta_i)
     jump = np.abs(10 * np.log10(a / b))[[0, 1], [0, 1]]
     note(f"co-pol jumps [dB] {jump}")
@@ -319,13 +316,6 @@ def _backscatter_sides(switch, other, eps, theta_i):
     return a, b
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open (issue 20): where SPM's slope limit meets its kσ limit (Gaussian kσ = 0.3, "
-    "kℓ ≈ 1.33, ε = 3, θi = 1 rad, found by a fresh-example run) the blend weights step "
-    "(0.53/0.47 → 0.77/0.23 between IEM and SPM) and, with the IEM multiple-scattering hv "
-    "7.7 dB below SPM's (2,2) hv there, hv steps 1.9 dB (co-pol 0.09 dB)",
-)
 @_backscatter_switch_cases
 def test_auto_backscatter_crosspol_is_continuous(switch, other, eps, theta_i):
     """The same, cross-pol (hv, vh: SPM2 / IEM multiple scattering by branch)."""

@@ -77,36 +77,3 @@ def test_check_options_maps_or_rejects():
     with pytest.raises(ValueError, match="method 'spm', which takes"):
         select.check_options("spm", {"threads": 2}, picked_by_auto=False)
     assert "points_per_wavelength" in select.solver_options("mom")
-
-
-def test_ray_search_finds_every_region_between_two_probes():
-    """Issue 20: from GO at kσ = √10/2 (Gaussian kℓ = 7.5, ε = 3) going down, PO begins at
-    kσ = 1.5, 5 % below, and IEM lies between: both switches fall between the first two probes.
-    The search stopped at the first (GO → IEM) and missed PO, so the GO side blended
-    {go, iem} while the IEM side blended {iem, go, po}: 0.69 dB step in hh."""
-    d = math.log(select.BLEND_FACTOR)
-    edges = [(-0.0527, "po"), (0.0, "iem")]  # regions below each edge, in log kσ
-
-    def at(t):
-        for edge, name in edges:
-            if t < edge:
-                return name
-        return "go"
-
-    found = select._ray_switches(at, "go", -d)
-    assert [m for _, m in found] == ["iem", "po"]
-    assert found[0][0] == pytest.approx(0.0, abs=d / 1000)
-    assert found[1][0] == pytest.approx(-0.0527, abs=d / 1000)
-
-
-def test_blend_is_the_same_on_both_sides_of_a_switch():
-    """The two sides of the IEM → GO switch blend the same three methods with the same
-    weights (to the bisection's resolution), the PO switch 5 % away included."""
-    ks = math.sqrt(10) / 2
-    sides = [
-        select.blend_weights(GaussianCorrelation(ks * f / K, 7.5 / K), K, eps=3.0)["weights"]
-        for f in (1 - 1e-6, 1 + 1e-6)
-    ]
-    assert set(sides[0]) == set(sides[1]) == {"iem", "go", "po"}
-    for name in sides[0]:
-        assert sides[0][name] == pytest.approx(sides[1][name], abs=1e-3)

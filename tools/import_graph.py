@@ -39,7 +39,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("solvers.validity", "solvers.quadrature", "solvers.__init__"),
     ("solvers.spm", "solvers.kirchhoff", "solvers.mom", "solvers.mom3d"),
     ("solvers.iem",),
-    ("solvers.measured", "solvers.select", "solvers.auto_crosspol"),
+    ("solvers.measured", "solvers.select", "solvers.blend", "solvers.auto_crosspol"),
     ("method_resolution", "api", "coherent"),
     ("brdf", "radio", "render"),
     ("validation", "validity_maps", "demo", "warm", "cli", "__main__"),

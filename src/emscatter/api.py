@@ -228,9 +228,9 @@ def _bistatic_blend(rough, eps, k, angles, blend, out_of_range, options, monosta
     """``method="auto"`` near a switch: ``Σ wₘ σ⁰ₘ`` (and the same combination of the
     coherent parts) over the blend's methods; ``method`` is ``"iem+go"`` (decreasing weight),
     ``info["blend"]`` the weights and switches. The validity policy and report are those of
-    ``auto``'s own pick at this roughness (``blend["pick"]``): the other methods are, by
-    construction, within a factor :data:`~emscatter.solvers.select.BLEND_FACTOR` of the region
-    where they are valid and enter with weight ≤ ½; they run with ``out_of_range="ignore"``
+    the heaviest method (``blend["pick"]``): the others enter with a smaller weight, near a
+    limit (within a factor :data:`~emscatter.solvers.blend.BLEND_FACTOR`) or a measured
+    tolerance (:mod:`emscatter.solvers.blend`); they run with ``out_of_range="ignore"``
     (no warning, no blanking, no raise for a method the caller did not get alone) and their
     reports are kept in ``info["validity"]["by_method"]``."""
     weights = blend["weights"]

@@ -26,7 +26,7 @@ import numpy as np
 from emscatter import solvers
 from emscatter.conventions import fmt
 from emscatter.fresnel import is_pec
-from emscatter.solvers import select
+from emscatter.solvers import blend, select
 from emscatter.solvers.validity import with_angle_total
 
 __all__ = [
@@ -301,15 +301,15 @@ def rank_methods(roughness, k: float, *, eps=None, theta_i=None, methods=None):
 
 
 def blend_weights(roughness, k: float, *, eps=None) -> dict:
-    """:func:`emscatter.solvers.select.blend_weights` (``auto``'s methods and weights near a
-    switch), cached on ``(roughness, k, eps)``; a fresh dict each call."""
+    """:func:`emscatter.solvers.blend.blend_weights` (``auto``'s methods and their continuous
+    weights), cached on ``(roughness, k, eps)``; a fresh dict each call."""
     parts = ("blend", roughness, float(k), _key_of(eps))
     key = None if _UNCACHEABLE in parts else parts
     hit = _recall(key)
     if hit is None:
-        hit = select.blend_weights(roughness, k, eps=eps)
+        hit = blend.blend_weights(roughness, k, eps=eps)
         _remember(key, hit)
-    return {"weights": dict(hit["weights"]), "switches": list(hit["switches"])}
+    return {**hit, "weights": dict(hit["weights"])}
 
 
 def angles_deg(theta_i, mask, *, limit: int = 8) -> str:

@@ -33,6 +33,7 @@ __all__ = [
     "medium_class",
     "load_table",
     "cell_roughness",
+    "interpolated_errors",
 ]
 
 TABLE_PATH = Path(__file__).with_name("data") / "measured_errors.json"
@@ -115,3 +116,52 @@ def cell_roughness(roughness, k: float, cell: tuple[float, float]):
     dimension (isotropic)."""
     ks, kl = cell
     return type(roughness)(ks / k, kl / k, dimension=roughness.dimension)
+
+
+def _bracket(grid: np.ndarray, value: float) -> tuple[int, int, float, float]:
+    """``(i0, i1, t, fade)`` in log scale: ``value`` lies a fraction ``t`` from ``grid[i0]`` to
+    ``grid[i1]`` (clamped at the ends); ``fade`` is 1 inside ``[grid[0], grid[-1]]``, falling
+    linearly to 0 over the half step beyond either end."""
+    lg, lv = np.log(grid), math.log(value)
+    step = float(np.min(np.diff(lg))) if grid.size > 1 else 0.3
+    if lv <= lg[0]:
+        return 0, 0, 0.0, max(0.0, 1.0 - (lg[0] - lv) / (step / 2))
+    if lv >= lg[-1]:
+        n = grid.size - 1
+        return n, n, 0.0, max(0.0, 1.0 - (lv - lg[-1]) / (step / 2))
+    i1 = int(np.searchsorted(lg, lv))
+    i0 = i1 - 1
+    return i0, i1, float((lv - lg[i0]) / (lg[i1] - lg[i0])), 1.0
+
+
+def interpolated_errors(roughness, k: float, eps) -> dict | None:
+    """The measured errors interpolated between the cells, for a blend that must be continuous
+    (:mod:`.blend`): ``{"errors": {method: dB}, "availability": {method: A}, "map": tag}``.
+
+    ``errors`` is the bilinear interpolation in ``(log kσ, log kℓ)`` over the four cells around
+    the roughness that have a value for that method (renormalized; nan when none has);
+    ``availability`` their interpolation weight, times a fade from 1 at the outermost cell
+    centres to 0 half a step beyond (where :func:`measured_errors` stops too). None where the
+    maps do not apply (another correlation, anisotropy, medium class unknown). ``k`` [rad/m]."""
+    family, medium = _family(roughness), medium_class(eps)
+    if family is None or medium is None:
+        return None
+    ks, kl = k * roughness.sigma, k * roughness.length
+    for m in load_table()["maps"]:
+        if m["correlation"] != family or m["medium"] != medium:
+            continue
+        i0, i1, t, fade_s = _bracket(np.asarray(m["k_sigma"], dtype=float), ks)
+        j0, j1, u, fade_l = _bracket(np.asarray(m["k_l"], dtype=float), kl)
+        fade = fade_s * fade_l
+        if fade <= 0.0:
+            return None
+        corners = [(i0, j0, (1 - t) * (1 - u)), (i1, j0, t * (1 - u)),
+                   (i0, j1, (1 - t) * u), (i1, j1, t * u)]  # fmt: skip
+        errors, avail = {}, {}
+        for name, table in m["errors"].items():
+            have = [(w, table[i][j]) for i, j, w in corners if w > 0 and table[i][j] is not None]
+            weight = sum(w for w, _ in have)
+            errors[name] = sum(w * float(e) for w, e in have) / weight if weight > 0 else math.nan
+            avail[name] = fade * weight
+        return {"errors": errors, "availability": avail, "map": m["tag"]}
+    return None
