@@ -172,17 +172,18 @@ def plot(path, lut, models_db) -> None:
     bands = sorted(set(np.round(ks, 3)))
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.2), sharey=True)
     for j, (ax, pol) in enumerate(zip(axes, POLS, strict=True)):
-        for name, d in models_db.items():
+        for c, (name, d) in enumerate(models_db.items()):
             y = [stats(d[np.isclose(ks, b, atol=1e-3), j], exact[np.isclose(ks, b, atol=1e-3), j])
                  ["rmse"] for b in bands]  # fmt: skip
             if np.all(np.isnan(y)):
                 continue
-            style = dict(lw=2.5, color="k") if name == "auto" else dict(lw=1.2)
+            style = dict(lw=2.5, color="k") if name == "auto" else dict(lw=1.2, color=f"C{c}")
             ax.plot(bands, y, "o-", label=name, ms=3, **style)
+        ax.set_ylim(0, 8)  # GO alone at small kσ is far above (its RMSE is in the table)
         ax.set_title(f"{pol.upper()}: RMSE against NMM3D, 40°")
         ax.set_xlabel("kσ")
         ax.grid(alpha=0.3)
-    axes[0].set_ylabel("RMSE [dB]")
+    axes[0].set_ylabel("RMSE [dB] (clipped at 8)")
     axes[0].legend(fontsize=7)
     fig.tight_layout()
     tmp = path.with_name(path.stem + ".tmp.png")
