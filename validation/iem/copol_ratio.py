@@ -5,7 +5,7 @@
 
 Grid: the NMM3D 40° look-up table of Tsang's group (exact 3-D solutions of Maxwell's
 equations; exponential correlation, ℓ/σ ∈ {4, 7, 10, 15}, rms height 0.021–0.21 λ,
-ε ∈ {3, 5.5+2i, 9+2.5i, 15+3.5i, 22+4i, 30+4.5i}: 162 cases, kσ 0.13–1.32). ``--nmm3d``: that
+ε ∈ {3+i, 5.5+2i, 9+2.5i, 15+3.5i, 22+4i, 30+4.5i}: 162 cases, kσ 0.13–1.32). ``--nmm3d``: that
 table (8 columns: θ, ℓ/σ, Re ε, Im ε, σ/λ, VV, HH, HV dB) for the exact columns; without it the
 same grid is built and the exact columns are left empty. ``--smrt``: an interpreter with SMRT
 1.7 (``iiem_fung02`` without cross-pol, ``iem_fung92``; 30 series terms). Models: emscatter
@@ -16,11 +16,8 @@ same grid is built and the exact columns are left empty. ``--smrt``: an interpre
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
-import subprocess
-import tempfile
+import sys
 import warnings
 from pathlib import Path
 
@@ -30,9 +27,11 @@ from emscatter.solvers import iem
 from emscatter.spectra import ExponentialCorrelation
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+from nmm3d_lut import atomic_write as _atomic  # noqa: E402
+from nmm3d_lut import grid, read_lut, run_peers  # noqa: E402
+
 THETA = math.radians(40.0)
-EPS = ((3.0, 0.0), (5.5, 2.0), (9.0, 2.5), (15.0, 3.5), (22.0, 4.0), (30.0, 4.5))
-RMS = (0.021, 0.042, 0.063, 0.084, 0.126, 0.168, 0.210)
 MODELS = {
     "aiem_faded": {},
     "aiem": dict(complementary="aiem"),
@@ -40,40 +39,11 @@ MODELS = {
     "fung92": dict(fresnel="incident", complementary="fung92", first_order="model",
                    shadowing=False),
 }  # fmt: skip
-SMRT = r"""
-import json, sys, warnings
-import numpy as np
-from smrt.interface.iem_fung92 import IEM_Fung92
-from smrt.interface.iiem_fung02 import IIEM_Fung02
-warnings.simplefilter("ignore")
-f = 5.405e9; k = 2 * np.pi * f / 299792458.0; mu = np.array([np.cos(np.radians(40.0))])
-out = []
-for ks, kl, er, ei in json.loads(sys.argv[1]):
-    row = []
-    for M, kw in ((IIEM_Fung02, dict(compute_crosspol=False)), (IEM_Fung92, {})):
-        m = M(roughness_rms=ks / k, corr_length=kl / k, autocorrelation_function="exponential",
-              warning_handling="nothing", series_truncation=30, **kw)
-        R = m.diffuse_reflection_matrix(f, 1, complex(er, ei), mu, mu, np.pi, 2)
-        idx = (lambda i: R[i, i]) if M is IIEM_Fung02 else (lambda i: R[i])
-        row += [float(np.asarray(idx(i)).ravel()[0] * 4 * np.pi * mu[0]) for i in (0, 1)]
-    out.append(row)
-print(json.dumps(out))
-"""
 
 
 def _grid(nmm3d):
-    if nmm3d:
-        t = np.loadtxt(nmm3d)
-        return [(r[1], r[2], r[3], r[4], r[5], r[6]) for r in t if abs(r[0] - 40.0) < 1e-9]
-    return [(q, er, ei, h, math.nan, math.nan) for q in (4.0, 7.0, 10.0, 15.0)
-            for er, ei in EPS for h in RMS]  # fmt: skip
-
-
-def _atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".")
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    t = read_lut(nmm3d) if nmm3d else grid()
+    return [(r[1], r[2], r[3], r[4], r[5], r[6]) for r in t]
 
 
 def main() -> None:
@@ -97,10 +67,9 @@ def main() -> None:
         cases = [
             (2 * math.pi * h, ratio * 2 * math.pi * h, er, ei) for ratio, er, ei, h, *_ in rows
         ]
-        res = subprocess.run([args.smrt, "-c", SMRT, json.dumps(cases)], capture_output=True,
-                             text=True, check=True, timeout=1800)  # fmt: skip
-        sm = 10 * np.log10(np.array(json.loads(res.stdout)))
-        cols["smrt_iiem_fung02"], cols["smrt_iem_fung92"] = sm[:, :2], sm[:, 2:]
+        peers = run_peers(args.smrt, cases, want=("smrt",), crosspol=False)
+        for n in ("smrt_iiem_fung02", "smrt_iem_fung92"):
+            cols[n] = 10 * np.log10(peers[n][:, :2])
     exact = np.array([(r[4], r[5]) for r in rows])
     names = list(cols)
     head = ["l_over_sigma", "eps_re", "eps_im", "k_sigma", "nmm3d_vv", "nmm3d_hh"]
