@@ -16,21 +16,23 @@ horizon; vectorized over directions).
   :func:`equivalent_beckmann` — the chapter-3 "general roughness" of each model (its Beckmann
   ``m``, by :mod:`.equivalence`'s criterion).
 
-Properties (tested in ``tests/test_brdf_catalogue.py``):
+Properties (tested in ``tests/test_brdf_catalogue.py``, tabulated in
+``validation/brdf/catalogue.md``):
 
-========================  ============  ====================================================
-model                     reciprocal    albedo ≤ 1
-========================  ============  ====================================================
-Lafortune                 yes (eq. 5 is  for lobes ``C_z^n ≤ (n+2)/(2π)`` with
-                          symmetric)     ``|C_x|, |C_y| ≤ C_z`` (the Phong-normalized lobe);
-                                         off-specular lobes ``|C_x| > C_z`` exceed 1 toward
-                                         grazing incidence — the model has no energy bound
-Strauss                   no (``F(θi)``,  yes for ``s < 1`` (tested on a grid); Strauss's
-                          ``c_s(θi)``,   ``min(1, …)`` caps the specular reflectance
-                          ``1/cosθi``)
-Neumann et al. (NNSK)     yes           yes for every ``n``, ``k_s + k_d ≤ 1`` (proof in
-                                         :func:`neumann`)
-========================  ============  ====================================================
+* Lafortune — reciprocal (eq. 5 is symmetric in ``wi``, ``wo``). Albedo ≤ 1 for the
+  Phong-shaped lobe ``−C_x = −C_y = C_z``, ``C_z^n ≤ (n+2)/(2π)``; the model has no energy
+  bound: off-specular lobes ``|C_x| = |C_y| = r C_z``, ``r > 1`` keep the normal-incidence
+  albedo and exceed 1 toward grazing (``n = 20``: ``r = 1.05`` → 1.10 at 30°, ``r = 1.2`` →
+  7.5 at 60°).
+* Strauss — not reciprocal (``F(θi)``, ``c_s(θi)`` and ``1/cosθi`` depend on the incidence
+  alone). Albedo ≤ 1 on the tested grid for a coloured (``c = 0.2``) or half-transparent
+  (``t = 0.5``) surface up to 89°, and for any ``c``, ``t`` with ``s ≥ 0.3`` up to 60°. The
+  model breaks it for a white opaque surface toward grazing (``s = 0.05``: 1.009 at 75°;
+  ``s = 0.3``: 1.35, ``s = 0.6``: 1.54 at 89°): the diffuse ``(1 − ms)(1 − s³)`` and specular
+  ``r_s`` are not bounded jointly, and ``Q_s/(π cosθi)`` has no ``cosθi`` to cancel.
+* Neumann et al. (NNSK) — reciprocal; albedo ≤ 1 for every ``n`` and direction when
+  ``k_s + k_d ≤ 1`` (proof in :func:`neumann`).
+* Poulin–Fournier 1990 (seed §2.6.1) is not implemented.
 """
 
 from __future__ import annotations
