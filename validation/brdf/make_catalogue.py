@@ -86,7 +86,7 @@ def _albedo_rows():
         worst, where, recip = 0.0, "", 0.0
         for params in grid:
             alb = A.directional_albedo(
-                lambda wi, wo, p=params: E.evaluate(model, wi, wo, **p),
+                lambda wi, wo, p=params, md=model: E.evaluate(md, wi, wo, **p),
                 np.radians(THETA_DEG),
                 n_theta=128,
                 n_phi=128,
@@ -170,7 +170,7 @@ def main() -> int:
         "",
         "## Reciprocity and directional albedo over each model's parameter range",
         "",
-        f"Albedo by `directional_albedo` (half-vector quadrature 128 × 128, quadrature error ≲",
+        "Albedo by `directional_albedo` (half-vector quadrature 128 × 128, quadrature error ≲",
         f"5e-4) at θi = {', '.join(f'{t:g}' for t in THETA_DEG)}°; reciprocity = max",
         "|f(wi, wo) − f(wo, wi)| / max over 4000 random pairs with θ ≤ 89°, worst over the grid.",
         "",
