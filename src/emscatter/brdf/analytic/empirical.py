@@ -12,6 +12,8 @@ horizon; vectorized over directions).
 * :func:`neumann` — the compact metallic models of Neumann, Neumann & Szirmay-Kalos 1999
   (Computer Graphics Forum 18(3), 161–172; seed §2.5.5, eq. 2.30): a Phong or Blinn lobe over
   ``max(cosθi, cosθo)``, reciprocal, with a constant that bounds the albedo by 1.
+* :func:`~.cylinders.poulin_fournier` — Poulin & Fournier 1990's parallel cylinders (seed
+  §2.6.1), single scattering with exact 2-D shadowing and masking.
 * :func:`evaluate` — any catalogue model (these and the ones of :mod:`.analytic`) by name;
   :func:`equivalent_beckmann` — the chapter-3 "general roughness" of each model (its Beckmann
   ``m``, by :mod:`.equivalence`'s criterion).
@@ -32,7 +34,8 @@ Properties (tested in ``tests/test_brdf_catalogue.py``, tabulated in
   ``r_s`` are not bounded jointly, and ``Q_s/(π cosθi)`` has no ``cosθi`` to cancel.
 * Neumann et al. (NNSK) — reciprocal; albedo ≤ 1 for every ``n`` and direction when
   ``k_s + k_d ≤ 1`` (proof in :func:`neumann`).
-* Poulin–Fournier 1990 (seed §2.6.1) is not implemented.
+* Poulin–Fournier 1990 (seed §2.6.1, :mod:`.cylinders`) — reciprocal; albedo ≤ ``k_s + k_d``
+  (single scattering over the lit, visible profile).
 """
 
 from __future__ import annotations
@@ -52,6 +55,7 @@ from emscatter.brdf.analytic import (
     phong,
     ward,
 )
+from emscatter.brdf.analytic.cylinders import poulin_fournier, poulin_fournier_rms_slope
 from emscatter.brdf.analytic.equivalence import (
     Equivalence,
     ashikhmin_from_ward,
@@ -249,6 +253,7 @@ MODELS = {
     "lafortune": lafortune,
     "strauss": strauss,
     "neumann": neumann,
+    "poulin-fournier": poulin_fournier,
 }
 
 #: whether ``f(wi, wo) = f(wo, wi)`` holds for the model (tested both ways)
@@ -261,6 +266,7 @@ RECIPROCAL = {
     "lafortune": True,
     "strauss": False,  # F(θi), c_s(θi) and 1/cosθi: Strauss 1990 is a direct-lighting model
     "neumann": True,
+    "poulin-fournier": True,
 }
 
 
@@ -283,7 +289,12 @@ def equivalent_beckmann(model: str, **params) -> Equivalence:
 
     ``lafortune`` takes ``lobes`` and uses the first lobe (it must be Phong-shaped:
     ``−C_x = −C_y = C_z``); ``ward``/``cook-torrance`` are Beckmann already; for
-    ``ashikhmin-shirley`` use :func:`~.equivalence.ashikhmin_from_ward`."""
+    ``ashikhmin-shirley`` use :func:`~.equivalence.ashikhmin_from_ward`; ``poulin-fournier``
+    (``d``, ``h``) returns the anisotropic ``(m_x, m_y) = (rms slope across the cylinders, 0)``
+    of its profile (exact, ``error = 0``; :func:`~.cylinders.poulin_fournier_rms_slope`)."""
+    if model == "poulin-fournier":
+        mx = poulin_fournier_rms_slope(params.get("d", 2.5), params.get("h", -0.3))
+        return Equivalence((mx, 0.0), 0.0, "rms slope of the cylinder profile (seed eq. 3.1)")
     if model in ("phong", "strauss", "lafortune") or (
         model == "neumann" and params.get("variant", "blinn") == "phong"
     ):
@@ -303,7 +314,7 @@ def equivalent_beckmann(model: str, **params) -> Equivalence:
         return beckmann_from_blinn(params["n"])
     raise ValueError(
         f"equivalent_beckmann takes one of ['blinn-phong', 'lafortune', 'neumann', 'phong', "
-        f"'strauss'], got {model!r} (ward and cook-torrance are Beckmann; for "
+        f"'poulin-fournier', 'strauss'], got {model!r} (ward and cook-torrance are Beckmann; for "
         "ashikhmin-shirley use equivalence.ashikhmin_from_ward)"
     )
 
