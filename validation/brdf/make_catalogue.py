@@ -62,6 +62,14 @@ GRIDS = {
         "neumann",
         [{"n": n, **kw} for n in (1, 10, 100, 1000) for kw in ({}, {"eps": GOLD})],
     ),
+    "Poulin–Fournier 1990 cylinders (d, h in radii; local Phong n_s = 50)": (
+        "poulin-fournier",
+        [
+            {"d": d, "h": h, "ks": ks, "kd": 1.0 - ks}
+            for d, h in ((2.0, 0.0), (2.5, -0.3), (4.0, -0.1))
+            for ks in (0.0, 1.0)
+        ],
+    ),
     "Neumann et al. 1999, Phong lobe (F = 1)": (
         "neumann",
         [{"n": n, "variant": "phong"} for n in (1, 10, 100, 1000)],
@@ -188,7 +196,15 @@ def main() -> int:
         "Strauss's white opaque surface adds an unbounded specular r_s to a diffuse",
         "(1 − ms)(1 − s³) and divides by cosθi toward grazing. Neumann et al.'s constant",
         "C_n = (n+1)/(8π) (Blinn) or (n+1)/(2π) (Phong) bounds the albedo by 1 (proof in",
-        "`empirical.neumann`). Poulin–Fournier 1990 (§2.6.1) is not implemented.",
+        "`empirical.neumann`). Poulin–Fournier's single-scattering average is bounded by its",
+        "local albedo (albedo here at φi = 0, across the cylinders; along them it is lower).",
+        "Its Beckmann equivalent is the profile's rms slope across the cylinders, m_y = 0:",
+        *[
+            f"(d, h) = ({d:g}, {h:g}): m_x = "
+            f"{E.equivalent_beckmann('poulin-fournier', d=d, h=h).value[0]:.3f}; "
+            for d, h in ((2.5, -0.3), (4.0, -0.1), (2.0, -0.5))
+        ],
+        "h = 0 (half cylinders, vertical walls) has infinite rms slope.",
         "",
     ]
     with atomic_path(HERE / "catalogue.md") as tmp:
