@@ -233,6 +233,16 @@ def test_catalogue_models_make_tables():
     np.testing.assert_allclose(
         E.evaluate("strauss", wi, wo, s=0.6, m=0.5, color=0.8), strauss(wi, wo, 0), rtol=0
     )
+    # the anisotropic one on an anisotropic grid: reciprocal, albedo ≤ 1, φ-dependent
+    tp = A.table_from_function(
+        lambda wi, wo, lam: E.poulin_fournier(wi, wo, 2.5, -0.3, ks=0.5, kd=0.5),
+        [5e-7],
+        resolution=(8, 12),
+        anisotropic=True,
+    )
+    assert not tp.isotropic and tp.reciprocity_error() < 1e-12
+    alb = tp.albedo().incoherent
+    assert np.all(alb <= 1.0) and np.ptp(alb[0, -2]) > 0.05  # varies with φi at θi = 67.5°
 
 
 def test_bad_parameters_are_named():
