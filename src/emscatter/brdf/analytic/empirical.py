@@ -4,9 +4,9 @@ pointing away from the surface, normal ``+z``, tangent ``+x``; ``f_r`` [1/sr], 0
 horizon; vectorized over directions).
 
 * :func:`lafortune` — generalized cosine lobes ``Σ_k [C_x wi_x wo_x + C_y wi_y wo_y +
-  C_z wi_z wo_z]^{n_k}`` (Lafortune, Foo, Torrance & Greenberg, SIGGRAPH 1997, eq. 5; the
-  seed's §2.6.2 "function family" model); :func:`lafortune_phong_lobe` gives the lobe equal
-  to the normalized Phong lobe.
+  C_z wi_z wo_z]^{n_k}`` (Lafortune, Foo, Torrance & Greenberg, "Non-linear approximation
+  of reflectance functions", SIGGRAPH 1997; the seed's §2.6.2 "function family" model);
+  :func:`lafortune_phong_lobe` gives the lobe equal to the normalized Phong lobe.
 * :func:`strauss` — Strauss 1990 (IEEE CG&A 10(6), 56–64; seed §2.5.4, eqs. 2.25–2.29):
   smoothness ``s``, metalness ``m``, transparency ``t``, colour ``c``.
 * :func:`neumann` — the compact metallic models of Neumann, Neumann & Szirmay-Kalos 1999
@@ -21,7 +21,7 @@ horizon; vectorized over directions).
 Properties (tested in ``tests/test_brdf_catalogue.py``, tabulated in
 ``validation/brdf/catalogue.md``):
 
-* Lafortune — reciprocal (eq. 5 is symmetric in ``wi``, ``wo``). Albedo ≤ 1 for the
+* Lafortune — reciprocal (the lobe sum is symmetric in ``wi``, ``wo``). Albedo ≤ 1 for the
   Phong-shaped lobe ``−C_x = −C_y = C_z``, ``C_z^n ≤ (n+2)/(2π)``; the model has no energy
   bound: off-specular lobes ``|C_x| = |C_y| = r C_z``, ``r > 1`` keep the normal-incidence
   albedo and exceed 1 toward grazing (``n = 20``: ``r = 1.05`` → 1.10 at 30°, ``r = 1.2`` →
@@ -104,7 +104,7 @@ def lafortune_phong_lobe(n: float, rho: float = 1.0) -> tuple[float, float, floa
     """The lobe ``(C_x, C_y, C_z, n)`` with ``−C_x = −C_y = C_z = (ρ (n+2)/(2π))^{1/n}``:
     Lafortune's specular lobe equal to the normalized Phong ``ρ (n+2)/(2π) cosⁿα`` (α from
     the mirror direction; :func:`emscatter.brdf.analytic.phong`), albedo ``ρ`` at normal
-    incidence (Lafortune et al. 1997 §3: "−C_x = −C_y > C_z" gives off-specular lobes,
+    incidence (Lafortune et al. 1997: −C_x = −C_y > C_z gives off-specular lobes,
     ``C_x = C_y > 0`` retro-reflection)."""
     n = check_positive("n", n)
     rho = check_in_range("rho", rho, 0.0, 1.0, low_open=False, high_open=False)
@@ -113,7 +113,7 @@ def lafortune_phong_lobe(n: float, rho: float = 1.0) -> tuple[float, float, floa
 
 
 def lafortune(wi, wo, lobes, *, kd: float = 0.0) -> np.ndarray:
-    """Lafortune et al. 1997 (eq. 5): ``f = k_d/π + Σ_k max(0, C_x,k wi_x wo_x + C_y,k wi_y wo_y
+    """Lafortune et al. 1997: ``f = k_d/π + Σ_k max(0, C_x,k wi_x wo_x + C_y,k wi_y wo_y
     + C_z,k wi_z wo_z)^{n_k}`` [1/sr]. ``lobes``: one ``(C_x, C_y, C_z, n)`` or a ``(K, 4)``
     array (``C`` absorbs the lobe's albedo, as in the paper; ``n > 0``). Reciprocal by
     construction. The model has no energy constraint: a lobe's albedo at normal incidence is
