@@ -165,8 +165,12 @@ def beckmann_from_blinn(n: float) -> Equivalence:
 def ashikhmin_from_ward(mx: float, my: float, *, ratio: str | float | None = "slope"):
     """Ashikhmin–Shirley ``(n_u, n_v)`` equivalent to Ward ``(m_x, m_y)``.
 
-    ``ratio="slope"`` fixes ``n_u/n_v = (m_y/m_x)²`` (module docstring), a number fixes
-    ``n_u/n_v`` to it, ``None`` fits both freely. Seed example: ``(0.1, 0.8)``.
+    ``ratio="slope"`` fixes ``n_u/n_v = (m_y/m_x)²`` (module docstring); ``ratio="seed"`` the
+    seed's criterion as it states it, the exponents in the ratio of the slopes ("notre critère
+    utilise le rapport m_x/m_y", §3.2.2): ``n_u/n_v = m_x/m_y`` in the seed's axes, whose
+    Fig. 3.8 pairs ``n_u`` with ``m_y`` — so ``n_u/n_v = m_y/m_x`` here (``n_u`` along ``x``,
+    with ``m_x``); a number fixes ``n_u/n_v`` to it, ``None`` fits both freely. Seed example:
+    ``(0.1, 0.8)``.
     """
     mx = check_positive("mx", mx)
     my = check_positive("my", my)
@@ -186,6 +190,13 @@ def ashikhmin_from_ward(mx: float, my: float, *, ratio: str | float | None = "sl
         )
         nu, nv = (float(v) for v in np.exp(res.x))
         return Equivalence((nu, nv), err(nu, nv))
-    r = (my / mx) ** 2 if ratio == "slope" else check_positive("ratio", ratio)
+    if isinstance(ratio, str) and ratio not in ("slope", "seed"):
+        raise ValueError(f"ratio must be 'slope', 'seed', a number > 0 or None, got {ratio!r}")
+    if ratio == "slope":
+        r = (my / mx) ** 2
+    elif ratio == "seed":
+        r = my / mx
+    else:
+        r = check_positive("ratio", ratio)
     nv = _fit_scalar(lambda nv: err(r * nv, nv), 1e-4, 1e5)
     return Equivalence((r * nv, nv), err(r * nv, nv))
