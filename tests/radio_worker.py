@@ -702,6 +702,8 @@ def check_xpd_plate():
             spec = px["per_path_db"][0, 0][px["valid"][0, 0]]
             out["flat_specular_per_path_db"] = spec.tolist()
     out["link_all_db"] = link
+
+
 def check_height_map_plate():
     """The plate (45°, 28 GHz, half-space concrete) with a material built from a measured map
     (MaterialSpec.from_height_map: a 1024² map drawn from σ = 0.4 mm, ℓ = 4 mm) against the
