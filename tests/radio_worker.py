@@ -702,6 +702,7 @@ def check_xpd_plate():
             spec = px["per_path_db"][0, 0][px["valid"][0, 0]]
             out["flat_specular_per_path_db"] = spec.tolist()
     out["link_all_db"] = link
+    return out
 
 
 def check_height_map_plate():
