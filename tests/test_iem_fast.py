@@ -188,3 +188,70 @@ def test_poisson_sums_started_at_their_peak_equal_brute_force(spec):
                     assert abs(math.expm1(got[0] - ref)) < 1e-9, (dim, q, K)
     big = iem_jit.poisson_sums(np.array([math.log(3.7e6)]), 10.0, spec, 2, rtol=1e-10)
     assert np.isfinite(big[0]) and abs(big[0] - 3.7e6) < 50.0  # ≈ q + log Ŵ_q
+
+
+@pytest.mark.parametrize("kernels", ["numba", "numpy"])
+@pytest.mark.parametrize(
+    "corr", [GaussianCorrelation, ExponentialCorrelation], ids=["gauss", "exp"]
+)
+def test_fung92_backscatter_fast_path_equals_the_general_terms(corr, kernels, monkeypatch):
+    """``complementary="fung92"`` in exact backscatter takes the closed-form path (one
+    complementary component of base cosθ, :func:`terms.fung92_backscatter_terms`); it must
+    give the general eight-term path's σ⁰ (reached just off backscatter, φ = π + 1e-7, where
+    an unshadowed σ⁰ is even in φ − π) to 1e-9, compiled and numpy, over kσ 0.05–2.5,
+    dielectrics and a PEC, both Fresnel options and first-order forms."""
+    monkeypatch.setenv("EMSCATTER_KERNELS", kernels)
+    for ks in (0.05, 0.3, 1.1, 2.5):
+        for eps in EPS:
+            for kw in (
+                dict(fresnel="incident", first_order="model"),
+                dict(),
+                dict(shadowing="height-correlated"),
+            ):
+                kw = {"shadowing": False, **kw}
+                r = corr(ks, 1.5)
+                common = dict(coherent=False, crosspol=False, complementary="fung92", rtol=1e-12)
+                fast = iem.bistatic(r, eps, 1.0, THETA, THETA, math.pi, **common, **kw)
+                gen = iem.bistatic(r, eps, 1.0, THETA, THETA, math.pi + 1e-7, **common, **kw)
+                for p in (0, 1):
+                    assert _rel(fast.sigma0[p, p], gen.sigma0[p, p]) < 1e-9, (ks, eps, kw, p)
+                assert np.all(fast.sigma0[0, 1] == 0) and np.all(fast.sigma0[1, 0] == 0)
+
+
+def test_fung92_closed_form_is_the_sum_of_the_general_terms():
+    """``fung92_backscatter_terms`` = Σ ¼ F̃ of ``complementary_terms(phase="fung92")`` in
+    backscatter (0–89.9°, ε from a dry soil to a metal-like 1e6 i), to 1e-9 relative."""
+    from emscatter.fresnel import fresnel_cos
+    from emscatter.solvers.iem import terms
+
+    th = np.radians(np.linspace(0.5, 89.9, 60))
+    si, cs = np.sin(th), np.cos(th)
+    for eps in (15 + 2j, 3.2 + 0.01j, 80 + 70j, 1e6j):
+        rh, rv = fresnel_cos(eps, cs)
+        T = terms.complementary_terms(si, cs, si, cs, 0 * si, -1 + 0 * si, eps, rh, rv,
+                                      phase="fung92")  # fmt: skip
+        G = sum(0.25 * np.asarray(F) for _, F, _, _ in T)
+        gh, gv = terms.fung92_backscatter_terms(si, cs, eps)
+        assert _rel(gh, G[0]) < 1e-9 and _rel(gv, G[3]) < 1e-9, eps
+    T = terms.complementary_terms(si, cs, si, cs, 0 * si, -1 + 0 * si, 1.0, -1 + 0 * cs,
+                                  1 + 0 * cs, lower=False, phase="fung92")  # fmt: skip
+    G = sum(0.25 * np.asarray(F) for _, F, _, _ in T)
+    gh, gv = terms.fung92_backscatter_terms(si, cs, "pec")
+    assert _rel(gh, G[0]) < 1e-12 and _rel(gv, G[3]) < 1e-12
+
+
+def test_fung92_compiled_fast_walk_equals_log_space_walk():
+    """The kernel's fung92 lanes against its own log-space walk (rtol 1e-12)."""
+    for spec in (iem_jit.GAUSSIAN, iem_jit.EXPONENTIAL):
+        for ks in (0.05, 0.3, 1.1, 2.5):
+            for eps in EPS:
+                for transition in (True, False):
+                    si, cs = np.sin(THETA), np.cos(THETA)
+                    K, pref = 2.0 * 3.0 * si, math.log(math.pi * 9.0)
+                    kw = dict(transition=transition, rtol=1e-12, max_terms=10**6, fung92=True)
+                    fast = iem_jit.backscatter(si, cs, eps, ks, K, pref, spec, 2, report=True,
+                                               **kw)  # fmt: skip
+                    slow = iem_jit.backscatter(si, cs, eps, ks, K, pref, spec, 2, fast=False, **kw)
+                    assert fast[3] == slow[3] == 0
+                    assert np.all(fast[4]), (spec, ks, eps, transition)
+                    assert _rel(fast[0], slow[0]) < 1e-10 and _rel(fast[1], slow[1]) < 1e-10

@@ -147,6 +147,7 @@ def backscatter(
     threads=1,
     lower_q2=True,
     fade=False,
+    fung92=False,
 ):
     """Exact-backscatter ``(σ⁰_hh, σ⁰_vv, log precision ratio, status)`` (the closed forms of
     :func:`emscatter.solvers.iem.terms.backscatter_terms`, end to end).
@@ -160,7 +161,9 @@ def backscatter(
     result does not depend on the split). ``lower_q2``: the lower-medium terms with the
     height phase ``Re q₂`` (AIEM, default) or, False, the upper medium's
     (``complementary="aiem-upper"``, ``"aiem-faded"``). ``fade``: those terms times
-    ``1 − γ_v``, one minus the vv transition factor (``"aiem-faded"``)."""
+    ``1 − γ_v``, one minus the vv transition factor (``"aiem-faded"``). ``fung92``: the 1992
+    IEM (``complementary="fung92"``: one complementary component of base ``cosθ``, no height
+    phase; ``lower_q2`` and ``fade`` are then ignored)."""
     _, _, back_kernel, run_split = _build()
     n = si.size
     pec = isinstance(eps, str)
@@ -177,7 +180,7 @@ def backscatter(
             si[a:b], cs[a:b], e, pec, float(ks), K[a:b], pref[a:b], int(spec), int(dim),
             bool(transition), log_rtol, int(max_terms), bool(fast), code, slope,
             psi[a:b] if code == 1 else psi, out_hh[a:b], out_vv[a:b], out_e[a:b], out_fast[a:b],
-            bool(lower_q2), bool(fade),
+            bool(lower_q2), bool(fade), bool(fung92),
         )  # fmt: skip
         status.append(st)
 

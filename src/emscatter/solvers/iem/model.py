@@ -209,9 +209,10 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     """Exact-backscatter σ⁰ (2, 2, n): the closed-form terms of
     :func:`emscatter.solvers.iem.terms.backscatter_terms`, two components (Kirchhoff, lower medium)
     plus the
-    n = 1 terms; hh and vv only (single-scattering cross-pol vanishes in the plane)."""
-    if opt.complementary == "fung92":  # the 1992 model: general terms
-        return None
+    n = 1 terms; hh and vv only (single-scattering cross-pol vanishes in the plane). The 1992
+    model (``"fung92"``): Kirchhoff plus one complementary component of base ``cosθ``
+    (:func:`emscatter.solvers.iem.terms.fung92_backscatter_terms`), no n = 1 terms."""
+    f92 = opt.complementary == "fung92"
     n = loc.n
     ks = k * rough.sigma
     ks2 = ks * ks
@@ -228,7 +229,7 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
             rough.dimension,
             transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
             shadow=shadow, threads=opt.threads, lower_q2=opt.complementary == "aiem",
-            fade=opt.complementary == "aiem-faded",
+            fade=opt.complementary == "aiem-faded", fung92=f92,
         )  # fmt: skip
         if status:
             raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
@@ -242,7 +243,12 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     si, cs = np.broadcast_to(loc.si, (n,)), np.broadcast_to(loc.ci, (n,))
     eps_f = eps if (pec or np.ndim(eps) == 0) else np.broadcast_to(eps, (n,))
     rh, rv = fresnel_cos(eps_f, cs)
-    (u_h, u_v), lower = kern.backscatter_terms(si, cs, eps_f, rh, rv, phase=opt.complementary)
+    if f92:  # one component of base cosθ and exponent −σ²cos²θ: a_p = cosθ (a = 0), no α⁻
+        u_h = u_v = 0j
+        g_h92, g_v92 = kern.fung92_backscatter_terms(si, cs, eps_f)
+        lower = (g_h92, g_v92, cs, 0.0 * cs, 0.0 * cs, cs)
+    else:
+        (u_h, u_v), lower = kern.backscatter_terms(si, cs, eps_f, rh, rv, phase=opt.complementary)
     # components: Kirchhoff (base 2 kz), the lower-medium α⁺, α⁻ terms, (and d at n = 1)
     e_k = -2.0 * ks2 * cs * cs
     bases = [2.0 * cs]

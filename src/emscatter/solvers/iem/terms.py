@@ -287,6 +287,30 @@ def backscatter_terms(si, cs, eps, rh, rv, *, phase="aiem"):
     return u, (gp_h, gp_v, cs + a, 0.25 * neg[0], 0.25 * neg[3], cs - a)
 
 
+def fung92_backscatter_terms(si, cs, eps):
+    """The 1992 IEM's complementary amplitude in exact backscatter, ``(G_h, G_v)``: the sum of
+    the eight ``¼ F̃`` of :func:`complementary_terms` with ``phase="fung92"`` (all with base
+    ``α = cosθ`` and no height phase), in closed form (Fung, Li & Chen 1992, eqs. 91 and 95;
+    SMRT's ``iem_fung92``)::
+
+        G_h = −4 sin²θ (ε − 1)/(cosθ + q₂)²
+        G_v = 4 sin²θ (ε − 1)(ε cos²θ + sin²θ)/(ε cosθ + q₂)²
+
+    (``sin²θ (1 + R)² …/cos²θ`` of the paper rewritten with ``1 + R_h = 2cosθ/(cosθ + q₂)``,
+    ``1 + R_v = 2ε cosθ/(ε cosθ + q₂)``: finite at grazing), ``q₂ = √(ε − sin²θ)``;
+    ``eps="pec"``: the limit ``(−4 sin²θ, 4 sin²θ)``. Unlike the AIEM forms
+    (:func:`backscatter_terms`) there are no terms of their own at n = 1. Checked against
+    :func:`complementary_terms` in the tests."""
+    s2 = si * si
+    if isinstance(eps, str):
+        return -4.0 * s2 + 0j, 4.0 * s2 + 0j
+    q2 = branch_root(eps - s2)
+    dh, dv = cs + q2, eps * cs + q2
+    return -4.0 * s2 * (eps - 1.0) / (dh * dh), 4.0 * s2 * (eps - 1.0) * (eps * cs * cs + s2) / (
+        dv * dv
+    )
+
+
 # ----------------------------------------------------------------------------- transition
 def transition_factor(eps, cs, ks: float, log_w, K, *, rtol: float = 1e-10):
     """``(γ_h, γ_v)`` ∈ [0, 1] of Wu et al. (2001) / Fung & Chen (2004) at incidence cosine

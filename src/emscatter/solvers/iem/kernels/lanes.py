@@ -375,14 +375,29 @@ def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2, fh, fv):
 
 
 @inline
+def fung92_co(s, c, q2, eps, pec):
+    """The 1992 IEM's complementary amplitude in exact backscatter, ``(G_h, G_v)`` (base
+    ``cosθ``, no height phase; :func:`emscatter.solvers.iem.terms.fung92_backscatter_terms`)."""
+    s2 = s * s
+    if pec:
+        return -4.0 * s2 + 0j, 4.0 * s2 + 0j
+    dh = c + q2
+    dv = eps * c + q2
+    gh = -4.0 * s2 * (eps - 1.0) / (dh * dh)
+    return gh, 4.0 * s2 * (eps - 1.0) * (eps * c * c + s2) / (dv * dv)
+
+
+@inline
 def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_rtol, r0, r08,
-                r08sq, a0, ieps, T, tr_ok, lower_q2, fade):  # fmt: skip
+                r08sq, a0, ieps, T, tr_ok, lower_q2, fade, fung92):  # fmt: skip
     """Per-geometry coefficients of exact backscatter, one geometry at a time (the
     log-space path): ``(fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J)`` — Fresnel
     coefficients at θ and with the transition, ``a = Re q₂``, the height exponents, the
-    lower-medium combinations (zero for a PEC: ``J = 1``); ``fast`` False where the linear
-    transition sums left the safe range (the log-space sums were used). ``T, tr_ok``: lane
-    state for a one-lane :func:`walk_transition` (lane 0 is overwritten)."""
+    lower-medium combinations (zero for a PEC: ``J = 1``; ``fung92``: the 1992 complementary
+    amplitude ×4 in ``p1``, base ``cosθ``, ``a = 0``, ``J = 3`` also for a PEC); ``fast``
+    False where the linear transition sums left the safe range (the log-space sums were
+    used). ``T, tr_ok``: lane state for a one-lane :func:`walk_transition` (lane 0 is
+    overwritten)."""
     s2 = s * s
     zero = (0j, 0j, 0j, 0j)
     q2, iq, rh, rv = fresnel_setup(s, c, eps, pec)
@@ -405,6 +420,10 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
                 e4 = math.exp(min(l4 - l1 - 2.0 * Q, 700.0))
         rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
     e_k = -2.0 * ks2 * c * c
+    if fung92:
+        gh92, gv92 = fung92_co(s, c, q2, eps, pec)
+        p1 = (4.0 * gh92, 0j, 0j, 4.0 * gv92)
+        return fast, rh, rv, rh_t, rv_t, 0.0, e_k, -ks2 * c * c, p1, zero, zero, 3
     if pec:
         return fast, rh, rv, rh_t, rv_t, 0.0, e_k, 0.0, zero, zero, zero, 1
     fh = fv = 1.0 - gv if fade else 1.0
@@ -415,13 +434,15 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
 @jit
 def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 max_terms, use_fast, sh_code, sh_slope, psi, out_hh, out_vv, out_e,
-                out_fast, lower_q2, fade):  # fmt: skip
-    """Exact-backscatter hh, vv per geometry: the linear-space walk where it is safe and
-    ``use_fast`` — blocks of :data:`LANES` geometries in lockstep: transition sums
-    (:func:`walk_transition`), then both series (:func:`lane_start`, :func:`walk_lanes`) —
-    else the log-space :func:`row_series` / :func:`transition_sums`, one geometry at a time.
-    Outputs σ⁰_hh, σ⁰_vv, the precision ratio (sum of the envelopes over the sum, ≥ 1;
-    :mod:`emscatter.solvers.iem.series`) and ``out_fast[r]``: the fast path was taken."""
+                out_fast, lower_q2, fade, fung92):  # fmt: skip
+    """Exact-backscatter hh, vv per geometry (``fung92``: the 1992 IEM, Kirchhoff plus one
+    complementary component of base ``cosθ``, no n = 1 terms of their own): the linear-space
+    walk where it is safe and ``use_fast`` — blocks of :data:`LANES` geometries in lockstep:
+    transition sums (:func:`walk_transition`), then both series (:func:`lane_start`,
+    :func:`walk_lanes`) — else the log-space :func:`row_series` / :func:`transition_sums`,
+    one geometry at a time. Outputs σ⁰_hh, σ⁰_vv, the precision ratio (sum of the envelopes
+    over the sum, ≥ 1; :mod:`emscatter.solvers.iem.series`) and ``out_fast[r]``: the fast
+    path was taken."""
     ks2 = ks * ks
     log_ks2 = math.log(ks2)
     rtol = math.exp(log_rtol)
@@ -490,7 +511,15 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                                                       a0)  # fmt: skip
             e_k = -2.0 * ks2 * c * c
             ek_lin = math.exp(e_k)
-            if pec:
+            dh = -4.0 * s2 * rh * rh * ek_lin
+            dv = 4.0 * s2 * rv * rv * ek_lin
+            if fung92:
+                a, e_g = 0.0, -ks2 * c * c
+                g1h, g1v = fung92_co(s, c, q2, eps, pec)
+                g2h = g2v = 0j
+                att1 = math.exp(e_g)
+                dh = dv = 0j
+            elif pec:
                 a, e_g, att1 = 0.0, 0.0, 0.0
                 g1h = g1v = g2h = g2v = 0j
             else:
@@ -502,8 +531,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 att1 = math.exp(e_g)
             started[l] = lane_start(
                 S, l, -4.0 * rh_t, 4.0 * rv_t, g1h, g1v, g2h, g2v, 2.0 * c, c + a, c - a, ek_lin,
-                att1, e_k, e_g, -4.0 * s2 * rh * rh * ek_lin, 4.0 * s2 * rv * rv * ek_lin,
-                ks2, K[r] * K[r], spec, dim,
+                att1, e_k, e_g, dh, dv, ks2, K[r] * K[r], spec, dim,
             )  # fmt: skip
             any_started = any_started or started[l]
         if any_started:
@@ -524,10 +552,10 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             s2 = s * s
             fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J = angle_setup(
                 s, c, K[r], eps, pec, ks2, spec, dim, transition, use_fast, rtol, log_rtol, r0,
-                r08, r08sq, a0, ieps, T, tr_ok, lower_q2, fade,
+                r08, r08sq, a0, ieps, T, tr_ok, lower_q2, fade, fung92,
             )  # fmt: skip
             lx[0] = math.log(2.0 * c) if c > 0 else -np.inf
-            if not pec:
+            if J == 3:
                 lx[1] = math.log(abs(c + a)) if c + a != 0 else -np.inf
                 lx[2] = math.log(abs(c - a)) if c - a != 0 else -np.inf
                 sx[1] = -1.0 if c + a < 0 else 1.0
@@ -535,6 +563,8 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             for p in range(2):
                 ak = -4.0 * rh_t if p == 0 else 4.0 * rv_t
                 u = (-4.0 * s2 * rh * rh) if p == 0 else (4.0 * s2 * rv * rv)
+                if fung92:
+                    u = 0j
                 amps = (
                     (
                         ak,
