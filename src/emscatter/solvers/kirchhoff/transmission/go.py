@@ -49,7 +49,19 @@ Energy. With the reflection of :mod:`.go` (same ``ε``, same slope variances), `
 would hold exactly for a flat lossless interface. Rough, single scattering: the shadowed
 fraction of the light is lost (no multiple scattering between facets), so ``R + T < 1`` by
 a deficit that grows with the slope and towards grazing incidence; the same deficit is in
-Mitsuba's ``roughdielectric`` (W07's model). Measured in ``tests/test_go_transmission.py``.
+Mitsuba's ``roughdielectric`` (W07's model; its albedo integrated from its own ``eval`` on
+the same grid equals ours to 3e-4 at α = 0.4). Measured deficit ``1 − (R + T)`` for
+``ε = 2.25``, separable Smith (``tests/test_go_transmission.py``; height-correlated within
+1e-3 of it), quadrature error < 1e-4::
+
+    α, θi:    0°        30°       60°       75°
+    0.1        0         0         4e-5      1.24e-2
+    0.3        1e-5      7.1e-4    2.17e-2   4.84e-2
+    0.5        2.8e-3    9.0e-3    3.68e-2   4.71e-2
+
+Part of it is light sent by a single facet into the wrong hemisphere (reflected below the
+horizon or refracted above it), which single scattering drops too; without shadowing the
+slope-space total is Smith's ``1 + Λ(θi)`` exactly (tested).
 
 Validity: that of GO (:func:`emscatter.solvers.kirchhoff.go.check_validity`).
 """
