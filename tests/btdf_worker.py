@@ -1,9 +1,11 @@
 """Mitsuba evaluations for tests/test_go_transmission.py in a fresh interpreter (Dr.Jit
 variants are per process): ``python tests/btdf_worker.py < JSON`` (standard input) with
 ``{"variant", "bsdf": dict, "wi": [[x, y, z], ...] (towards the light), "wo": [...] (towards
-the viewer)}`` prints ``{"eval": [...]}`` as JSON on its last line: ``bsdf.eval`` (radiance
-transport: ``f · |cosθ|`` of the light direction), channel 0. A vectorized (``llvm_*``)
-variant evaluates all pairs at once; a ``scalar_*`` one pair by pair.
+the viewer), "wavelength" [nm, optional]}`` prints ``{"eval": [...]}`` as JSON on its last
+line: ``bsdf.eval`` (radiance transport: ``f · |cosθ|`` of the light direction), channel 0, or
+in a ``*_polarized`` variant the 4×4 Mueller matrix per pair (Mitsuba's Stokes frames). A
+vectorized (``llvm_*``) variant evaluates all pairs at once; a ``scalar_*`` one pair by pair
+(unpolarized only).
 """
 
 from __future__ import annotations
@@ -32,8 +34,13 @@ def main(arg: str) -> None:
     else:
         si = mi.SurfaceInteraction3f()
         si.wi = mi.Vector3f(*(mi.Float(c) for c in wo.T))
+        if "spectral" in mi.variant():
+            si.wavelengths = mi.UnpolarizedSpectrum(float(args.get("wavelength", 550.0)))
         val = bsdf.eval(ctx, si, mi.Vector3f(*(mi.Float(c) for c in wi.T)))
-        vals = np.array(val[0], dtype=float).tolist()
+        if "polarized" in mi.variant():  # (4, 4, wavelengths, n) → (n, 4, 4), first λ
+            vals = np.moveaxis(np.array(val, dtype=float)[:, :, 0, :], -1, 0).tolist()
+        else:
+            vals = np.array(val[0], dtype=float).tolist()
     print(json.dumps({"eval": vals}))
 
 
