@@ -12,6 +12,7 @@ from emscatter.solvers.mom3d.dielectric_model import beam_fresnel, solve_dielect
 from emscatter.solvers.mom3d.incident import tapered_beam
 from emscatter.solvers.spm import model as spm
 from emscatter.spectra import GaussianCorrelation
+from emscatter.surfaces.generate import generate_surface
 
 K = 2 * math.pi  # λ = 1 m
 
@@ -65,6 +66,34 @@ def test_refined_grid_converges_for_high_permittivity():
     e_c = np.max(np.abs(coarse["reflectivity"] - ref))
     e_f = np.max(np.abs(fine["reflectivity"] - ref))
     assert e_f < e_c and e_f < 0.005, (e_c, e_f)
+
+
+def test_reciprocity_of_the_reactions_on_a_rough_dielectric():
+    """Lorentz reciprocity on one realization (ε = 3, Gaussian kσ = 0.3, kℓ = 3, 2λ × 2λ at
+    14 points/λ): the reaction ``∫(E_B·J_A − H_B·M_A) dS`` of beam B (from ``−k_s``) on A's
+    currents equals the converse. Measured: every pair within 2.8 % of the largest reaction,
+    hv/vh within 0.02 dB and 0.26 dB (open: not smaller at 20 points/λ, 2.5 %, 0.23 dB; the
+    PEC MFIE reaches 1.1 % at 8); R + T = 0.9939/0.9924 (h/v) on this surface."""
+    rough = GaussianCorrelation(0.3 / K, 3 / K)
+    dx = 1 / 14
+    h = generate_surface(rough, (28, 28), dx, rng=5).heights
+    ti, ts, ps = math.radians(30), math.radians(45), math.radians(70)
+    a = solve_dielectric_realization(h, dx, K, 3.0, ti, [ts], [ps])
+    b = solve_dielectric_realization(h, dx, K, 3.0, ts, [ti], [math.pi], phi_i=ps + math.pi)
+
+    def react(x, y):  # [pol of y's field, pol of x's currents]
+        out = np.empty((2, 2), complex)
+        for qi, q in enumerate("hv"):
+            e, hh = y["beam"].fields(x["points"], q)
+            for p in range(2):
+                out[qi, p] = np.sum(e * x["u"][p]) - np.sum(hh * x["w"][p])
+        return out
+
+    rab, rba = react(a, b), react(b, a).T
+    assert np.max(np.abs(rab - rba)) < 0.04 * np.max(np.abs(rab))
+    cross_db = 20 * np.log10(np.abs(rab[[0, 1], [1, 0]]) / np.abs(rba[[0, 1], [1, 0]]))
+    assert np.all(np.abs(cross_db) < 0.4), cross_db
+    assert np.all(np.abs(a["reflectivity"] + a["transmissivity"] - 1) < 0.012)
 
 
 @pytest.mark.slow
