@@ -124,8 +124,8 @@ def test_agrees_with_first_order_spm(theta_i):
 
 def test_bad_inputs_name_the_parameter():
     rough = GaussianCorrelation(0.01, 0.5)
-    with pytest.raises(ValueError, match="eps must be 'pec'"):
-        mom3d.bistatic(rough, 17 + 2j, K, 0.3, 0.3)
+    with pytest.raises(ValueError, match="eps must be a complex permittivity or 'pec'"):
+        mom3d.bistatic(rough, "gold", K, 0.3, 0.3)
     with pytest.raises(ValueError, match="dimension=2"):
         mom3d.bistatic(GaussianCorrelation(0.01, 0.5, dimension=1), "pec", K, 0.3, 0.3)
     with pytest.raises(ValueError, match="realizations must be an int ≥ 2"):

@@ -1,17 +1,20 @@
-"""The exact 3-D reference (issue 19), first form: method of moments for a perfectly conducting
-2-D rough surface ``z = f(x, y)`` — MFIE, pulse bases, point matching, a tapered incident wave
+"""The exact 3-D reference (issue 19): method of moments for a perfectly conducting or
+dielectric 2-D rough surface ``z = f(x, y)`` — MFIE (PEC) or Müller's equations (dielectric),
+pulse bases, point matching, a tapered incident wave
 (Tsang, Kong, Ding & Ao 2001 vol. II ch. 10), dense GMRES, Monte Carlo over realizations.
 
-==================  ====================================================================
-module              what it holds
-==================  ====================================================================
-:mod:`.model`       ``bistatic`` (Monte Carlo σ⁰, coherent reflectivity), ``solve_realization``
-:mod:`.operator`    the MFIE matrix (pulse basis, point matching, J/2 self term), GMRES
-:mod:`.incident`    the tapered wave as a Gaussian plane-wave spectrum, its exact power
-:mod:`.farfield`    far-field amplitudes, polarization vectors, hemisphere quadrature
-==================  ====================================================================
+=========================  ===============================================================
+module                     what it holds
+=========================  ===============================================================
+:mod:`.model`              ``bistatic`` (Monte Carlo σ⁰, coherent part), ``solve_realization``
+:mod:`.operator`           the MFIE matrix (pulse basis, point matching, J/2 self term), GMRES
+:mod:`.dielectric`         Müller's equations (J and M, both media's Green functions), self cells
+:mod:`.dielectric_model`   one dielectric realization: reflected/transmitted power, Fresnel beam
+:mod:`.incident`           the tapered wave as a Gaussian plane-wave spectrum, its exact power
+:mod:`.farfield`           far-field amplitudes, polarization vectors, hemisphere quadrature
+=========================  ===============================================================
 
-Not registered as a solver yet (perfect conductors only); call
+Not registered as a solver yet; call
 ``emscatter.solvers.mom3d.bistatic``.
 """
 

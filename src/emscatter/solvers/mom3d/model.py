@@ -1,5 +1,6 @@
-"""Method of moments for a perfectly conducting 2-D rough surface (the 3-D problem): one
-realization (:func:`solve_realization`) and the Monte Carlo σ⁰ (:func:`bistatic`).
+"""Method of moments for a perfectly conducting or dielectric 2-D rough surface (the 3-D
+problem): one realization (:func:`solve_realization`; dielectrics in :mod:`.dielectric_model`)
+and the Monte Carlo σ⁰ (:func:`bistatic`).
 
 The formulation (MFIE, pulse bases, point matching, analytic ``J/2`` self term) is in
 :mod:`.operator`, the tapered incident wave and its power in :mod:`.incident`, the far field and
@@ -11,10 +12,12 @@ realizations of the far-field amplitude ``A = p̂_s·F`` (:mod:`.farfield`):
   hemisphere (the specular lobe of a finite beam has a width ~ ``2/(k g cosθi)``), summed over
   the scattered polarizations: the coherent reflectivity per incident polarization;
 * per realization, the energy ratio ``∫ Σ_p dP/dΩ dΩ / P_inc`` (1 for a perfect conductor:
-  the check of every solution, in ``info["energy"]``).
+  the check of every solution, in ``info["energy"]``); for a dielectric ``R + T``
+  (reflected plus transmitted power, 1 when lossless; NaN for a lossy medium, whose
+  reflectivity per realization is ``info["reflectivity"]``).
 
-Not registered in :mod:`emscatter.solvers` (a perfect conductor only: the solver contract runs
-dielectrics); call it as ``emscatter.solvers.mom3d.bistatic``.
+Not registered in :mod:`emscatter.solvers` yet (a dense solve: minutes per realization for
+dielectric patches of a few wavelengths); call it as ``emscatter.solvers.mom3d.bistatic``.
 """
 
 from __future__ import annotations
@@ -25,8 +28,9 @@ import time
 import numpy as np
 
 from emscatter.conventions import check_angle, check_finite, check_positive, fmt
-from emscatter.fresnel import is_pec
+from emscatter.fresnel import check_eps, is_pec
 from emscatter.scattering import Scattering
+from emscatter.solvers.mom3d.dielectric_model import solve_dielectric_realization
 from emscatter.solvers.mom3d.farfield import amplitudes, hemisphere
 from emscatter.solvers.mom3d.incident import tapered_beam
 from emscatter.solvers.mom3d.operator import assemble, make_patch, rhs, solve
@@ -122,11 +126,13 @@ def solve_realization(
 
 
 def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes):
+    eps = check_eps(eps)
     if not is_pec(eps):
-        raise ValueError(
-            f"mom3d solves perfect conductors only: eps must be 'pec', got {eps!r} "
-            "(dielectrics are the next step of issue 19)"
-        )
+        if np.ndim(eps) != 0:
+            raise ValueError(f"mom3d needs one scalar eps, got an array of shape {np.shape(eps)}")
+        eps = complex(eps)
+        if abs(eps - 1.0) < 1e-9:
+            raise ValueError(f"eps={eps!r} is air: there is no interface to scatter from")
     if getattr(roughness, "dimension", None) != 2:
         raise ValueError(
             "mom3d needs a 2-D surface roughness (dimension=2), got "
@@ -142,17 +148,21 @@ def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes):
     ppw = check_positive("points_per_wavelength", ppw)
     if ppw < MIN_PPW:
         raise ValueError(f"points_per_wavelength must be ≥ {MIN_PPW:g}, got {fmt(ppw)}")
-    lam = 2 * math.pi / k
-    length = 8.0 * lam if length is None else check_positive("length", length, unit="m")
+    # dielectrics: points per wavelength in the denser medium (λ / Re √ε), Tsang's denser grid
+    lam = 2 * math.pi / k / (1.0 if is_pec(eps) else max(1.0, np.sqrt(eps).real))
+    lam0 = 2 * math.pi / k
+    length = 8.0 * lam0 if length is None else check_positive("length", length, unit="m")
     n_side = int(math.ceil(length / lam * ppw))
     need = matrix_bytes(n_side * n_side, _dtype_for(n_side * n_side))
+    if not is_pec(eps):
+        need = (4 * n_side * n_side) ** 2 * 16
     if need > max_bytes:
         raise ValueError(
             f"length={fmt(length)} m at points_per_wavelength={fmt(ppw)} needs "
             f"{n_side}² nodes and a {need / 2**30:.3g} GiB dense matrix, over "
             f"max_matrix_bytes={max_bytes / 2**30:.3g} GiB: use a smaller patch or raise it"
         )
-    return k, ti, length, n_side
+    return eps, k, ti, length, n_side, lam
 
 
 def bistatic(
@@ -179,13 +189,15 @@ def bistatic(
     Parameters
     ----------
     roughness : a 2-D :class:`~emscatter.spectra.Roughness` (Gaussian, exponential, …).
-    eps : ``"pec"`` (the only medium solved so far).
+    eps : ``"pec"`` (MFIE, :mod:`.operator`) or a complex scalar with ``Im ε ≥ 0`` below air
+        (Müller's equations, :mod:`.dielectric`; four unknowns per node).
     k : free-space wavenumber [rad/m].
     theta_i : incidence angle [rad], scalar, ``[0°, 80°]``; ``phi_i`` its azimuth [rad].
     theta_s, phi_s : scattering directions [rad], broadcast together.
     realizations : surfaces (≥ 2), each from ``SeedSequence(seed).spawn``; reproducible.
     length : side of the square patch [m] (default 8λ).
-    points_per_wavelength : nodes per λ along each axis (default 8, at least 6).
+    points_per_wavelength : nodes per λ along each axis (default 8, at least 6); for a
+        dielectric per wavelength inside it, ``λ / Re √ε`` (the denser grid it needs).
     taper_g : taper radius [m] (default ``length/4``).
     tol, max_iter : GMRES relative residual and iteration cap (an unconverged solve raises).
     max_matrix_bytes : refuse patches whose dense matrix exceeds this (default 2 GiB).
@@ -199,7 +211,7 @@ def bistatic(
     """
     from emscatter.surfaces.generate import generate_surface
 
-    k, ti, length, n_side = _check(
+    eps, k, ti, length, n_side, lam = _check(
         roughness, eps, k, theta_i, length, points_per_wavelength, realizations, max_matrix_bytes
     )
     pi_ = float(check_finite("phi_i", phi_i))
@@ -207,24 +219,21 @@ def bistatic(
     ps = check_finite("phi_s", phi_s)
     ts_b, ps_b = np.broadcast_arrays(ts, ps)
     shape = ts_b.shape
-    spacing = 2 * math.pi / k / points_per_wavelength
+    spacing = lam / points_per_wavelength
     seeds = np.random.SeedSequence(seed).spawn(realizations)
-    amps, hemis, energy, iters, secs = [], [], [], [], []
+    amps, hemis, energy, iters, secs, refl = [], [], [], [], [], []
     out = None
     for i, ss in enumerate(seeds):  # one dense solve per realization
         surf = generate_surface(roughness, (n_side, n_side), spacing, rng=np.random.default_rng(ss))
-        out = solve_realization(
-            surf.heights,
-            spacing,
-            k,
-            ti,
-            ts_b.ravel(),
-            ps_b.ravel(),
-            pi_,
-            taper_g=taper_g,
-            tol=tol,
-            max_iter=max_iter,
-        )
+        args = (ti, ts_b.ravel(), ps_b.ravel(), pi_)
+        opts = {"taper_g": taper_g, "tol": tol, "max_iter": max_iter}
+        if is_pec(eps):
+            out = solve_realization(surf.heights, spacing, k, *args, **opts)
+        else:
+            out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args, **opts)
+            out["energy"] = out["reflectivity"] + out["transmissivity"]
+            out["matrix_bytes"] = out["unknowns"] ** 2 * 16
+            refl.append(out["reflectivity"])
         amps.append(out["amplitude"])
         hemis.append(out["hemisphere"])
         energy.append(out["energy"])
@@ -264,6 +273,7 @@ def bistatic(
         dimension=2,
         info={
             "energy": np.array(energy),
+            "reflectivity": np.array(refl) if refl else np.ones((realizations, 2)),
             "incoherent_reflectivity": r_tot - r_coh,
             "sigma0_std": sig_se.reshape(2, 2, *shape),
             "iterations": np.array(iters),

@@ -1,0 +1,161 @@
+"""One realization of the 3-D method of moments for a dielectric interface (Müller's
+equations of :mod:`.dielectric`): reflected and transmitted far fields, their powers, and the
+exact reflected power of the tapered beam from a flat interface (the Fresnel reference).
+
+Far fields (``exp(−iωt)``, ``H`` in ``E/η₀`` units), from the densities ``u = sJ``, ``w = sM``
+radiating into medium ``i`` (refractive index ``n_i = √ε_i``, ``k_i = n_i k₀``)::
+
+    E = i k₀ e^{i k_i r}/(4π r) [(I − k̂k̂)·F_u − n_i k̂ × F_w],
+    F_X = Σ X_n e^{−i k_i k̂·r_n} Δx Δy,
+
+with the sources ``(u, w)`` in air and ``(−u, −w)`` below (the normal into medium 2 is
+``−n̂``). Power per steradian ``n_i k₀² |p̂·(F_u − n_i k̂ × F_w)|² / (16π²)`` (flux
+``n_i |E|²`` in these units). The reflectivity per incident polarization is the upper-hemisphere
+integral over ``P_inc``; the transmissivity the lower one, for a lossless medium (a lossy one
+has no far field below: there ``1 − R`` is the absorbed fraction).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from emscatter.fresnel import fresnel_cos
+from emscatter.solvers.mom3d.dielectric import (
+    assemble_dielectric,
+    rhs_dielectric,
+    solve_dielectric,
+)
+from emscatter.solvers.mom3d.farfield import DIR_BLOCK, hemisphere, pol_vectors
+from emscatter.solvers.mom3d.incident import tapered_beam
+from emscatter.solvers.mom3d.operator import make_patch
+
+__all__ = ["amplitudes_em", "beam_fresnel", "solve_dielectric_realization"]
+
+
+def amplitudes_em(points, area, k0, n_med, u, w, theta_s, phi_s) -> np.ndarray:
+    """``p̂·(F_u − n k̂ × F_w)`` ``(2, P, D)`` (h, v scattered) for densities ``u, w``
+    ``(P, N, 3)`` radiating into a medium of real index ``n_med`` in directions
+    ``theta_s, phi_s`` [rad] (flat; ``θ > π/2`` below the interface) [m²]."""
+    theta_s = np.asarray(theta_s, dtype=float).ravel()
+    phi_s = np.asarray(phi_s, dtype=float).ravel()
+    khat, hs, vs = pol_vectors(theta_s, phi_s)
+    p = u.shape[0]
+    uu = np.concatenate([u, w], axis=0).transpose(1, 0, 2).reshape(u.shape[1], 6 * p)
+    out = np.empty((2, p, theta_s.size), dtype=complex)
+    for d0 in range(0, theta_s.size, DIR_BLOCK):
+        d = slice(d0, min(theta_s.size, d0 + DIR_BLOCK))
+        f = (np.exp(-1j * k0 * n_med * (khat[d] @ points.T)) @ uu).reshape(-1, 2 * p, 3) * area
+        fu, fw = f[:, :p], f[:, p:]
+        vec = fu - n_med * np.cross(khat[d][:, None, :], fw)
+        out[0, :, d] = np.einsum("dpc,dc->pd", vec, hs[d])
+        out[1, :, d] = np.einsum("dpc,dc->pd", vec, vs[d])
+    return out
+
+
+def beam_fresnel(beam, eps2) -> np.ndarray:
+    """Exact reflected power of the tapered ``beam`` from the infinite flat interface, over
+    its incident power, ``(2,)`` for h and v: each plane wave of the spectrum split into TE/TM
+    of its own plane of incidence and reflected by Fresnel (distinct ``k⊥`` carry orthogonal
+    fluxes, Parseval)."""
+    kz = -beam.kvec[:, 2]
+    kp = np.hypot(beam.kvec[:, 0], beam.kvec[:, 1])
+    te = np.stack([-beam.kvec[:, 1], beam.kvec[:, 0], np.zeros_like(kz)], axis=1)
+    safe = kp > 1e-12 * beam.k
+    te[safe] /= kp[safe, None]
+    te[~safe] = [-math.sin(beam.phi_i), math.cos(beam.phi_i), 0.0]
+    tm = np.cross(te, beam.kvec / beam.k)
+    rh, rv = fresnel_cos(eps2, kz / beam.k)
+    w2 = beam.weight**2 * kz
+    out = []
+    for e in (beam.e_h, beam.e_v):
+        r = np.abs(np.sum(e * te, 1)) ** 2 * np.abs(rh) ** 2
+        r = r + np.abs(np.sum(e * tm, 1)) ** 2 * np.abs(rv) ** 2
+        out.append(float(np.sum(w2 * r) / np.sum(w2)))
+    return np.array(out)
+
+
+def solve_dielectric_realization(
+    heights,
+    spacing: float,
+    k: float,
+    eps2,
+    theta_i: float,
+    theta_s,
+    phi_s,
+    phi_i: float = 0.0,
+    *,
+    taper_g: float | None = None,
+    n_mu: int | None = None,
+    tol: float = 1e-6,
+    max_iter: int = 400,
+    dtype=np.complex128,
+) -> dict:
+    """Solve Müller's equations on one ``(ny, nx)`` height map [m] (square ``spacing`` [m])
+    for air over ``eps2`` at wavenumber ``k`` [rad/m], incidence ``theta_i, phi_i`` [rad].
+
+    Returns a dict: ``amplitude`` ``(2, 2, D)`` (scattered pol × incident pol, in the upper
+    directions ``theta_s, phi_s``, normalized as :mod:`.farfield`'s so that
+    ``σ⁰ = k² cosθi |A|² / (4π P_inc)``), ``hemisphere`` and ``weights`` (upper quadrature),
+    ``reflectivity`` ``(2,)`` and ``transmissivity`` ``(2,)`` (NaN for a lossy medium),
+    ``power``, ``beam``, ``u``, ``w``, ``points``, ``iterations``, ``residual``, ``seconds``,
+    ``unknowns``.
+    """
+    t0 = time.perf_counter()
+    eps2 = complex(eps2)
+    patch = make_patch(np.asarray(heights, dtype=float), spacing, spacing)
+    ny, nx = patch.shape
+    half = math.hypot((nx - 1) / 2 * spacing, (ny - 1) / 2 * spacing)
+    g = taper_g if taper_g is not None else min(nx, ny) * spacing / 4.0
+    beam = tapered_beam(k, theta_i, phi_i, g, half)
+    points = patch.points
+    mat = assemble_dielectric(patch, k, eps2, dtype=dtype)
+    t_asm = time.perf_counter() - t0
+    rhs = [rhs_dielectric(patch, *beam.fields(points, p), eps2) for p in ("h", "v")]
+    xs, its, res = solve_dielectric(mat, rhs, tol=tol, max_iter=max_iter)
+    del mat
+    t_solve = time.perf_counter() - t0 - t_asm
+    n = patch.n
+
+    def lift(a, b):
+        return np.stack([a, b, patch.fx * a + patch.fy * b], axis=1)
+
+    u = np.stack([lift(x[:n], x[n : 2 * n]) for x in xs])
+    w = np.stack([lift(x[2 * n : 3 * n], x[3 * n :]) for x in xs])
+    area = spacing * spacing
+    amp = amplitudes_em(points, area, k, 1.0, u, w, theta_s, phi_s)
+    size = max(nx, ny) * spacing
+    if n_mu is None:
+        n_mu = max(24, int(math.ceil(2.0 * k * size / math.pi)))
+    th, ph, wt = hemisphere(n_mu)
+    hemi = amplitudes_em(points, area, k, 1.0, u, w, th, ph)
+    scale = k * k / (16.0 * math.pi**2) / beam.power
+    refl = scale * np.einsum("spd,d->p", np.abs(hemi) ** 2, wt)
+    trans = np.full(2, np.nan)
+    if eps2.imag == 0.0 and eps2.real > 0:
+        n2 = math.sqrt(eps2.real)
+        th2, ph2, wt2 = hemisphere(max(24, int(math.ceil(n_mu * n2))))
+        low = amplitudes_em(points, area, k, n2, -u, -w, math.pi - th2, ph2)
+        trans = n2 * scale * np.einsum("spd,d->p", np.abs(low) ** 2, wt2)
+    if not np.all(np.isfinite(refl)) or not np.all(np.isfinite(amp)):
+        raise FloatingPointError("mom3d dielectric: the scattered field is not finite")
+    return {
+        "amplitude": amp,
+        "hemisphere": hemi,
+        "weights": wt,
+        "reflectivity": refl,
+        "transmissivity": trans,
+        "power": beam.power,
+        "beam": beam,
+        "u": u,
+        "w": w,
+        "points": points,
+        "iterations": its,
+        "residual": res,
+        "seconds": {"assemble": t_asm, "solve": t_solve, "total": time.perf_counter() - t0},
+        "unknowns": 4 * n,
+        "taper_g": g,
+        "n_mu": n_mu,
+    }
