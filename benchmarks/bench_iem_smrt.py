@@ -163,7 +163,7 @@ def main(argv=None) -> dict:
                 "k_sigma": ks,
                 "angles": n,
                 "smrt_series_truncation_converged": n_conv,
-            "smrt_last_relative_step": last_step,
+                "smrt_last_relative_step": last_step,
                 "seconds_median": {m: statistics.median(v) for m, v in per.items()},
                 "fung92_vs_smrt_converged_max_rel_diff": float(np.max(np.abs(a - b) / b)),
             }
