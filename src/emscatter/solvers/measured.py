@@ -92,22 +92,28 @@ def measured_errors(roughness, k: float, eps) -> dict | None:
     """``{"errors": {method: dB or nan}, "cell": (kσ, kℓ), "map": tag}`` of the map cell
     nearest to ``(kσ, kℓ)`` for this correlation and medium class; None where not mapped
     (module docstring). ``k`` [rad/m]."""
+    hit = _map_of(roughness, k, eps)
+    if hit is None:
+        return None
+    m, ks, kl = hit
+    i = _nearest(np.asarray(m["k_sigma"], dtype=float), ks)
+    j = _nearest(np.asarray(m["k_l"], dtype=float), kl)
+    if i is None or j is None:
+        return None
+    errors = {
+        name: (math.nan if v[i][j] is None else float(v[i][j])) for name, v in m["errors"].items()
+    }
+    return {"errors": errors, "cell": (m["k_sigma"][i], m["k_l"][j]), "map": m["tag"]}
+
+
+def _map_of(roughness, k: float, eps):
+    """``(map, kσ, kℓ)``: the map of this roughness's correlation and medium class, or None."""
     family, medium = _family(roughness), medium_class(eps)
     if family is None or medium is None:
         return None
-    ks, kl = k * roughness.sigma, k * roughness.length
     for m in load_table()["maps"]:
-        if m["correlation"] != family or m["medium"] != medium:
-            continue
-        i = _nearest(np.asarray(m["k_sigma"], dtype=float), ks)
-        j = _nearest(np.asarray(m["k_l"], dtype=float), kl)
-        if i is None or j is None:
-            return None
-        errors = {
-            name: (math.nan if v[i][j] is None else float(v[i][j]))
-            for name, v in m["errors"].items()
-        }
-        return {"errors": errors, "cell": (m["k_sigma"][i], m["k_l"][j]), "map": m["tag"]}
+        if m["correlation"] == family and m["medium"] == medium:
+            return m, k * roughness.sigma, k * roughness.length
     return None
 
 
@@ -143,25 +149,21 @@ def interpolated_errors(roughness, k: float, eps) -> dict | None:
     ``availability`` their interpolation weight, times a fade from 1 at the outermost cell
     centres to 0 half a step beyond (where :func:`measured_errors` stops too). None where the
     maps do not apply (another correlation, anisotropy, medium class unknown). ``k`` [rad/m]."""
-    family, medium = _family(roughness), medium_class(eps)
-    if family is None or medium is None:
+    hit = _map_of(roughness, k, eps)
+    if hit is None:
         return None
-    ks, kl = k * roughness.sigma, k * roughness.length
-    for m in load_table()["maps"]:
-        if m["correlation"] != family or m["medium"] != medium:
-            continue
-        i0, i1, t, fade_s = _bracket(np.asarray(m["k_sigma"], dtype=float), ks)
-        j0, j1, u, fade_l = _bracket(np.asarray(m["k_l"], dtype=float), kl)
-        fade = fade_s * fade_l
-        if fade <= 0.0:
-            return None
-        corners = [(i0, j0, (1 - t) * (1 - u)), (i1, j0, t * (1 - u)),
-                   (i0, j1, (1 - t) * u), (i1, j1, t * u)]  # fmt: skip
-        errors, avail = {}, {}
-        for name, table in m["errors"].items():
-            have = [(w, table[i][j]) for i, j, w in corners if w > 0 and table[i][j] is not None]
-            weight = sum(w for w, _ in have)
-            errors[name] = sum(w * float(e) for w, e in have) / weight if weight > 0 else math.nan
-            avail[name] = fade * weight
-        return {"errors": errors, "availability": avail, "map": m["tag"]}
-    return None
+    m, ks, kl = hit
+    i0, i1, t, fade_s = _bracket(np.asarray(m["k_sigma"], dtype=float), ks)
+    j0, j1, u, fade_l = _bracket(np.asarray(m["k_l"], dtype=float), kl)
+    fade = fade_s * fade_l
+    if fade <= 0.0:
+        return None
+    corners = [(i0, j0, (1 - t) * (1 - u)), (i1, j0, t * (1 - u)),
+               (i0, j1, (1 - t) * u), (i1, j1, t * u)]  # fmt: skip
+    errors, avail = {}, {}
+    for name, table in m["errors"].items():
+        have = [(w, table[i][j]) for i, j, w in corners if w > 0 and table[i][j] is not None]
+        weight = sum(w for w, _ in have)
+        errors[name] = sum(w * float(e) for w, e in have) / weight if weight > 0 else math.nan
+        avail[name] = fade * weight
+    return {"errors": errors, "availability": avail, "map": m["tag"]}

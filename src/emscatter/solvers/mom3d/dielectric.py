@@ -35,10 +35,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.sparse import linalg as spla
 
 from emscatter.solvers.mom3d.near import near_correction
-from emscatter.solvers.mom3d.operator import Patch
+from emscatter.solvers.mom3d.operator import Patch, gmres_solve
 
 __all__ = ["assemble_dielectric", "rhs_dielectric", "self_integrals", "solve_dielectric"]
 
@@ -201,37 +200,11 @@ def rhs_dielectric(patch: Patch, e_inc: np.ndarray, h_inc: np.ndarray, eps2: com
 
 
 def solve_dielectric(mat, rhs_list, *, tol=1e-6, max_iter=400):
-    """GMRES (restart 80) for each right-hand side; returns ``(solutions, iterations,
-    residuals)``. Raises :class:`RuntimeError` naming the residual when ``tol`` is missed:
-    an unconverged current is never returned silently."""
-    n4 = mat.shape[0]
-    low = mat.dtype == np.complex64
-
-    def mv(v):
-        v = np.asarray(v).ravel()
-        if low:
-            return (mat @ v.astype(np.complex64)).astype(np.complex128)
-        return mat @ v
-
-    op = spla.LinearOperator((n4, n4), matvec=mv, dtype=np.complex128)
-    xs, its, res = [], [], []
-    for b in rhs_list:
-        count = [0]
-
-        def cb(_r, count=count):
-            count[0] += 1
-
-        x, info = spla.gmres(
-            op, b, rtol=tol, atol=0.0, restart=80, maxiter=max(1, max_iter // 80 + 1),
-            callback=cb, callback_type="pr_norm",
-        )  # fmt: skip
-        r = float(np.linalg.norm(mv(x) - b) / np.linalg.norm(b))
-        if info != 0 and r > 10 * tol:
-            raise RuntimeError(
-                f"mom3d dielectric: GMRES did not converge: relative residual {r:.3g} > "
-                f"tol={tol:g} after {count[0]} iterations (raise max_iter or refine the grid)"
-            )
-        xs.append(x)
-        its.append(count[0])
-        res.append(r)
-    return xs, its, res
+    """GMRES (restart 80, :func:`~emscatter.solvers.mom3d.operator.gmres_solve`) for each
+    right-hand side; returns ``(solutions, iterations, residuals)``. Raises
+    :class:`RuntimeError` naming the residual when ``tol`` is missed: an unconverged current is
+    never returned silently."""
+    return gmres_solve(
+        mat, rhs_list, tol=tol, max_iter=max_iter, restart=80, what="mom3d dielectric",
+        hint="raise max_iter or refine the grid",
+    )  # fmt: skip

@@ -163,15 +163,16 @@ class Solution:
     residual: list
 
 
-def solve(
-    mat: np.ndarray, patch: Patch, rhs_list: list, *, tol: float = 1e-5, max_iter: int = 300
-) -> Solution:
-    """Solve ``M u = b`` for each ``b`` in ``rhs_list`` by GMRES (restart 50) on a
-    :class:`~scipy.sparse.linalg.LinearOperator` wrapping the dense matrix.
-
-    Raises :class:`RuntimeError` naming the residual if GMRES has not reached ``tol``
-    within ``max_iter`` iterations: an unconverged current is never returned silently."""
-    n2 = mat.shape[0]
+def gmres_solve(mat: np.ndarray, rhs_list: list, *, tol: float, max_iter: int, restart: int,
+                physical_optics_start: bool = False, what: str = "mom3d",
+                hint: str = "raise max_iter or check the surface sampling"):  # fmt: skip
+    """``M x = b`` for each ``b`` in ``rhs_list`` by GMRES (``restart``) on a
+    :class:`~scipy.sparse.linalg.LinearOperator` wrapping the dense matrix (complex64 matrices
+    are applied in single precision, the iteration in double). ``physical_optics_start``:
+    start from ``x = 2b`` (the PEC current ``2 N × H_inc``). Returns ``(solutions, iterations,
+    residuals)``; raises :class:`RuntimeError` naming the residual if GMRES has not reached
+    ``tol`` within ``max_iter`` iterations: an unconverged current is never returned silently."""
+    n = mat.shape[0]
     low = mat.dtype == np.complex64
 
     def mv(v):
@@ -180,8 +181,8 @@ def solve(
             return (mat @ v.astype(np.complex64)).astype(np.complex128)
         return mat @ v
 
-    op = spla.LinearOperator((n2, n2), matvec=mv, dtype=np.complex128)
-    us, its, res = [], [], []
+    op = spla.LinearOperator((n, n), matvec=mv, dtype=np.complex128)
+    xs, its, res = [], [], []
     for b in rhs_list:
         count = [0]
 
@@ -191,21 +192,31 @@ def solve(
         x, info = spla.gmres(
             op,
             b,
-            x0=2.0 * b,  # physical-optics start: u = 2 N × H_inc
+            x0=2.0 * b if physical_optics_start else None,
             rtol=tol,
             atol=0.0,
-            restart=50,
-            maxiter=max(1, max_iter // 50 + 1),
+            restart=restart,
+            maxiter=max(1, max_iter // restart + 1),
             callback=cb,
             callback_type="pr_norm",
         )
         r = float(np.linalg.norm(mv(x) - b) / np.linalg.norm(b))
         if info != 0 and r > 10 * tol:
             raise RuntimeError(
-                f"mom3d: GMRES did not converge: relative residual {r:.3g} > tol={tol:g} "
-                f"after {count[0]} iterations (raise max_iter or check the surface sampling)"
+                f"{what}: GMRES did not converge: relative residual {r:.3g} > tol={tol:g} "
+                f"after {count[0]} iterations ({hint})"
             )
-        us.append(current(patch, x))
+        xs.append(x)
         its.append(count[0])
         res.append(r)
-    return Solution(us, its, res)
+    return xs, its, res
+
+
+def solve(
+    mat: np.ndarray, patch: Patch, rhs_list: list, *, tol: float = 1e-5, max_iter: int = 300
+) -> Solution:
+    """Solve ``M u = b`` for each ``b`` in ``rhs_list`` (:func:`gmres_solve`, restart 50, from
+    the physical-optics current) and return the surface currents."""
+    xs, its, res = gmres_solve(mat, rhs_list, tol=tol, max_iter=max_iter, restart=50,
+                               physical_optics_start=True)  # fmt: skip
+    return Solution([current(patch, x) for x in xs], its, res)
