@@ -1,4 +1,4 @@
-"""Porous, wet and polluted surfaces: the seed's chapter 4 as a :class:`~.table.BrdfTable` transform.
+"""Porous, wet and polluted surfaces: the seed's chapter 4 as a transform of a BrdfTable.
 
 After Mérillou, Dischler & Ghazanfarpour, "A BRDF post-process to integrate porosity on rendered
 surfaces", IEEE TVCG 6 (2000) 306, as the seed thesis writes it (§4.3 eqs. 4.1–4.3, §4.4 eq. 4.4,
@@ -26,7 +26,8 @@ of diffuse albedo ``k_d,f`` and mirror reflectance ``k_s,f``;
 
 ``G_p = c_i/(c_i − k c_i + k) · c_o/(c_o − k c_o + k)``, ``k = √(2m²/π)``, ``c = cosθ``   (4.1)
 
-``A_p = k_a (1 − (1 − k_a)^{n_b}) / (1 − (1 − k_a)) = 1 − (1 − k_a)^{n_b}``, ``k_a = 1 − k_s − k_d``  (4.2)
+``A_p = k_a (1 − (1 − k_a)^{n_b}) / (1 − (1 − k_a)) = 1 − (1 − k_a)^{n_b}``,
+``k_a = 1 − k_s − k_d``                                                               (4.2)
 
 ``n_b = s_p [3.7 − 2 ((θi + θo)/2 − 2π/(s_p + 6))²]``                                 (4.3)
 
