@@ -66,7 +66,9 @@ from . import grid
 from .table import BrdfTable
 
 __all__ = [
+    "PLUGIN_PARAMS",
     "WATER_N",
+    "from_plugin_params",
     "fill_fraction",
     "polluted",
     "pore_bounces",
@@ -314,3 +316,50 @@ def polluted(
     and faster with ``alpha``. Other keywords as :func:`porous`."""
     p = fill_fraction(t, t0, t_fill)
     return porous(table, alpha, filling=p, kd_foreign=kd_pollution, ks_foreign=0.0, **kw)
+
+
+#: Parameters of the Mitsuba plugin ``"emscatter"`` that apply this transform at load time.
+PLUGIN_PARAMS = (
+    "porosity",
+    "pore_shape",
+    "pore_slope",
+    "diffuse_albedo",
+    "wetness",
+    "pollution_time",
+    "pollution_fill_time",
+    "pollution_albedo",
+)
+
+
+def from_plugin_params(table: BrdfTable, params: dict) -> BrdfTable:
+    """The transform the plugin parameters ask for (names in :data:`PLUGIN_PARAMS`): ``porosity``
+    α (required once any is given), ``pore_shape`` s_p, ``pore_slope`` m, ``diffuse_albedo`` k_d,
+    and either ``wetness`` (:func:`wet`) or ``pollution_time`` with ``pollution_fill_time`` and
+    ``pollution_albedo`` (:func:`polluted`, t0 = 0), or neither (:func:`porous`)."""
+    unknown = sorted(set(params) - set(PLUGIN_PARAMS))
+    if unknown:
+        raise ValueError(f"unknown porosity parameters {unknown}; allowed: {list(PLUGIN_PARAMS)}")
+    if "porosity" not in params:
+        raise ValueError(f"give 'porosity' (α ∈ [0, 1]) with {sorted(params)}")
+    p = {k: float(v) for k, v in params.items()}
+    kw = {
+        "pore_shape": p.get("pore_shape", 2.0),
+        "m": p.get("pore_slope", 0.08),
+        "kd": p.get("diffuse_albedo", 0.0),
+    }
+    if "wetness" in p and "pollution_time" in p:
+        raise ValueError("give 'wetness' or 'pollution_time', not both")
+    if "wetness" in p:
+        return wet(table, p["porosity"], p["wetness"], **kw)
+    if "pollution_time" in p:
+        return polluted(
+            table,
+            p["porosity"],
+            p["pollution_time"],
+            t_fill=p.get("pollution_fill_time", 0.3),
+            kd_pollution=p.get("pollution_albedo", 0.08),
+            **kw,
+        )
+    if "pollution_fill_time" in p or "pollution_albedo" in p:
+        raise ValueError("'pollution_fill_time' and 'pollution_albedo' need 'pollution_time'")
+    return porous(table, p["porosity"], **kw)
