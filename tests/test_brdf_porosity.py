@@ -252,3 +252,22 @@ def test_plugin_params_errors(bp):
         P.from_plugin_params(bp, {"wetness": 0.3})
     with pytest.raises(ValueError, match="not both"):
         P.from_plugin_params(bp, {"porosity": 0.3, "wetness": 0.3, "pollution_time": 0.1})
+
+
+def test_plugin_params_map_to_the_transform_keywords(bp):
+    """Each plugin parameter reaches its keyword: ``specular_albedo`` is ``ks``, the pollution
+    parameters ``polluted``'s (the figures of validation/brdf/porosity rely on both)."""
+    got = P.from_plugin_params(
+        bp, {"porosity": 0.35, "diffuse_albedo": 0.4, "specular_albedo": 0.5}
+    )
+    want = P.porous(bp, 0.35, kd=0.4, ks=0.5)
+    np.testing.assert_array_equal(got.values, want.values)
+    default_ks = P.from_plugin_params(bp, {"porosity": 0.35, "diffuse_albedo": 0.4})
+    assert not np.array_equal(default_ks.values, got.values)
+    got = P.from_plugin_params(
+        bp,
+        {"porosity": 0.35, "diffuse_albedo": 0.4, "specular_albedo": 0.5, "pollution_time": 0.4,
+         "pollution_fill_time": 0.6, "pollution_albedo": 0.08},
+    )  # fmt: skip
+    want = P.polluted(bp, 0.35, 0.4, t_fill=0.6, kd_pollution=0.08, kd=0.4, ks=0.5)
+    np.testing.assert_array_equal(got.values, want.values)

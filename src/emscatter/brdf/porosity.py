@@ -324,6 +324,7 @@ PLUGIN_PARAMS = (
     "pore_shape",
     "pore_slope",
     "diffuse_albedo",
+    "specular_albedo",
     "wetness",
     "pollution_time",
     "pollution_fill_time",
@@ -334,6 +335,7 @@ PLUGIN_PARAMS = (
 def from_plugin_params(table: BrdfTable, params: dict) -> BrdfTable:
     """The transform the plugin parameters ask for (names in :data:`PLUGIN_PARAMS`): ``porosity``
     α (required once any is given), ``pore_shape`` s_p, ``pore_slope`` m, ``diffuse_albedo`` k_d,
+    ``specular_albedo`` k_s (default: the table's own albedo, :func:`porous`),
     and either ``wetness`` (:func:`wet`) or ``pollution_time`` with ``pollution_fill_time`` and
     ``pollution_albedo`` (:func:`polluted`, t0 = 0), or neither (:func:`porous`)."""
     unknown = sorted(set(params) - set(PLUGIN_PARAMS))
@@ -347,6 +349,8 @@ def from_plugin_params(table: BrdfTable, params: dict) -> BrdfTable:
         "m": p.get("pore_slope", 0.08),
         "kd": p.get("diffuse_albedo", 0.0),
     }
+    if "specular_albedo" in p:
+        kw["ks"] = p["specular_albedo"]
     if "wetness" in p and "pollution_time" in p:
         raise ValueError("give 'wetness' or 'pollution_time', not both")
     if "wetness" in p:

@@ -15,8 +15,8 @@ Scene-dict / XML parameters: ``table`` (a key from :func:`register_table`), ``co
 (bool, default true: include the coherent delta lobe), ``sampling_resolution`` (int, 64), and
 the seed's ch. 4 porosity applied to the table at load time (:mod:`emscatter.brdf.porosity`,
 :func:`~emscatter.brdf.porosity.from_plugin_params`): ``porosity``, ``pore_shape``,
-``pore_slope``, ``diffuse_albedo``, ``wetness``, ``pollution_time``, ``pollution_fill_time``,
-``pollution_albedo`` (floats).
+``pore_slope``, ``diffuse_albedo``, ``specular_albedo``, ``wetness``, ``pollution_time``,
+``pollution_fill_time``, ``pollution_albedo`` (floats).
 
 What it does (numpy preparation in :mod:`emscatter.render.plugin_data`):
 

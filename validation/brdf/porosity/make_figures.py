@@ -35,7 +35,7 @@ def main(out_dir: Path) -> int:
         lambda wi, wo, wl: blinn_phong(wi, wo, N_BP, ks=KS), WL, resolution=(30, 60)
     )
     key = em_mi.register_table(base)
-    common = {"diffuse_albedo": KD, "pore_shape": 2.0, "pore_slope": 0.08}
+    common = {"diffuse_albedo": KD, "specular_albedo": KS, "pore_shape": 2.0, "pore_slope": 0.08}
 
     def bsdf(**params):
         return {"type": "emscatter", "table": key, "sampling_resolution": 32, **common, **params}
