@@ -5,8 +5,7 @@ emscatter Mitsuba plugin (``--via plugin``, the default in ``llvm_*`` variants, 
 included) or converted to an RGL file for Mitsuba's ``measured`` (``--via measured``, the
 default in ``scalar_*`` variants, where the plugin does not run), or an RGL ``.bsdf`` file
 (Mitsuba's ``measured``). ``--scene FILE.xml``: the user's Mitsuba 3 scene, where a shape refers
-to the BSDF
-as ``<ref id="emscatter"/>`` (its film sets the image size). The work is
+to the BSDF as ``<ref id="emscatter"/>`` (its film sets the image size). The work is
 :mod:`emscatter.render.job`; every input is checked before Mitsuba is started: the source
 (exists, ``.npz``/``.bsdf``, an emscatter BRDF table), the outputs, the variant, ``--spp`` and
 the size. Errors are one line with exit status 2.
