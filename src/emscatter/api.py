@@ -462,6 +462,8 @@ def _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options):
         finest=lobe_width(rough, k),
         tol=tol,
     )
+    if getattr(module, "COHERENT_IN_SIGMA0", False):  # GO: σ⁰ is the whole intensity
+        return np.zeros_like(r_inc), r_inc, err, evals
     r_coh = module.bistatic(rough, eps, k, ti, ti, pi_, pi_, **options).coherent
     return np.asarray(r_coh), r_inc, err, evals
 
