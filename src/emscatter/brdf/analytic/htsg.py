@@ -334,7 +334,10 @@ def htsg_table(
         },
     )
     coh = np.stack(
-        [htsg_specular(table.theta_i, lam, sigma0, tau, n, **spec_opts) for lam in table.wavelengths]
+        [
+            htsg_specular(table.theta_i, lam, sigma0, tau, n, **spec_opts)
+            for lam in table.wavelengths
+        ]
     )
     meta = dict(table.metadata)
     meta["coherent"] = "HTSG specular |F|^2 exp(-g) S^2"
