@@ -16,6 +16,8 @@ horizon; vectorized over directions).
   §2.6.1), single scattering with exact 2-D shadowing and masking.
 * :func:`~.htsg.htsg` — He, Torrance, Sillion & Greenberg 1991 (seed §2.3.2), Kirchhoff wave
   optics with shadowing and an effective roughness; emscatter's PO when both are off.
+* :func:`~.stam.stam` — Stam 1999's diffraction shader for a Gaussian surface (seed §2.3.3),
+  anisotropic ``(τ_x, τ_y)``; HTSG without shadowing and effective roughness.
 * :func:`evaluate` — any catalogue model (these and the ones of :mod:`.analytic`) by name;
   :func:`equivalent_beckmann` — the chapter-3 "general roughness" of each model (its Beckmann
   ``m``, by :mod:`.equivalence`'s criterion).
@@ -67,6 +69,7 @@ from emscatter.brdf.analytic.equivalence import (
     phong_from_beckmann,
 )
 from emscatter.brdf.analytic.htsg import htsg, htsg_equivalent_beckmann
+from emscatter.brdf.analytic.stam import stam, stam_equivalent_beckmann
 from emscatter.conventions import check_in_range, check_positive
 
 __all__ = [
@@ -258,6 +261,7 @@ MODELS = {
     "neumann": neumann,
     "poulin-fournier": poulin_fournier,
     "htsg": htsg,
+    "stam": stam,
 }
 
 #: whether ``f(wi, wo) = f(wo, wi)`` holds for the model (tested both ways)
@@ -272,6 +276,7 @@ RECIPROCAL = {
     "neumann": True,
     "poulin-fournier": True,
     "htsg": True,
+    "stam": True,
 }
 
 
@@ -303,6 +308,8 @@ def equivalent_beckmann(model: str, **params) -> Equivalence:
         return htsg_equivalent_beckmann(
             params["sigma0"], params["tau"], wavelength=params.get("wavelength")
         )
+    if model == "stam":
+        return stam_equivalent_beckmann(params["sigma"], params["tau_x"], params.get("tau_y"))
     if model == "poulin-fournier":
         mx = poulin_fournier_rms_slope(params.get("d", 2.5), params.get("h", -0.3))
         return Equivalence((mx, 0.0), 0.0, "rms slope of the cylinder profile (seed eq. 3.1)")
@@ -325,8 +332,8 @@ def equivalent_beckmann(model: str, **params) -> Equivalence:
         return beckmann_from_blinn(params["n"])
     raise ValueError(
         f"equivalent_beckmann takes one of ['blinn-phong', 'htsg', 'lafortune', 'neumann', "
-        f"'phong', 'poulin-fournier', 'strauss'], got {model!r} (ward and cook-torrance are "
-        "Beckmann; for ashikhmin-shirley use equivalence.ashikhmin_from_ward)"
+        f"'phong', 'poulin-fournier', 'stam', 'strauss'], got {model!r} (ward and "
+        "cook-torrance are Beckmann; for ashikhmin-shirley use equivalence.ashikhmin_from_ward)"
     )
 
 
