@@ -134,9 +134,9 @@ def _equivalence_rows():
 
 def _htsg_section() -> list[str]:
     sys.path.insert(0, str(HERE))
-    from catalogue_htsg import section
+    from catalogue_htsg import section, stam_section
 
-    return section()
+    return section() + stam_section()
 
 
 def main() -> int:
