@@ -89,7 +89,7 @@ def test_bad_points_are_one_line_errors(option, rx, message, tmp_path, capsys):
         (["--map-model", "fit"], "--map-model applies only with --height-map FILE"),
         # 1 mm spacing resolves |K| ≤ π/Δ = 3142 rad/m; 2k at 300 GHz is 12 578 rad/m
         (["--height-map", "{map}", "--frequencies-ghz", "300"], "at 300 GHz"),
-        (["--height-map", "{map}", "--plate"], "--height-map apply to scenes, not to --plate"),
+        (["--height-map", "{map}", "--plate"], "--height-map applies to scenes, not to --plate"),
         # a 256 mm map's Welch patches do not reach down to 2k at 3.5 GHz (a default frequency)
         (["--height-map", "{map}"], "is too small for 3.5 GHz"),
         (

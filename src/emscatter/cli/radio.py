@@ -236,7 +236,7 @@ def run(a) -> int:
 
     out = Path(a.out)
     if a.plate and a.height_map:
-        raise ValueError("--medium, --tx and --height-map apply to scenes, not to --plate")
+        raise ValueError("--height-map applies to scenes, not to --plate")
     a.map_spec = _map_spec(a)  # the map read and its band checked before anything else
     if a.builtin_json is not None:
         if a.plate or a.tx is not None or a.extrapolate:
@@ -248,8 +248,8 @@ def run(a) -> int:
         raise ValueError(
             "--extrapolate applies to the indoor scenes, not to --plate (its media are in band)"
         )
-    if a.plate and (a.medium or a.tx is not None or a.rx or a.height_map):
-        raise ValueError("--medium, --tx and --height-map apply to scenes, not to --plate")
+    if a.plate and (a.medium or a.tx is not None or a.rx):
+        raise ValueError("--medium and --tx apply to scenes, not to --plate")
     if a.plate:
         from ..radio import demo
 
