@@ -807,6 +807,14 @@ def check_textured_plate():
         out[key + "_specular"] = _textured_plate(
             ci, (0, 0, 1), samples=10_000, diffuse=False, textured=textured
         )[0]
+    from emscatter.radio.material import EmscatterRadioMaterial
+
+    out["errors"] = {
+        "no_direction": _error(lambda: EmscatterRadioMaterial("a", surface=aniso, medium="wood")),
+        "flat": _error(lambda: EmscatterRadioMaterial("b", medium="wood", texture_direction=(0, 0, 1))),
+        "zero": _error(lambda: EmscatterRadioMaterial("c", surface=aniso, medium="wood",
+                                                     texture_direction=(0, 0, 0))),
+    }  # fmt: skip
     return out
 
 
