@@ -809,12 +809,12 @@ def check_textured_plate():
         )[0]
     from emscatter.radio.material import EmscatterRadioMaterial
 
+    mat = EmscatterRadioMaterial
     out["errors"] = {
-        "no_direction": _error(lambda: EmscatterRadioMaterial("a", surface=aniso, medium="wood")),
-        "flat": _error(lambda: EmscatterRadioMaterial("b", medium="wood", texture_direction=(0, 0, 1))),
-        "zero": _error(lambda: EmscatterRadioMaterial("c", surface=aniso, medium="wood",
-                                                     texture_direction=(0, 0, 0))),
-    }  # fmt: skip
+        "no_direction": _error(lambda: mat("a", surface=aniso, medium="wood")),
+        "flat": _error(lambda: mat("b", medium="wood", texture_direction=(0, 0, 1))),
+        "zero": _error(lambda: mat("c", surface=aniso, medium="wood", texture_direction=(0, 0, 0))),
+    }
     return out
 
 

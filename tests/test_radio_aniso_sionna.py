@@ -20,7 +20,7 @@ def _db(a, b):
 
 
 def test_textured_plate_laws():
-    r = _ok(_run("textured_plate"), "textured_plate")["result"]
+    r = _ok(_run("textured_plate"), "textured_plate")
     assert r["method"] == "po"
     # diffuse power vs the radar-equation quadrature of the anisotropic σ⁰ (as the isotropic
     # plate check: 0.2 dB, here widened by 3 Monte Carlo standard errors)
