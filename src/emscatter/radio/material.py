@@ -127,10 +127,11 @@ def _parse_props(props: mi.Properties) -> dict:
         del props[key]
         return v
 
-    for key in ("medium", "method", "correlation"):
+    for key in ("medium", "method", "correlation", "texture_direction"):
         if key in props:
             out[key] = str(take(key))
-    for key in ("eps_real", "conductivity", "thickness", "rms_height", "correlation_length"):
+    floats = ("eps_real", "conductivity", "thickness", "rms_height", "correlation_length")
+    for key in (*floats, "correlation_length_y"):
         if key in props:
             out[key] = float(take(key))
     if "half_space" in props and bool(take("half_space")):
@@ -148,7 +149,17 @@ def _parse_props(props: mi.Properties) -> dict:
                 f"emscatter-radio-material {props.id()!r}: correlation must be 'gaussian' or "
                 f"'exponential', got {kind!r}"
             )
-        out["surface"] = cls(sigma=out.pop("rms_height"), length=out.pop("correlation_length"))
+        out["surface"] = cls(sigma=out.pop("rms_height"), length=out.pop("correlation_length"),
+                             length_y=out.pop("correlation_length_y", None))  # fmt: skip
+    if "texture_direction" in out:  # "0 0 1" or "0, 0, 1"
+        text = out["texture_direction"]
+        try:
+            out["texture_direction"] = [float(v) for v in text.replace(",", " ").split()]
+        except ValueError:
+            raise ValueError(
+                f"emscatter-radio-material {props.id()!r}: texture_direction must be three "
+                f"numbers (e.g. '0 0 1'), got {text!r}"
+            ) from None
     return out
 
 
@@ -208,6 +219,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             conductivity = kw.get("conductivity")
             thickness = kw.get("thickness", DEFAULT_THICKNESS)
             method = kw.get("method", "auto")
+            texture_direction = kw.get("texture_direction")
         super().__init__(props)
         self._medium = resolve_medium(medium, eps_real=eps_real, conductivity=conductivity)
         thickness = check_thickness(thickness)
