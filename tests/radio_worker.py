@@ -890,6 +890,14 @@ def check_textured_scenes():
     )
     out["unchanged"] = not any(isinstance(x, m.EmscatterRadioMaterial)
                                for x in sc.radio_materials.values())  # fmt: skip
+    h = radio.roughen(sc, "flat", {"brick": (1e-3, 30e-3, 12e-3)}, table_options=opts,
+                      texture_direction={"brick": (2, 0, 0)})  # fmt: skip
+    out["per_medium_direction"] = [float(v) for v in h.materials["rough-brick"]._texture]
+    radio.flatten(sc)
+    grooved = {"brick": (1e-3, 30e-3, 12e-3)}
+    out["bad_direction"] = _error(
+        lambda: radio.roughen(sc, "flat", grooved, texture_direction={"brick": "up"})
+    )
     kw = {"max_depth": 2, "samples_per_src": 100_000, "diffuse_reflection": True, "seed": 1}
     rmkw = {"center": mi.Point3f(55.0, 0.0, 1.5), "orientation": mi.Point3f(0, 0, 0),
             "size": mi.Point2f(50.0, 16.0), "cell_size": mi.Point2f(2.0, 2.0),

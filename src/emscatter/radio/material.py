@@ -239,8 +239,10 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             dr.make_opaque(self._dir)
         elif getattr(surface, "dimension", 2) == 2 and not getattr(surface, "is_isotropic", True):
             raise ValueError(
-                f"anisotropic roughness ({surface.describe()}) needs texture_direction=(dx, dy, "
-                "dz): the world direction of the ℓx axis, e.g. (0, 0, 1) for vertical grooves"
+                "radio materials need isotropic 2-D roughness unless a texture direction is "
+                f"given: anisotropic roughness ({surface.describe()}) needs texture_direction="
+                "(dx, dy, dz), the world direction of the ℓx axis, e.g. (0, 0, 1) for vertical "
+                "grooves"
             )
         else:
             self._surface = check_surface(surface)

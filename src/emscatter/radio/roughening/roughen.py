@@ -388,11 +388,27 @@ def roughen(
     ``method``, ``out_of_range``, ``table_options``: as for
     :class:`~emscatter.radio.material.EmscatterRadioMaterial`. Tables are built lazily, at the
     first trace, only for used materials. ``texture_direction``: world direction of the ``ℓx``
-    axis of every anisotropic roughness (``(σ, ℓx, ℓy)``; :mod:`emscatter.radio.texture`),
-    required when one is given."""
+    axis of every anisotropic roughness (``(σ, ℓx, ℓy)``; :mod:`emscatter.radio.texture`), or
+    a dict material name or ITU type → direction (per medium, keyed as ``mapping``), required
+    where one is given."""
     from ..material import EmscatterRadioMaterial
 
-    direction = None if texture_direction is None else check_direction(texture_direction)
+    if isinstance(texture_direction, dict):
+        directions = {
+            str(k): check_direction(v, f"texture_direction[{k!r}]")
+            for k, v in texture_direction.items()
+        }
+    else:
+        common_dir = None if texture_direction is None else check_direction(texture_direction)
+        directions = {}
+
+    def direction_of(a):
+        if not directions:
+            return common_dir
+        for key in (a.original, a.itu_type, a.medium_key):
+            if key in directions:
+                return directions[key]
+        return None
 
     assignments = plan(scene, roughness, mapping, frequencies=frequencies, extrapolate=extrapolate)
     if flat:
@@ -401,9 +417,11 @@ def roughen(
             for a in assignments
         ]
     textured = [
-        a.object for a in assignments if a.surface is not None and not a.surface.is_isotropic
+        a.object
+        for a in assignments
+        if a.surface is not None and not a.surface.is_isotropic and direction_of(a) is None
     ]
-    if textured and direction is None:
+    if textured:
         raise ValueError(
             f"roughen: anisotropic roughness (ℓx ≠ ℓy) on {textured[:4]} needs "
             "texture_direction=(dx, dy, dz), the world direction of the ℓx axis (e.g. (0, 0, 1): "
@@ -428,7 +446,7 @@ def roughen(
                 table_options=table_options,
                 texture_direction=None
                 if a.surface is None or a.surface.is_isotropic
-                else direction,
+                else direction_of(a),
             )
     originals = {}
     for a in assignments:
