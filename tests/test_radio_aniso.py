@@ -161,3 +161,18 @@ def test_parse_medium_option_and_bad_input():
         tx.check_direction((0, 0, float("nan")))
     with pytest.raises(ValueError, match="n_psi"):
         tb.TableOptions(n_psi=1)
+
+
+def test_material_spec_carries_the_texture_direction():
+    from emscatter import radio
+
+    spec = radio.MaterialSpec(surface=ANISO, medium="concrete", method="po",
+                              options=OPTS, texture_direction=(0, 0, 2))  # fmt: skip
+    assert np.allclose(spec.texture_direction, [0, 0, 1])
+    tab = spec.tables(F)
+    assert isinstance(tab, tx.TexturedTables) and tab.lobe.shape[0] == OPTS.n_psi
+    iso = radio.MaterialSpec(surface=G(sigma=1e-3, length=20e-3), medium="concrete",
+                             method="po", options=OPTS)  # fmt: skip
+    assert not isinstance(iso.tables(F), tx.TexturedTables)
+    with pytest.raises(ValueError, match="texture_direction"):
+        radio.MaterialSpec(surface=ANISO, medium="concrete", texture_direction=(0, 0, 0))
