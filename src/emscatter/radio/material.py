@@ -22,6 +22,10 @@ Per ray, at the scene frequency and the ray's incidence angle:
 * **diffraction** uses Sionna's own UTD wedge coefficients with the flat slab of the medium
   (roughness does not enter the wedge).
 
+**Anisotropic roughness** (walls with a texture direction, ``texture_direction=``): the
+tables get the incidence-azimuth axis and the lobe lookup works in the texture frame of each hit
+(:mod:`emscatter.radio.texture`, Dr.Jit side in :mod:`emscatter.radio.texture_jit`).
+
 Tables are built lazily, the first time a solver traces the material at a frequency, and only
 if some object of the scene uses it (Dr.Jit traces every live material, used or not). Changing
 ``scene.frequency`` checks the medium's band at once (an out-of-band ITU material fails even
@@ -169,8 +173,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     Parameters
     ----------
     name : unique name in the scene (required unless loaded from XML).
-    surface : isotropic 2-D roughness statistics (:mod:`emscatter.spectra`), or ``None``
-        for a flat face — then the material is Sionna's own ``RadioMaterial`` with ``S = 0``.
+    surface : 2-D roughness statistics (:mod:`emscatter.spectra`; anisotropic, ``length_y ≠
+        length``, with ``texture_direction``), or ``None`` for a flat face — then the material is Sionna's own ``RadioMaterial`` with ``S = 0``.
     medium : ITU-R P.2040 name (``"concrete"``), a :class:`~emscatter.materials.Material`, or
         a permittivity (``exp(−iωt)``, ``Im ε ≥ 0``); or give ``eps_real`` [-] and
         ``conductivity`` [S/m] instead.
