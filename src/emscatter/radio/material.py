@@ -174,7 +174,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     ----------
     name : unique name in the scene (required unless loaded from XML).
     surface : 2-D roughness statistics (:mod:`emscatter.spectra`; anisotropic, ``length_y ≠
-        length``, with ``texture_direction``), or ``None`` for a flat face — then the material is Sionna's own ``RadioMaterial`` with ``S = 0``.
+        length``, with ``texture_direction``), or ``None`` for a flat face — then the
+        material is Sionna's own ``RadioMaterial`` with ``S = 0``.
     medium : ITU-R P.2040 name (``"concrete"``), a :class:`~emscatter.materials.Material`, or
         a permittivity (``exp(−iωt)``, ``Im ε ≥ 0``); or give ``eps_real`` [-] and
         ``conductivity`` [S/m] instead.
