@@ -73,7 +73,9 @@ class TableOptions:
     ``n_cos`` nodes in ``cosθi`` for the coherent correction (SPM's costly second-order term
     on ``n_cos_spm`` of them, spline-interpolated: it is smooth in ``cosθ``); ``n_theta``
     incidence angles on ``[0, theta_max_deg]`` for the lobe; ``n_alpha`` azimuths on
-    ``[0, π]`` and ``n_s`` radial nodes around the specular point. Where
+    ``[0, π]`` and ``n_s`` radial nodes around the specular point; ``n_psi`` incidence
+    azimuths on ``[0, π/2]`` for a textured (anisotropic) surface only
+    (:mod:`emscatter.radio.texture`). Where
     ``r_coh + r_incoh > 1 + energy_tolerance`` the lobe is scaled down to conserve energy
     (recorded in ``RadioTables.energy_scale``), with an :class:`EnergyWarning` when that
     starts below ``energy_warn_below_deg`` (a solver far out of its range, not only the usual
@@ -84,6 +86,7 @@ class TableOptions:
     n_theta: int = 46
     n_alpha: int = 37
     n_s: int = 96
+    n_psi: int = 7
     theta_max_deg: float = 89.0
     energy_tolerance: float = 0.01
     energy_warn_below_deg: float = 60.0
@@ -94,6 +97,10 @@ class TableOptions:
             if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Integral) or v < 4:
                 raise ValueError(f"TableOptions.{name} must be an integer >= 4, got {v!r}")
             object.__setattr__(self, name, int(v))  # np.int64 too; one key for the cache
+        v = self.n_psi
+        if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Integral) or v < 2:
+            raise ValueError(f"TableOptions.n_psi must be an integer >= 2, got {v!r}")
+        object.__setattr__(self, "n_psi", int(v))
         for name in ("theta_max_deg", "energy_tolerance", "energy_warn_below_deg"):
             object.__setattr__(self, name, real_number(f"TableOptions.{name}", getattr(self, name)))
         if not 10.0 <= self.theta_max_deg < 90.0:
