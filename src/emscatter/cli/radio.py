@@ -23,11 +23,21 @@ import importlib.util
 import math
 import re
 from pathlib import Path
+from typing import NamedTuple
 
 from .args import Integer, Number, OutputFolder, OutputPath, add_command, reject_unless
 from .heightmap_args import HEIGHT_MAP_OPTIONS, add_height_map_args
 
 SCENES = ("room", "floor_wall", "box")
+
+
+class Textured(NamedTuple):
+    """An anisotropic ``--medium`` value: the surface and the world direction of its ℓx axis."""
+
+    surface: object
+    direction: tuple | None
+
+
 #: The ``--medium NAME=map`` value: the medium's roughness is ``--height-map``'s.
 MAP = "map"
 #: How ``--height-map`` becomes a radio roughness (``radio.from_map.surface_from_map``).
@@ -67,24 +77,35 @@ def _scene(text: str) -> str:
 
 
 def _medium(text: str) -> tuple[str, object]:
-    """``NAME=σ,ℓ`` [m] (Gaussian correlation), ``NAME=flat`` or ``NAME=map`` (the roughness of
-    ``--height-map``) → ``(NAME, (σ, ℓ) | None | "map")``."""
+    """``NAME=σ,ℓ`` [m] (Gaussian correlation), ``NAME=σ,ℓx,ℓy@DIR`` (anisotropic, ``DIR`` the
+    world direction of the ℓx axis: ``x|y|z|vertical`` or ``dx,dy,dz``;
+    :func:`emscatter.radio.texture.parse_medium_option`), ``NAME=flat`` or ``NAME=map`` (the
+    roughness of ``--height-map``) → ``(NAME, (σ, ℓ) | Textured | None | "map")``."""
     m = re.fullmatch(r"\s*([^=\s]+)\s*=\s*(.+?)\s*", text)
     if m is None:
         raise argparse.ArgumentTypeError(
-            "expected NAME=SIGMA,LENGTH in metres (e.g. brick=0.8e-3,8e-3), NAME=flat or "
-            f"NAME=map (with --height-map), got {text!r}"
+            "expected NAME=SIGMA,LENGTH in metres (e.g. brick=0.8e-3,8e-3), "
+            "NAME=SIGMA,LENGTH_X,LENGTH_Y@DIR, NAME=flat or NAME=map (with --height-map), "
+            f"got {text!r}"
         )
     name, value = m.groups()
     if value.lower() == "flat":
         return name, None
     if value.lower() == "map":
         return name, MAP
+    if "@" in value or value.count(",") == 2:
+        from ..radio.texture import parse_medium_option
+
+        try:
+            parsed = parse_medium_option(f"{name}={value}")
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc).removeprefix("--medium ")) from None
+        return name, Textured(parsed["surface"], parsed["texture_direction"])
     parts = value.split(",")
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(
-            f"{name}: expected SIGMA,LENGTH in metres (two numbers, e.g. 0.8e-3,8e-3), "
-            f"got {value!r}"
+            f"{name}: expected SIGMA,LENGTH in metres (two numbers, e.g. 0.8e-3,8e-3) or "
+            f"SIGMA,LENGTH_X,LENGTH_Y@DIR, got {value!r}"
         )
     sigma = Number(low=0.0, high=1.0, unit="m")(parts[0].strip())
     length = Number(low=0.0, high=100.0, unit="m")(parts[1].strip())
@@ -149,7 +170,9 @@ def register(subparsers) -> None:
         metavar="NAME=SIGMA,LENGTH",
         help=(
             "roughness of an ITU type, material or object of the scene: rms height and "
-            "correlation length [m] (Gaussian), or NAME=flat; repeat for more. Unnamed media "
+            "correlation length [m] (Gaussian), NAME=SIGMA,LENGTH_X,LENGTH_Y@DIR (anisotropic: "
+            "DIR = x|y|z|vertical|dx,dy,dz, the world direction of the LENGTH_X axis), or "
+            "NAME=flat; repeat for more. Unnamed media "
             "take emscatter's default table (emscatter.radio.DEFAULT_ROUGHNESS)"
         ),
     )
@@ -325,10 +348,21 @@ def _map_roughness(a) -> tuple[dict, object]:
     entries with ``NAME=map`` replaced by the map's roughness; without any ``NAME=map`` the
     map's roughness is the common one (every medium not named by ``--medium``)."""
     spec = getattr(a, "map_spec", None)
-    mapping = {n: (spec.surface if v is MAP else v) for n, v in a.medium}
+    mapping = {
+        n: (spec.surface if v is MAP else v.surface if isinstance(v, Textured) else v)
+        for n, v in a.medium
+    }
     if spec is None or any(v is MAP for _, v in a.medium):
         return mapping, None
     return mapping, spec.surface
+
+
+def _texture_directions(a) -> dict | None:
+    """``{medium: direction}`` of the anisotropic ``--medium NAME=σ,ℓx,ℓy@DIR`` entries (None
+    when there are none), for :func:`~emscatter.radio.roughening.roughen`'s
+    ``texture_direction``."""
+    dirs = {n: v.direction for n, v in a.medium if isinstance(v, Textured) and v.direction}
+    return dirs or None
 
 
 def _write_map_record(a, out: Path, stem: str) -> None:
@@ -425,7 +459,7 @@ def run_any_scene(a) -> int:
         sc.frequency = f
         res = compare_rough_flat(
             sc, common, mapping=mapping, extrapolate=a.extrapolate, table_options=opts,
-            frequencies=freqs, xpd=bool(a.rx),
+            frequencies=freqs, xpd=bool(a.rx), texture_direction=_texture_directions(a),
             paths={"samples_per_src": samples, "max_depth": depth} if a.rx else False,
             radio_map={"center": (*((lo[:2] + hi[:2]) / 2), a.map_height),
                        "orientation": (0.0, 0.0, 0.0), "size": tuple(size),
@@ -461,6 +495,12 @@ def run_builtin_json(a) -> int:
         raise ValueError(
             "--builtin-json with --height-map: name the medium the map is of with --medium "
             "NAME=map (e.g. --medium concrete=map)"
+        )
+    textured = [n for n, v in a.medium if isinstance(v, Textured)]
+    if textured:
+        raise ValueError(
+            f"--builtin-json fits Sionna's isotropic built-in models; --medium {textured[0]}= "
+            "is anisotropic (σ,ℓx,ℓy@DIR): give it as NAME=σ,ℓ"
         )
     given = {n: (None if v is None else a.map_spec.surface if v is MAP
                  else GaussianCorrelation(sigma=v[0], length=v[1]))
