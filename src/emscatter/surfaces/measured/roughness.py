@@ -40,7 +40,7 @@ import scipy.fft as sfft
 
 from emscatter.spectra import Roughness
 from emscatter.surfaces.heightmap import HeightMap, HeightMapError
-from emscatter.surfaces.nfold import nfold_table
+from emscatter.surfaces.measured.nfold import nfold_table
 
 __all__ = ["MeasuredRoughness", "measured_roughness", "BandWarning", "TAILS"]
 
@@ -386,7 +386,8 @@ class MeasuredRoughness(Roughness):
 
     def log_nfold_table(self):
         """``f(n, s) = log(w_n/L)`` for the PO and IEM series (``po.log_nfold``'s scaled ``s``):
-        FFT of the measured ``ρⁿ`` averaged over ellipses (:mod:`emscatter.surfaces.nfold`)."""
+        FFT of the measured ``ρⁿ`` averaged over ellipses
+        (:mod:`emscatter.surfaces.measured.nfold`)."""
         return self._nfold[0]
 
     nfold_info = property(lambda self: dict(self._nfold[1]), doc="how the table was built")
