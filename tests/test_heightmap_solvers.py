@@ -1,5 +1,5 @@
 """Issue 17: PO and IEM on a measured height map (the n-fold spectra tabulated from the map,
-:mod:`emscatter.surfaces.nfold`) against the same solvers on the analytic roughness.
+:mod:`emscatter.surfaces.measured.nfold`) against the same solvers on the analytic roughness.
 
 The maps are drawn by ``emscatter.generate_surface`` from a known Gaussian roughness (2048²,
 Δ = ℓ/10, 8 Welch segments per axis); the solvers on the measured roughness must agree with

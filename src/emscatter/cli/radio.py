@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from .args import Integer, Number, OutputFolder, OutputPath, add_command, reject_unless
-from .heightmap_args import HEIGHT_MAP_OPTIONS, add_height_map_args
+from .heightmap_args import HEIGHT_MAP_OPTIONS, add_height_map_args, map_error
 
 SCENES = ("room", "floor_wall", "box")
 
@@ -337,10 +337,10 @@ def _map_spec(a):
     try:
         return MaterialSpec.from_height_map(
             a.height_map, model=a.map_model, segments=a.segments, tail=a.tail, unit=a.unit,
-            detrend=a.detrend, frequencies=a.frequencies_ghz,
+            detrend=a.detrend, holes=a.holes, frequencies=a.frequencies_ghz,
         )  # fmt: skip
     except (HeightMapError, ImportError, ValueError) as exc:
-        raise ValueError(f"--height-map {a.height_map}: {exc}") from None
+        raise map_error(a.height_map, exc) from None
 
 
 def _map_roughness(a) -> tuple[dict, object]:
