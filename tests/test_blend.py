@@ -164,3 +164,29 @@ def test_auto_backscatter_hh_below_vv_where_po_would_give_hh_equal_vv():
     bis = em.bistatic(rough, eps, wavelength=1.0, theta_i=ti, theta_s=ti, phi_s=0.0,
                       out_of_range="ignore")  # fmt: skip
     assert bis.method == "po"
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    kind=st.sampled_from(sorted(CLASSES)),
+    log_ks=st.floats(math.log10(0.02), math.log10(30.0)),
+    log_kl=st.floats(math.log10(0.3), math.log10(300.0)),
+    eps=st.sampled_from([None, "pec", 3.0, 17 + 2j]),
+    monostatic=st.booleans(),
+)
+def test_methods_after_a_fully_valid_one_are_not_checked_and_change_nothing(
+    kind, log_ks, log_kl, eps, monostatic
+):
+    """The blend stops checking after the first method valid a factor BLEND_FACTOR inside its
+    limits: the weights are those of the blend with every method checked."""
+    rough = CLASSES[kind](10.0**log_ks / K, 10.0**log_kl / K)
+    fast = blend.blend_weights(rough, K, eps=eps, monostatic=monostatic)
+    full_margins = blend.margins
+    try:  # the reference: every method checked
+        blend.margins = lambda *a, stop_below=None, **kw: full_margins(*a, **kw)
+        full = blend.blend_weights(rough, K, eps=eps, monostatic=monostatic)
+    finally:
+        blend.margins = full_margins
+    assert fast["weights"] == pytest.approx(full["weights"], abs=1e-15)
+    assert set(fast["margins"]) <= set(full["margins"])
+    assert all(fast["margins"][n] == full["margins"][n] for n in fast["margins"])

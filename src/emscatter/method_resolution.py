@@ -303,12 +303,18 @@ def rank_methods(roughness, k: float, *, eps=None, theta_i=None, methods=None):
 def blend_weights(roughness, k: float, *, eps=None, monostatic: bool = False) -> dict:
     """:func:`emscatter.solvers.blend.blend_weights` (``auto``'s methods and their continuous
     weights; ``monostatic``: for backscatter, where a dielectric's order puts the IEM before
-    PO), cached on ``(roughness, k, eps, monostatic)``; a fresh dict each call."""
+    PO), cached on ``(roughness, k, eps, monostatic)``; a fresh dict each call. The methods'
+    validity reports come from :func:`validity_report` (cached: the method that then runs
+    does not check its validity again)."""
     parts = ("blend", roughness, float(k), _key_of(eps), bool(monostatic))
     key = None if _UNCACHEABLE in parts else parts
     hit = _recall(key)
     if hit is None:
-        hit = blend.blend_weights(roughness, k, eps=eps, monostatic=monostatic)
+
+        def report(name):  # the reports the chosen methods' runs then find cached
+            return validity_report(name, roughness, k, eps=eps)
+
+        hit = blend.blend_weights(roughness, k, eps=eps, monostatic=monostatic, report=report)
         _remember(key, hit)
     return {**hit, "weights": dict(hit["weights"])}
 

@@ -123,12 +123,19 @@ def _smooth(t):
     return t * t * (3.0 - 2.0 * t)
 
 
-def margins(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> tuple[dict, dict]:
+def margins(
+    roughness, k: float, *, eps=None, methods=AUTO_ORDER, report=None, stop_below=None
+) -> tuple[dict, dict]:
     """``({method: cₘ}, {method: report})``: each method's margin ``max log(ratio)`` over its
-    roughness checks (≤ 0 valid; ∞ unsupported; module docstring) and its validity report."""
-    reports = {n: _report(n, roughness, k, eps, None) for n in methods}
-    out = {}
-    for n, rep in reports.items():
+    roughness checks (≤ 0 valid; ∞ unsupported; module docstring) and its validity report.
+    ``report(name)``: the roughness-level validity report of a method (default: its
+    ``check_validity``; the API passes its cached reports, so that the method it then runs
+    reuses the one computed here). ``stop_below``: the methods are checked in order and the
+    rest is not checked (left out of both dicts) after the first with a finite margin
+    ``cₘ ≤ stop_below``."""
+    out, reports = {}, {}
+    for n in methods:
+        rep = reports[n] = _report(n, roughness, k, eps, None) if report is None else report(n)
         ratios = [
             (d.get("ratio", math.inf) if name not in CATEGORY_CHECKS else
              (0.0 if d.get("ok") else math.inf))
@@ -141,6 +148,8 @@ def margins(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> tuple[dict,
         else:
             c = max((math.log(r) if r > 0 else -math.inf) for r in ratios)
         out[n] = math.inf if math.isnan(c) else c
+        if stop_below is not None and math.isfinite(out[n]) and out[n] <= stop_below:
+            break
     return out, reports
 
 
@@ -162,25 +171,32 @@ def _soft_argmin(values: np.ndarray, width: float, present: np.ndarray) -> np.nd
     return raw / total if total > 0 else raw
 
 
-def blend_weights(roughness, k: float, *, eps=None, methods=None, monostatic: bool = False) -> dict:
+def blend_weights(
+    roughness, k: float, *, eps=None, methods=None, monostatic: bool = False, report=None
+) -> dict:
     """The methods ``method="auto"`` blends for this roughness at wavenumber ``k`` [rad/m]
     (permittivity ``eps``, optional) and their weights (module docstring); ``methods`` in
-    order (default :func:`auto_order` of ``eps`` and ``monostatic``: True for backscatter).
+    order (default :func:`auto_order` of ``eps`` and ``monostatic``: True for backscatter);
+    ``report``: as in :func:`margins`.
 
     Returns ``{"weights": {name: w}, "pick": name, "soft_valid": {name: vₘ},
     "margins": {name: cₘ}, "measured": {...} or None}``: weights sum to 1, names in
     decreasing weight (small ones faded out: :data:`FADE_WEIGHTS`); ``pick`` is the heaviest, whose
-    validity the blend reports; ``measured`` the interpolated errors and availabilities used."""
+    validity the blend reports; ``measured`` the interpolated errors and availabilities used;
+    ``soft_valid`` and ``margins`` name the methods checked (those after the first one valid
+    a factor :data:`BLEND_FACTOR` inside its limits are not: their weight is 0)."""
     methods = tuple(auto_order(eps, monostatic=monostatic) if methods is None else methods)
-    c, reports = margins(roughness, k, eps=eps, methods=methods)
-    cm = np.array([c[n] for n in methods])
+    d = math.log(BLEND_FACTOR)
+    # after a method valid with v = 1 (c ≤ −δ) every later one has weight 0 whatever its
+    # criteria (stick-breaking; the measured step reads the maps, not the reports): unchecked
+    c, reports = margins(roughness, k, eps=eps, methods=methods, report=report, stop_below=-d)
+    cm = np.array([c.get(n, math.nan) for n in methods])
     supported = np.isfinite(cm).astype(float)
     if not supported.any():
         raise ValueError(
             "no solver supports this roughness: "
             + "; ".join(f"{n}: {r['reasons'][0]}" for n, r in reports.items())
         )
-    d = math.log(BLEND_FACTOR)
     v = np.where(supported > 0, _smooth(0.5 - np.where(supported > 0, cm, 0.0) / (2 * d)), 0.0)
     first, rest = _first_of(v)
     crit = first + rest * _soft_argmin(cm, d, supported)
@@ -209,7 +225,7 @@ def blend_weights(roughness, k: float, *, eps=None, methods=None, monostatic: bo
     return {
         "weights": weights,
         "pick": methods[order[0]],
-        "soft_valid": {n: float(x) for n, x in zip(methods, v, strict=True)},
+        "soft_valid": {n: float(x) for n, x in zip(methods, v, strict=True) if n in c},
         "margins": dict(c),
         "measured": meas,
     }
