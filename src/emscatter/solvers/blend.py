@@ -42,14 +42,14 @@ reflectivity is the same convex combination of the methods' ones, so a blend of
 energy-conserving answers conserves energy. What is not smoothed: the medium class of the
 measured maps (conductor for ``|ε| ≥ 100`` or Re ε < 0) is a switch in ε.
 
-**Backscatter of a dielectric: IEM before PO** (:func:`auto_order`). In backscatter (``θs =
-θi``, ``φs = φi + π``; :func:`emscatter.backscatter` tells the API, which passes
+**Backscatter of a dielectric: IEM before PO** (:func:`auto_order`). In backscatter
+(``θs = θi``, ``φs = φi + π``; :func:`emscatter.backscatter` tells the API, which passes
 ``monostatic=True``) the order is :data:`BACKSCATTER_DIELECTRIC_ORDER` — ``spm, go, iem, po`` —
 for a dielectric (not PEC, Re ε ≥ 0, ``|ε| < 100``): where both IEM and PO hold, the IEM is
 taken. Why: PO's backscatter is the stationary-phase (specular-point) Kirchhoff field, and the
 facet that reflects back to the radar is normal to the incident direction, so both
-polarizations see the Fresnel coefficient at normal incidence, ``R_h(0) = −R_v(0)``, and ``σ⁰hh
-= σ⁰vv`` exactly (Ulaby, Moore & Fung 1982 vol. II ch. 12, the stationary-phase Kirchhoff
+polarizations see the Fresnel coefficient at normal incidence, ``R_h(0) = −R_v(0)``, and
+``σ⁰hh = σ⁰vv`` exactly (Ulaby, Moore & Fung 1982 vol. II ch. 12, the stationary-phase Kirchhoff
 solution with ``R(0)``; the same for GO). Exact solutions and measurements of dielectric
 surfaces at kσ ≲ 2 give ``σ⁰hh < σ⁰vv`` by 1–2 dB at 30–50° (NMM3D, ``validation/auto/``; Oh et
 al. 1992's ``p = σhh/σvv ≤ 1``): the polarization dependence there is the complementary
