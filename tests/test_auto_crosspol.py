@@ -85,3 +85,21 @@ def test_iem_backscatter_entry_is_the_bistatic_solver_term(rough, eps):
     np.testing.assert_allclose(fast, sig[0, 1], rtol=1e-13, atol=0.0)
     np.testing.assert_array_equal(sig[0, 1], sig[1, 0])
     assert np.all(fast > 0)
+
+
+@pytest.mark.parametrize(
+    "cols",
+    [
+        np.array([[0.7, 0.0, 3.0, 0.1]]),  # one angle
+        np.array([[0.7, 0.0, 3.0, 0.1]] * 3),  # one distinct row
+        np.array([[0.7, 0.0], [0.2, 0.0], [0.7, 0.0], [-0.0, 1.0]]),  # θ and φ vary
+        np.array([[0.7, 0.0, 3.0, 0.1], [0.2, 1.0, 3.0, 0.1], [0.7, 0.0, 3.0, 0.1]]),
+        np.array([[0.7, 0.0, 3.0, 0.1], [0.2, 1.0, 4.0, 0.1], [0.2, 1.0, 3.0, 0.2]]),  # 4 vary
+    ],
+)
+def test_unique_rows_is_numpys(cols):
+    uniq, inv = auto_crosspol._unique_rows(cols)
+    ref, ref_inv = np.unique(cols, axis=0, return_inverse=True)
+    np.testing.assert_array_equal(uniq, ref)
+    np.testing.assert_array_equal(uniq[inv], cols)
+    np.testing.assert_array_equal(inv, ref_inv.reshape(-1))

@@ -150,7 +150,7 @@ def _bistatic_one(
     :mod:`emscatter.solvers.auto_crosspol` added to a closed-form branch."""
     ti, ts, ps, pi_ = angles
     if method == "auto":
-        blend = blend_weights(rough, k, eps=eps)
+        blend = blend_weights(rough, k, eps=eps, monostatic=monostatic)
         if len(blend["weights"]) > 1:
             return _bistatic_blend(
                 rough, eps, k, angles, blend, out_of_range, options, monostatic, depth
@@ -292,11 +292,15 @@ def _merged_validity(parts) -> dict:
     }
 
 
-def _bistatic_groups(rough, groups: list[Group], shape, k_b, angles, method, out_of_range, opts):
+def _bistatic_groups(
+    rough, groups: list[Group], shape, k_b, angles, method, out_of_range, opts, monostatic=False
+):
     """Several frequencies: one solver run per group, results placed back element-wise."""
     parts = []
     for g in groups:  # (a loop, not a comprehension: its frame count differs across Pythons)
-        res = _bistatic_one(rough, g.eps, g.k, g.take(angles), method, out_of_range, opts, depth=1)
+        res = _bistatic_one(
+            rough, g.eps, g.k, g.take(angles), method, out_of_range, opts, monostatic, depth=1
+        )
         parts.append((g, res))
     sigma0 = np.empty((2, 2, *shape))
     methods = np.empty(shape, dtype=object)
@@ -396,7 +400,9 @@ def _bistatic_checked(
         e = eps_at(eps, k)
         return _bistatic_one(rough, e, k, angles, method, out_of_range, options, monostatic)
     shape, k_b, groups = spec
-    return _bistatic_groups(rough, groups, shape, k_b, angles, method, out_of_range, options)
+    return _bistatic_groups(
+        rough, groups, shape, k_b, angles, method, out_of_range, options, monostatic
+    )
 
 
 def backscatter(

@@ -90,6 +90,25 @@ def _cached(keys, compute):
     return out
 
 
+def _unique_rows(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(cols, axis=0, return_inverse=True)`` (rows of a 2-D float array) without
+    its per-call cost where it is not needed: one row (a single backscatter angle, the usual
+    call) is its own unique row, and at most two varying columns are made unique as one
+    complex column (lexicographic order, as ``axis=0``)."""
+    n = cols.shape[0]
+    if n == 1:
+        return cols, np.zeros(1, dtype=np.intp)
+    varying = [j for j in range(cols.shape[1]) if not np.all(cols[:, j] == cols[0, j])]
+    if not varying:
+        return cols[:1], np.zeros(n, dtype=np.intp)
+    if len(varying) <= 2:
+        z = cols[:, varying[0]] + (1j * cols[:, varying[1]] if len(varying) == 2 else 0j)
+        _, first, inv = np.unique(z, return_index=True, return_inverse=True)
+        return cols[first], inv.reshape(-1)
+    uniq, inv = np.unique(cols, axis=0, return_inverse=True)
+    return uniq, inv.reshape(-1)
+
+
 def backscatter_mask(ti, ts, ps, pi_) -> np.ndarray:
     """True where ``θs = θi`` and ``φs = φi + π`` (to 1e-9 rad), broadcast shape."""
     ti, ts, ps, pi_ = np.broadcast_arrays(ti, ts, ps, pi_)
@@ -155,7 +174,7 @@ def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
         # σ⁰⁽²²⁾ depends on φi only through an anisotropic spectrum's axes
         iso = rough.length == rough.length_y
         pairs = np.stack([tb, np.zeros_like(pb) if iso else np.mod(pb, 2 * math.pi)], -1)
-        uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+        uniq, inv = _unique_rows(pairs)
         e = complex(eps)
         base = ("spm2", type(rough), rough.length, rough.length_y, e, float(k))
         keys = [(*base, float(t), float(f)) for t, f in uniq]
@@ -178,7 +197,7 @@ def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     e = eps if is_pec(eps) or np.ndim(eps) == 0 else np.broadcast_to(eps, shape)[back]
     ea = np.broadcast_to(np.asarray(e if not is_pec(e) else 0.0, dtype=complex), tb.shape)
     cols = np.stack([tb, np.mod(pb, 2 * math.pi), ea.real, ea.imag], -1)
-    uniq, inv = np.unique(cols, axis=0, return_inverse=True)
+    uniq, inv = _unique_rows(cols)
     tag = "pec" if is_pec(e) else "eps"
     keys = [("iem", tag, rough, float(k), *map(float, row)) for row in uniq]
 
