@@ -34,6 +34,7 @@ from emscatter.method_resolution import (
 )
 
 from . import cache, solvers
+from . import progress as _progress
 from .conventions import (
     broadcast_angles,
     broadcast_view,
@@ -598,6 +599,7 @@ def emissivity(
     method: str = "auto",
     tol: float = 1e-4,
     out_of_range: str = "warn",
+    progress: bool | None = None,
     **options,
 ) -> Emissivity:
     """h and v emissivity ``e_p = 1 − r_coh,p − r_incoh,p`` (Kirchhoff's law) by hemispherical
@@ -615,8 +617,12 @@ def emissivity(
     (``info["methods"]`` has the method of each angle, ``result.method`` lists them, e.g.
     ``"spm+go"``): the rest of the curve keeps the best method for the regime, and the angles
     that an approximation gets wrong (typically near grazing) get one that holds there.
+
+    ``progress``: a tqdm bar on stderr counting σ⁰ evaluations of the quadrature, advanced
+    per chunk (its total grows as refinements start) — ``None`` (auto) on a terminal past
+    2 s, ``True`` always, ``False`` never (:mod:`emscatter.progress`).
     """
-    with call_deadline():  # one budget for the whole call, fallbacks included
+    with call_deadline(), _progress.task("emissivity", None, progress, unit="σ⁰"):
         rough = _check_roughness(surface)
         eps = as_eps_or_material(eps)
         k = wavenumber(frequency, wavelength)
