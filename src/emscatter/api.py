@@ -98,6 +98,12 @@ def resolve_method(
     its roughness-level validity (the policy has been applied: warned or raised)."""
     select.check_out_of_range(out_of_range)
     name = _check_method(method)
+    return _resolve(roughness, k, name, out_of_range, eps, theta_i, stacklevel + 1)
+
+
+def _resolve(roughness, k, name, out_of_range, eps, theta_i, stacklevel):
+    """:func:`resolve_method` for a ``name`` and ``out_of_range`` already checked (the API's
+    own calls: each check once per call)."""
     if name == "auto":
         name = rank_methods(roughness, k, eps=eps)[0][0]
     # the per-angle checks are skipped where the policy does not need them (call_report)
@@ -159,8 +165,8 @@ def _bistatic_one(
         method, picked = next(iter(blend["weights"])), True
     name = method
     opts = _map_options(name, options, picked)  # before any warning
-    name, module, report, make_nan = resolve_method(
-        rough, k, name, out_of_range, eps, theta_i=ti, stacklevel=6 + depth
+    name, module, report, make_nan = _resolve(
+        rough, k, name, out_of_range, eps, ti, 6 + depth
     )  # warnings point at the caller of bistatic/backscatter
     # BOARD interface 3: the coherent part is computed on first read, unless asked for eagerly
     lazy = _takes(module.bistatic, "coherent") and not opts.pop("coherent", False)

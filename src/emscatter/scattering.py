@@ -13,6 +13,24 @@ from .conventions import check_pol_pair, pol_index
 __all__ = ["Scattering"]
 
 
+class _LazyCoherent:
+    """The :attr:`Scattering.coherent` field: a zero-argument callable stored there is called
+    on first read and replaced by its array. A data descriptor on this one field, so that
+    reading every other attribute costs a plain lookup (no ``__getattribute__`` override)."""
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        value = obj.__dict__["coherent"]
+        if callable(value):
+            value = np.asarray(value())
+            obj.__dict__["coherent"] = value
+        return value
+
+    def __set__(self, obj, value):  # the dataclass __init__ (object.__setattr__) lands here
+        obj.__dict__["coherent"] = value
+
+
 @dataclass(frozen=True, eq=False)
 class Scattering:
     """Result of every solver.
@@ -52,13 +70,6 @@ class Scattering:
     dimension: int = 2
     info: dict = field(default_factory=dict)
 
-    def __getattribute__(self, name):
-        value = object.__getattribute__(self, name)
-        if name == "coherent" and callable(value):
-            value = np.asarray(value())
-            object.__setattr__(self, "coherent", value)
-        return value
-
     def __getstate__(self):  # pickling (e.g. to a worker process) computes a lazy part first
         state = dict(self.__dict__)
         state["coherent"] = self.coherent
@@ -67,7 +78,7 @@ class Scattering:
     @property
     def coherent_computed(self) -> bool:
         """Whether :attr:`coherent` has been computed (False while it is still lazy)."""
-        return not callable(object.__getattribute__(self, "coherent"))
+        return not callable(self.__dict__["coherent"])
 
     @property
     def frequency(self):
@@ -119,3 +130,6 @@ class Scattering:
         """σ⁰ for unpolarized incidence summed over received polarizations:
         ``(hh + vh + hv + vv) / 2``."""
         return 0.5 * self.sigma0.sum(axis=(0, 1))
+
+
+Scattering.coherent = _LazyCoherent()  # after @dataclass: the field stays required
