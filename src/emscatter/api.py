@@ -217,7 +217,7 @@ def _bistatic_one(
             else np.where(mask, np.nan, coh_in)
         )
         info["out_of_range"] = True if make_nan else blank
-    return Scattering(
+    return Scattering._of(
         sigma0=sigma0,
         coherent=coherent,
         method=name,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -75,6 +75,16 @@ class Scattering:
         state["coherent"] = self.coherent
         return state
 
+    @classmethod
+    def _of(cls, **fields) -> Scattering:
+        """A result from all ten fields by keyword, without the frozen ``__init__``'s one
+        ``object.__setattr__`` per field (the API builds one per call; same object)."""
+        obj = object.__new__(cls)
+        if len(fields) != len(_FIELDS) or fields.keys() != _FIELDS:
+            raise TypeError(f"Scattering._of needs exactly the fields {sorted(_FIELDS)}")
+        obj.__dict__.update(fields)
+        return obj
+
     @property
     def coherent_computed(self) -> bool:
         """Whether :attr:`coherent` has been computed (False while it is still lazy)."""
@@ -133,3 +143,4 @@ class Scattering:
 
 
 Scattering.coherent = _LazyCoherent()  # after @dataclass: the field stays required
+_FIELDS = frozenset(f.name for f in fields(Scattering))
