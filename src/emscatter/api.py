@@ -34,6 +34,7 @@ from emscatter.method_resolution import (
 )
 
 from . import cache, solvers
+from . import progress as _progress
 from .conventions import (
     broadcast_angles,
     broadcast_view,
@@ -97,6 +98,12 @@ def resolve_method(
     its roughness-level validity (the policy has been applied: warned or raised)."""
     select.check_out_of_range(out_of_range)
     name = _check_method(method)
+    return _resolve(roughness, k, name, out_of_range, eps, theta_i, stacklevel + 1)
+
+
+def _resolve(roughness, k, name, out_of_range, eps, theta_i, stacklevel):
+    """:func:`resolve_method` for a ``name`` and ``out_of_range`` already checked (the API's
+    own calls: each check once per call)."""
     if name == "auto":
         name = rank_methods(roughness, k, eps=eps)[0][0]
     # the per-angle checks are skipped where the policy does not need them (call_report)
@@ -158,8 +165,8 @@ def _bistatic_one(
         method, picked = next(iter(blend["weights"])), True
     name = method
     opts = _map_options(name, options, picked)  # before any warning
-    name, module, report, make_nan = resolve_method(
-        rough, k, name, out_of_range, eps, theta_i=ti, stacklevel=6 + depth
+    name, module, report, make_nan = _resolve(
+        rough, k, name, out_of_range, eps, ti, 6 + depth
     )  # warnings point at the caller of bistatic/backscatter
     # BOARD interface 3: the coherent part is computed on first read, unless asked for eagerly
     lazy = _takes(module.bistatic, "coherent") and not opts.pop("coherent", False)
@@ -210,7 +217,7 @@ def _bistatic_one(
             else np.where(mask, np.nan, coh_in)
         )
         info["out_of_range"] = True if make_nan else blank
-    return Scattering(
+    return Scattering._of(
         sigma0=sigma0,
         coherent=coherent,
         method=name,
@@ -606,6 +613,7 @@ def emissivity(
     method: str = "auto",
     tol: float = 1e-4,
     out_of_range: str = "warn",
+    progress: bool | None = None,
     **options,
 ) -> Emissivity:
     """h and v emissivity ``e_p = 1 − r_coh,p − r_incoh,p`` (Kirchhoff's law) by hemispherical
@@ -623,8 +631,12 @@ def emissivity(
     (``info["methods"]`` has the method of each angle, ``result.method`` lists them, e.g.
     ``"spm+go"``): the rest of the curve keeps the best method for the regime, and the angles
     that an approximation gets wrong (typically near grazing) get one that holds there.
+
+    ``progress``: a tqdm bar on stderr counting σ⁰ evaluations of the quadrature, advanced
+    per chunk (its total grows as refinements start) — ``None`` (auto) on a terminal past
+    2 s, ``True`` always, ``False`` never (:mod:`emscatter.progress`).
     """
-    with call_deadline():  # one budget for the whole call, fallbacks included
+    with call_deadline(), _progress.task("emissivity", None, progress, unit="σ⁰"):
         rough = _check_roughness(surface)
         eps = as_eps_or_material(eps)
         k = wavenumber(frequency, wavelength)

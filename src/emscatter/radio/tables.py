@@ -37,6 +37,7 @@ import numpy as np
 from ..conventions import wavenumber
 from ..emissivity import lobe_width
 from ..fresnel import fresnel_cos
+from ..progress import task
 from ..spectra import Roughness, check_roughness
 from .medium import real_number
 
@@ -341,6 +342,7 @@ def build_tables(
     out_of_range: str = "warn",
     label: str = "material",
     options: TableOptions | None = None,
+    progress: bool | None = None,
 ) -> RadioTables:
     """The tables of one material at one frequency [Hz] (module docstring).
 
@@ -351,7 +353,9 @@ def build_tables(
 
     Identical requests (same roughness, permittivity, frequency, method and grid) reuse the
     tables already built in this process (several walls of one material cost one build); only
-    real builds enter :func:`build_log`.
+    real builds enter :func:`build_log`. ``progress``: a tqdm bar over the build's three
+    stages (coherent amplitude, lobe, its integral) on stderr — ``None`` (auto) on a terminal
+    past 2 s, ``True`` always, ``False`` never (:mod:`emscatter.progress`).
     """
     opts = options or TableOptions()
     key = (repr(surface), complex(np.asarray(eps)), float(frequency), method, out_of_range, opts)
@@ -359,14 +363,16 @@ def build_tables(
     if hit is not None:
         _CACHE.move_to_end(key)
         return hit
-    tables = _build(surface, eps, frequency, method, out_of_range, label, opts)
+    desc = f"radio tables {label} {float(frequency) / 1e9:g} GHz"
+    with task(desc, 3, progress, unit="stage") as bar:
+        tables = _build(surface, eps, frequency, method, out_of_range, label, opts, bar)
     _CACHE[key] = tables
     while len(_CACHE) > _CACHE_SIZE:
         _CACHE.popitem(last=False)
     return tables
 
 
-def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioTables:
+def _build(surface, eps, frequency, method, out_of_range, label, opts, bar) -> RadioTables:
     from .. import api
 
     policy = check_policy(out_of_range)
@@ -418,6 +424,7 @@ def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioT
         if policy == "warn":
             warnings.warn(msg, RadioValidityWarning, stacklevel=3)
     coherent, n_coh = _coherent_on_grid(rough, eps, k, name, cos_nodes, fres, opts.n_cos_spm)
+    bar.update(1)
     grading = _grading(rough, k, opts.n_s)
     theta_s, phi_s = lobe_directions(theta_nodes, alpha_nodes, s_nodes, grading)
     ti = np.broadcast_to(theta_nodes[:, None, None], theta_s.shape)
@@ -425,6 +432,7 @@ def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioT
         {"coherent": False} if "coherent" in inspect.signature(module.bistatic).parameters else {}
     )
     res = module.bistatic(rough, eps, k, ti, theta_s, phi_s, 0.0, **skip)
+    bar.update(1)
     sig = np.nan_to_num(np.asarray(res.sigma0, dtype=float), nan=0.0, posinf=0.0)
     sig = np.maximum(sig, 0.0)
     cos_i = np.cos(theta_nodes)[:, None, None]
@@ -457,6 +465,7 @@ def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioT
                 stacklevel=3,
             )
     seconds = time.perf_counter() - t0
+    bar.update(1)
     evals = {"bistatic_points": int(theta_s.size), "coherent_points": n_coh}
     _LOG.append(
         {"label": label, "frequency": float(frequency), "method": name, **evals, "seconds": seconds}
