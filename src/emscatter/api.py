@@ -174,18 +174,35 @@ def _bistatic_one(
     entry = _solver_entry(module)
     if monostatic and _takes(entry, "monostatic"):
         extra["monostatic"] = True
+    # auto's IEM in backscatter: its multiple-scattering hv (×3–6 the co-pol cost) is the
+    # per-angle-remembered term of auto_crosspol (equal to the solver's to 1e-13,
+    # tests/test_auto_crosspol.py), so a repeated scene pays it once
+    iem_hv = (
+        picked
+        and name == "iem"
+        and monostatic
+        and rough.dimension == 2
+        and not {"crosspol", "crosspol_order", "rms_slope"} & opts.keys()
+        and _takes(entry, "crosspol")
+    )
+    if iem_hv:
+        extra["crosspol"] = False
     result = entry(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
     shape = result.sigma0.shape[2:]
     info = {**result.info, "validity": report}
     info.pop("coherent", None)
     sigma0 = result.sigma0
     if picked:  # auto's closed-form branches: the backscatter cross-pol they lack
-        hv, how = auto_crosspol.supplement(name, rough, eps, k, ti, ts, ps, pi_)
+        what = auto_crosspol.IEM_BACKSCATTER if iem_hv else name
+        hv, how = auto_crosspol.supplement(what, rough, eps, k, ti, ts, ps, pi_)
         if hv is not None:
             sigma0 = np.array(sigma0, dtype=float)
             sigma0[0, 1] += hv
             sigma0[1, 0] += hv
-            info["crosspol_added"] = how
+            if iem_hv:  # the IEM's own term, from the per-angle memory
+                info["crosspol"] = "multiple scattering (backscatter; solvers.auto_crosspol)"
+            else:
+                info["crosspol_added"] = how
     if lazy:
 
         def coherent():  # the specular geometry: depends on θi, φi, ε only

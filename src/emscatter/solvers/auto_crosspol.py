@@ -33,6 +33,10 @@ so ``R_h`` and ``R_v`` act on one polarization each, no mixing; Ulaby, Moore & F
   published comparisons
   (issue 20: emscatter IEM −4.4 dB bias, SMRT −5.1, pyi2em −4.6): a lower bound.
 
+* ``iem`` picked by ``auto`` in backscatter: the IEM's own multiple-scattering hv is this same
+  term (:func:`emscatter.solvers.iem.crosspol.backscatter`, equal to the solver's to 1e-13), so
+  the API runs the IEM with ``crosspol=False`` and adds it from here (:data:`IEM_BACKSCATTER`).
+
 Both terms are remembered per (roughness, ε, k, θi, φi) — SPM2's per unit σ⁴, since
 σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k and the angles only — so a repeated scene, a σ sweep or the
 blend's second method pays once (:func:`clear_cache`).
@@ -56,6 +60,9 @@ from ..fresnel import is_pec
 __all__ = ["backscatter_mask", "supplement", "clear_cache"]
 
 _BACK_TOL = 1e-9
+#: The ``name`` under which :func:`supplement` gives the IEM's own backscatter hv (for ``auto``'s
+#: IEM run with ``crosspol=False``: the same term, remembered per angle).
+IEM_BACKSCATTER = "iem (backscatter)"
 SPM2_NODES = 6
 #: Backscatter hv values remembered (per method family, roughness, ε, k and angle); SPM2's
 #: are stored divided by σ⁴ (σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k, θ only), so a σ sweep reuses them.
@@ -159,7 +166,7 @@ def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
 
 def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     """:func:`supplement` without its per-call cache (per-angle values still remembered)."""
-    if name not in ("spm", "po", "go") or rough.dimension != 2 or rough.sigma == 0:
+    if name not in ("spm", "po", "go", IEM_BACKSCATTER) or rough.dimension != 2 or rough.sigma == 0:
         return None, None
     back = backscatter_mask(ti, ts, ps, pi_)
     if not back.any():
