@@ -93,3 +93,26 @@ def test_cli_street_canyon_with_grooved_brick(tmp_path):
     d = cols["rough_minus_flat_db"]
     assert lit.sum() > 100 and np.all(np.isfinite(d[lit]))
     assert "rough − flat median" in p.stdout
+
+
+def test_quiet_runs_the_command_with_bars_silenced(tmp_path, capsys, monkeypatch):
+    """``emscatter radio --quiet``: the command body runs inside ``progress.silenced`` (the
+    tables and sweeps it builds draw no bar in auto mode, even on a terminal); without it
+    the auto policy is untouched."""
+    from emscatter import progress
+    from emscatter.cli import radio as cli_radio
+
+    seen = []
+    real = cli_radio._run
+
+    def spy(a):
+        seen.append(progress._SILENT.get())
+        return real(a)
+
+    monkeypatch.setattr(cli_radio, "_run", spy)
+    out = tmp_path / "b.json"
+    argv = ["--builtin-json", str(out), "--medium", "concrete=1e-3,8e-3", "--frequencies-ghz",
+            "28", "--quick"]  # fmt: skip
+    assert _main([*argv, "--quiet"], capsys)[0] == 0 and out.exists()
+    assert _main(argv, capsys)[0] == 0
+    assert seen == [True, False]

@@ -249,12 +249,27 @@ def register(subparsers) -> None:
         ),
     )
     r.add_argument("--quick", action="store_true", help="few rays, coarse maps and tables")
+    r.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar (drawn on stderr only when it is a terminal and the work runs past "
+        "2 s anyway)",
+    )
     r.add_argument("--plate", action="store_true", help="run the large-plate cross-check")
     r.add_argument("--out", type=OutputFolder(), default="out/radio", help="output folder")
     r.set_defaults(func=run)
 
 
 def run(a) -> int:
+    """``emscatter radio`` (module docstring); ``--quiet`` silences every progress bar of the
+    tables and sweeps it builds (:func:`emscatter.progress.silenced`)."""
+    from ..progress import silenced
+
+    with silenced(a.quiet):
+        return _run(a)
+
+
+def _run(a) -> int:
     from pathlib import Path
 
     out = Path(a.out)
