@@ -306,3 +306,23 @@ def test_go_with_exponential_facet_angles_equals_cook_torrance_with_them():
     for p in (0, 1):
         rel = np.abs(got.sigma0[p, p][use] / want[p, p][use] - 1)
         assert rel.max() < 0.02, rel.max()
+
+
+@pytest.mark.parametrize("lx,ly", [(10.0, 10.0), (10.0, 30.0)], ids=["isotropic", "ly=3lx"])
+def test_correlation_lengths_from_the_whole_map_are_unbiased(lx, ly):
+    """The 1/e lengths come from the whole map's autocorrelation, not the Welch patches (a
+    64-sample Hann patch gave ℓy = 1.95 µm for a true 3 µm: −35 %). Gaussian maps of 512²
+    with known ℓ: the mean over 4 seeds within 3 % of ℓ (measured −0.3 %/−1.3 % isotropic,
+    −0.3 %/+0.05 % anisotropic), every seed within 8 % (one map holds 50 × 17 cells: the
+    realization's own scatter, ±5 %)."""
+    got = []
+    for seed in range(4):
+        s = emscatter.generate_surface(GaussianCorrelation(1.0, lx, length_y=ly), (512, 512),
+                                       1.0, rng=seed)  # fmt: skip
+        m = measured_roughness(height_map(s.heights, s.spacing))
+        got.append((m.length / lx, m.length_y / ly))
+        assert m.correlation(0.0, 0.0) == pytest.approx(1.0)
+        assert m.correlation(lx, 0.0) == pytest.approx(math.exp(-1), abs=0.05)
+    got = np.array(got)
+    assert np.all(np.abs(got.mean(axis=0) - 1) < 0.03), got
+    assert np.all(np.abs(got - 1) < 0.08), got

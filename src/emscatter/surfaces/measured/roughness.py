@@ -14,9 +14,13 @@
   spectral resolution, ``Δ`` the spacing); beyond ``π/Δ`` the spectrum is a recorded choice:
   ``tail="none"`` (zero) or ``"power-law"`` (``C |K|^(−a)`` fitted to the radially averaged
   PSD over the top of the band ``[π/(4Δ), 0.9 π/Δ]``, isotropic);
-* **correlation** ``ρ`` is the inverse transform of the same PSD (so ``ρ(0) = 1`` and the
-  n-fold spectra ``FFT(ρⁿ)`` are consistent with ``w``); ``length``/``length_y`` are its
-  1/e lags along x / y;
+* **correlation** ``ρ`` (:meth:`MeasuredRoughness.correlation`, ``acf``) is the whole map's
+  autocorrelation (zero-padded FFT, each lag over its valid pairs, lags up to half the map)
+  and ``length``/``length_y`` are its 1/e lags along x / y (unbiased to ≈ πℓxℓy/A, the
+  removed mean: within 3 % on 512² maps of ℓ = 10Δ…30Δ, tested). The Welch patches' ρ
+  (the inverse transform of the PSD, so ``ρ(0) = 1`` and the n-fold spectra ``FFT(ρⁿ)``
+  are consistent with ``w``) is the one the n-fold spectra use; it is the true ρ times the
+  window's autocorrelation and shorter (1.95 µm for a true 3 µm on a 64-sample patch);
 * **slopes**: the mean-square slopes are the map's own cell-centred finite differences
   (``_mss_closed`` returns them: the solvers treat the measured surface as differentiable at
   its own resolution), and :meth:`MeasuredRoughness.slope_pdf` is their density (non-Gaussian
@@ -44,6 +48,12 @@ import scipy.fft as sfft
 
 from emscatter.spectra import Roughness
 from emscatter.surfaces.heightmap import HeightMap, HeightMapError
+from emscatter.surfaces.measured.estimators import (
+    cell_slopes,
+    density_estimate,
+    map_acf,
+    slope_acf_sum,
+)
 from emscatter.surfaces.measured.nfold import nfold_table
 
 __all__ = [
@@ -189,122 +199,6 @@ def _welch(hm: HeightMap, segments: int, smooth: int = 0):
     return _symmetric_extended(p), k0, dk, patch
 
 
-def _cell_slopes(hm: HeightMap):
-    """Cell-centred finite-difference slopes ``(ζx, ζy)`` of the valid cells (2-D: the mean of
-    the two differences across each cell; 1-D: forward differences, ``ζy`` None)."""
-    h, m = hm.heights, hm.mask
-    if h.ndim == 1:
-        ok = m[1:] & m[:-1]
-        return (np.diff(h) / hm.spacing[0])[ok], None
-    dy, dx = hm.spacing
-    d1 = h[1:, 1:] - h[:-1, :-1]  # the two diagonals of each cell
-    d2 = h[:-1, 1:] - h[1:, :-1]
-    zx = (d1 + d2) * (0.5 / dx)
-    zy = (d1 - d2) * (0.5 / dy)
-    if m.all():  # no holes: every cell, no boolean gather
-        return zx.ravel(), zy.ravel()
-    ok = m[1:, 1:] & m[1:, :-1] & m[:-1, 1:] & m[:-1, :-1]
-    return zx[ok], zy[ok]
-
-
-def _slope_acf_sum(hm: HeightMap, zx, zy) -> float:
-    """``S = Σ_τ ρ_ζ(τ)²`` [samples]: the sum of the squared slope correlation over lags
-    within 4× its 1/e lag per axis (the geometric mean of the ζx and ζy fields' sums), from
-    the zero-padded FFT autocorrelation of the slope field (holes as zeros, each lag
-    normalized by its overlap). ``N/S`` is the number of independent slope samples a
-    histogram bin sees (Priestley 1981 §5.3: the variance of a mean of correlated samples
-    is ``σ²/N · Σρ``; for a bin's indicator of small probability its correlation at lag
-    ``τ`` is ≈ ρ_ζ(τ)² for Gaussian slopes). White slopes: ``S = 1``."""
-    h, m = hm.heights, hm.mask
-    if h.ndim == 1:
-        fields = [np.where(m[1:] & m[:-1], np.diff(h) / hm.spacing[0], 0.0)]
-        valid = (m[1:] & m[:-1]).astype(float)
-    else:
-        ok = m[1:, 1:] & m[1:, :-1] & m[:-1, 1:] & m[:-1, :-1]
-        d1 = np.where(ok, h[1:, 1:] - h[:-1, :-1], 0.0)
-        d2 = np.where(ok, h[:-1, 1:] - h[1:, :-1], 0.0)
-        fields = [d1 + d2, d1 - d2]  # ∝ ζx, ζy (scale drops out of ρ)
-        valid = ok.astype(float)
-    pad = tuple(sfft.next_fast_len(2 * n) for n in valid.shape)
-    axes = tuple(range(valid.ndim))
-    overlap = sfft.irfftn(np.abs(sfft.rfftn(valid, pad, axes=axes, workers=-1)) ** 2, pad,
-                          axes=axes, workers=-1)  # fmt: skip
-    sums = []
-    for f in fields:
-        f = np.where(valid > 0, f - f[valid > 0].mean(), 0.0)
-        c = sfft.irfftn(np.abs(sfft.rfftn(f, pad, axes=axes, workers=-1)) ** 2, pad,
-                        axes=axes, workers=-1)  # fmt: skip
-        rho = c / np.maximum(overlap, 1.0)
-        rho = np.fft.fftshift(rho / rho.flat[0])
-        ctr = tuple(n // 2 for n in pad)
-        win = []
-        for ax in axes:
-            line = rho[tuple(slice(None) if a == ax else ctr[a] for a in axes)][ctr[ax] :]
-            below = np.nonzero(line < math.exp(-1.0))[0]
-            lag = int(below[0]) if below.size else line.size
-            half = min(4 * max(lag, 1), valid.shape[ax] // 4)
-            win.append(slice(ctr[ax] - half, ctr[ax] + half + 1))
-        sums.append(max(1.0, float((rho[tuple(win)] ** 2).sum())))
-    return float(math.prod(sums) ** (1.0 / len(sums)))
-
-
-def _density(zx, zy, bins: int, bandwidth=None, n_eff: float | None = None):
-    """The slope density on a grid centred on 0 (odd ``bins``): a histogram over ±6 rms (or
-    the extreme slope, whichever is smaller) widened by 4 kernel widths, smoothed by a
-    variance-preserving Gaussian kernel (Jones 1991, "On correcting for variance inflation
-    in kernel density estimation", CSDA 11, 3: the slopes shrunk by ``1/√(1 + b²)`` about
-    their mean, the kernel ``b/√(1 + b²)`` rms, so the density's variance is the slopes').
-    ``bandwidth`` ``b`` is in rms slopes per axis: None → Scott's rule with the effective
-    sample count ``n_eff`` (``b = n_eff^(−1/(d+4))``, ×(4/3)^(1/5) in 1-D; Silverman 1986
-    eq. 4.14), 0 → the raw histogram. Returns (density, x grid, y grid or None, the
-    fraction of slopes that fell outside, b)."""
-    bins = bins + 1 - bins % 2
-    d = 1 if zy is None else 2
-    if bandwidth is None:
-        bandwidth = (4 / 3) ** 0.2 * n_eff**-0.2 if d == 1 else n_eff ** (-1.0 / 6.0)
-    b = float(bandwidth)
-    shrink = 1.0 / math.sqrt(1.0 + b * b)
-    grids, zs, kern = [], [], []
-    for z in (zx,) if d == 1 else (zx, zy):
-        rms = math.sqrt(np.mean(z * z))
-        mu = float(np.mean(z))
-        zs_ = mu + (z - mu) * shrink if b > 0 else z
-        half = min(6 * rms, np.abs(z).max()) * shrink + 4 * b * shrink * rms
-        half *= 1 + 1.0 / bins
-        edges = np.linspace(-half, half, bins + 1)
-        step = edges[1] - edges[0]
-        grids.append((edges[0] + 0.5 * step, step))
-        zs.append(zs_)
-        kern.append(b * shrink * rms / step)  # kernel rms in bins
-    if d == 1:
-        hist, _ = np.histogram(zs[0], bins=np.linspace(grids[0][0] - 0.5 * grids[0][1],
-                               grids[0][0] + (bins - 0.5) * grids[0][1], bins + 1))  # fmt: skip
-        hist = hist.astype(float)
-    else:
-        (x0, sx), (y0, sy) = grids
-        hist = _hist2d(zs[1], zs[0], y0 - 0.5 * sy, sy, x0 - 0.5 * sx, sx, bins)
-    lost = 1 - hist.sum() / zx.size
-    if b > 0:
-        from scipy.ndimage import gaussian_filter
-
-        sig = kern[0] if d == 1 else (kern[1], kern[0])  # rows y
-        hist = gaussian_filter(hist, sig, mode="constant", truncate=4.0)
-    cell = math.prod(g[1] for g in grids)
-    dens = hist / (zx.size * cell)
-    return dens, grids[0], (grids[1] if d == 2 else None), lost, b
-
-
-def _hist2d(y, x, y0: float, sy: float, x0: float, sx: float, bins: int) -> np.ndarray:
-    """Counts on a uniform ``bins²`` grid (rows y) by bin index and one ``bincount`` (as
-    ``np.histogram2d``, last edge closed, without its binary search: 3× faster)."""
-    iy = np.floor((y - y0) / sy).astype(np.intp)
-    ix = np.floor((x - x0) / sx).astype(np.intp)
-    iy[y == y0 + bins * sy], ix[x == x0 + bins * sx] = bins - 1, bins - 1
-    ok = (iy >= 0) & (iy < bins) & (ix >= 0) & (ix < bins)
-    flat = iy[ok] * bins + ix[ok]
-    return np.bincount(flat, minlength=bins * bins).reshape(bins, bins).astype(float)
-
-
 @dataclass(frozen=True, eq=False)
 class MeasuredRoughness(Roughness):
     """The roughness of a measured height map (module docstring); build it with
@@ -326,6 +220,7 @@ class MeasuredRoughness(Roughness):
     isotropic: bool = False
     source: str = "array"
     info: dict = field(default_factory=dict)
+    acf: np.ndarray = None
     name: str = field(default="measured", init=False, repr=False)
 
     # ---------------------------------------------------------------- Roughness hooks
@@ -428,8 +323,9 @@ class MeasuredRoughness(Roughness):
         return rho / rho[tuple(n // 2 for n in rho.shape)]
 
     def correlation(self, x, y=0.0) -> np.ndarray:
-        """ρ(x, y) [-] from the PSD (0 beyond half the patch), ``x, y`` [m]."""
-        rho = self._rho_grid
+        """ρ(x, y) [-], ``x, y`` [m]: the whole map's autocorrelation (``acf``, lags up to
+        half the map, 0 beyond; :func:`measured_roughness`), else the PSD's (half a patch)."""
+        rho = self._rho_grid if self.acf is None else self.acf
         sp = self.info["spacing"]
         x = np.asarray(x, dtype=float)
         if self.dimension == 1:
@@ -470,7 +366,10 @@ class MeasuredRoughness(Roughness):
     @cached_property
     def _nfold(self):
         tail = None if self.tail == "none" else (lambda kr: self._tail(kr) / self.sigma**2)
-        lengths = (self.length,) if self.dimension == 1 else (self.length, self.length_y)
+        # the scale of s: the 1/e lags of the patch ρ it tabulates (``info["patch_lengths"]``)
+        lengths = self.info.get("patch_lengths") or (
+            (self.length,) if self.dimension == 1 else (self.length, self.length_y)
+        )
         return nfold_table(self._rho_grid, self.info["spacing"], lengths, tail)
 
     def log_nfold_table(self):
@@ -550,11 +449,14 @@ class MeasuredRoughness(Roughness):
         dens = self.slope_density.sum(axis=0) * self.slope_grid[1][1]
         info = {**self.info, "spacing": (self.info["spacing"][1],),
                 "patch": (self.info["patch"][1],)}  # fmt: skip
+        if "patch_lengths" in info:
+            info["patch_lengths"] = info["patch_lengths"][:1]
         return MeasuredRoughness(
             sigma=self.sigma, length=self.length, dimension=1, psd=p1, k0=(self.k0[1],),
             dk=(self.dk[1],), slope_density=dens, slope_grid=(self.slope_grid[0], None),
             slopes_ms=(self.slopes_ms[0], 0.0), tail=self.tail, tail_fit=self.tail_fit,
             band_lo=self.band_lo, band_hi=self.band_hi, source=self.source, info=info,
+            acf=None if self.acf is None else self.acf[self.acf.shape[0] // 2].copy(),
         )  # fmt: skip
 
     def surface(self):
@@ -654,9 +556,9 @@ def measured_roughness(
             f"slope_bandwidth must be None (Scott's rule) or a number 0…2 (rms slopes; 0: the "
             f"raw histogram), got {slope_bandwidth!r}"
         )
-    zx, zy = _cell_slopes(hm)
+    zx, zy = cell_slopes(hm)
     n_sl = zx.size
-    n_eff = n_sl / _slope_acf_sum(hm, zx, zy)
+    n_eff = n_sl / slope_acf_sum(hm, zx, zy)
     if slope_bandwidth is None:
         b_rule = (4 / 3) ** 0.2 * n_eff**-0.2 if hm.dimension == 1 else n_eff ** (-1 / 6)
     else:
@@ -667,7 +569,7 @@ def measured_roughness(
         bins = int(np.clip(math.ceil(6 * (6 + 4 * b_rule) / b_rule), 21, 301))
     else:
         bins = int(np.clip(2 * round(n_sl**0.25), 21, 201))
-    dens, gx, gy, lost, b_used = _density(zx, zy, bins, b_rule, n_eff)
+    dens, gx, gy, lost, b_used = density_estimate(zx, zy, bins, b_rule, n_eff)
     mss = (float(np.mean(zx * zx)), float(np.mean(zy * zy)) if zy is not None else 0.0)
     band_lo = 2 * math.pi / max(p * d for p, d in zip(patch, hm.spacing, strict=True))
     band_hi = math.pi / max(hm.spacing)
@@ -686,7 +588,17 @@ def measured_roughness(
               "isotropic": bool(isotropic) and hm.dimension == 2, "source": hm.source,
               "info": info, "dimension": hm.dimension}  # fmt: skip
     probe = MeasuredRoughness(sigma=sigma, length=1.0, length_y=None, **common)
-    rho = probe._rho_grid
+    pr = probe._rho_grid
+    if hm.dimension == 1:
+        info["patch_lengths"] = (_one_over_e(pr[pr.size // 2 :], hm.spacing[0]),)
+    else:
+        py, px = pr.shape[0] // 2, pr.shape[1] // 2
+        info["patch_lengths"] = (_one_over_e(pr[py, px:], hm.spacing[1]),
+                                 _one_over_e(pr[py:, px], hm.spacing[0]))  # fmt: skip
+        if isotropic:
+            info["patch_lengths"] = (math.sqrt(math.prod(info["patch_lengths"])),) * 2
+    rho = map_acf(hm)  # ℓ from the whole map, not from the (shorter, windowed) patches
+    common["acf"] = rho
     if hm.dimension == 1:
         lx = _one_over_e(rho[rho.size // 2 :], hm.spacing[0])
         ly = None
