@@ -4,6 +4,7 @@ orders of one realization against statistical PO.
 
     PYTHONPATH=src .venv/bin/python validation/heightmap/make_figure.py
     # → validation/heightmap/heightmap.png (needs SurfaceTopography for the .nc round trip)
+    # and then make_render.py → render.png / render.json (needs Mitsuba; --no-render skips it)
 
 Lengths in units of the wavelength-free roughness (σ = 0.1, ℓ = 1; Δ = ℓ/10; 1024² map): SPM at
 kσ = 0.2 (k = 2), IEM at kσ = 0.5 (k = 5), ε = 5 + 0.5i, θi = 30°, the incidence plane.
@@ -113,5 +114,15 @@ def main() -> Path:
     return out
 
 
+def render(argv=()) -> None:
+    """The rendered half (``make_render.py``: Mitsuba, its own process, as Dr.Jit variants
+    are per process) → render.png / render.json."""
+    import subprocess
+
+    subprocess.run([sys.executable, str(HERE / "make_render.py"), *argv], check=True)
+
+
 if __name__ == "__main__":
     main()
+    if "--no-render" not in sys.argv[1:]:
+        render()
