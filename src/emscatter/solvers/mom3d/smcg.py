@@ -54,7 +54,7 @@ from emscatter.solvers.mom3d.near import WIDTH, near_correction
 __all__ = ["SmcgOperator", "smcg_operator", "taylor_kernels"]
 
 #: Rows per block in the strong-matrix assembly (bounds the ``(rows, offsets)`` temporaries).
-ROW_BLOCK = 2048
+ROW_BLOCK = 256
 
 
 def taylor_kernels(k: float, rho: np.ndarray, order: int) -> np.ndarray:
@@ -93,7 +93,7 @@ def _strong(patch, k: float, radius: float, dtype) -> sparse.csr_matrix:
     included) for the pairs ``ρ < radius``, as a ``(2N, 2N)`` CSR matrix."""
     n = patch.n
     ny, nx = patch.shape
-    x, y, z, fx, fy = patch.x, patch.y, patch.z, patch.fx, patch.fy
+    z, fx, fy = patch.z, patch.fx, patch.fy
     area = patch.dx * patch.dy
     oi, oj = _offsets(patch.dx, patch.dy, radius, nx, ny)
     shift = oi + oj * nx
@@ -112,25 +112,32 @@ def _strong(patch, k: float, radius: float, dtype) -> sparse.csr_matrix:
     itype = np.int32 if nnz < 2**31 - 1 and 2 * n < 2**31 else np.int64
     data = np.empty(nnz, dtype=dtype)
     indices = np.empty(nnz, dtype=itype)
+    X, Y = -oi * patch.dx, -oj * patch.dy  # x_m − x_n etc. per offset (exact on the grid)
+    rho2 = X * X + Y * Y
+    q0 = area / (4.0 * math.pi)
     for r0 in range(0, n, ROW_BLOCK):  # second pass: the entries, vectorized per block
         r = np.arange(r0, min(n, r0 + ROW_BLOCK))
         cx, cy = ix[r, None] + oi[None, :], iy[r, None] + oj[None, :]
         ok = (cx >= 0) & (cx < nx) & (cy >= 0) & (cy < ny)
         col = np.where(ok, r[:, None] + shift[None, :], r[:, None])
-        X, Y, Z = x[r, None] - x[col], y[r, None] - y[col], z[r, None] - z[col]
-        R = np.where(ok, np.sqrt(X * X + Y * Y + Z * Z), 1.0)  # masked columns are dropped
-        R[:, self_q] = 1.0
-        a = area * (1j * k * R - 1.0) * np.exp(1j * k * R) / (4.0 * math.pi * R**3)
-        a[:, self_q] = 0.0
+        Z = z[r, None] - z[col]
+        R2 = rho2 + Z * Z
+        R2[:, self_q] = 1.0
+        R = np.sqrt(R2)
+        kr = k * R
+        c, sn = np.cos(kr), np.sin(kr)
+        q = q0 / (R2 * R)
+        q[:, self_q] = 0.0
+        a = (-c - kr * sn) * q + 1j * ((kr * c - sn) * q)  # Δ²(ikR − 1)e^{ikR}/(4πR³)
         D = Z - fx[r, None] * X - fy[r, None] * Y
         dfx, dfy = fx[col] - fx[r, None], fy[col] - fy[r, None]
-        blocks = [-a * (X * dfx - D), -a * (X * dfy), -a * (Y * dfx), -a * (Y * dfy - D)]
+        blocks = [a * (D - X * dfx), -a * (X * dfy), -a * (Y * dfx), a * (D - Y * dfy)]
         blocks[0][:, self_q] += 0.5
         blocks[3][:, self_q] += 0.5
-        for (i, j), c in corr.items():
-            q = where[(i, j)]
+        for (i, j), cc in corr.items():
+            qq = where[(i, j)]
             for b, (s, t) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
-                blocks[b][:, q] += c[s, t, r]
+                blocks[b][:, qq] += cc[s, t, r]
         ok2 = np.concatenate([ok, ok], axis=1)
         cols2 = np.concatenate([col, col + n], axis=1)[ok2]
         for half, (b0, b1) in enumerate(((0, 1), (2, 3))):
@@ -145,13 +152,14 @@ class SmcgOperator:
     sparse, weak pairs by FFT (module docstring). ``shape``, ``dtype`` (complex128: the
     iteration's precision; the sparse entries are stored in ``strong.dtype``), ``nbytes``."""
 
-    def __init__(self, patch, k: float, near_radius: float, taylor_order: int, dtype):
+    def __init__(self, patch, k: float, near_radius: float, taylor_order: int, dtype,
+                 strong=None):  # fmt: skip
         ny, nx = patch.shape
         self.patch, self.k, self.order = patch, k, int(taylor_order)
         self.near_radius = near_radius
         self.shape = (2 * patch.n, 2 * patch.n)
         self.dtype = np.dtype(np.complex128)
-        self.strong = _strong(patch, k, near_radius, dtype)
+        self.strong = _strong(patch, k, near_radius, dtype) if strong is None else strong
         self.pad = (sfft.next_fast_len(2 * ny - 1), sfft.next_fast_len(2 * nx - 1))
         py, px = self.pad
         dj = np.fft.fftfreq(py, 1.0 / py).astype(int)  # offsets m − n in grid steps
@@ -166,6 +174,12 @@ class SmcgOperator:
         p1 = self.order + 1
         self.kx, self.ky, self.k1 = spec[:p1], spec[p1 : 2 * p1], spec[2 * p1 :]
         self.zc = patch.z - patch.z.mean()
+
+    def with_order(self, taylor_order: int) -> SmcgOperator:
+        """The same strong matrix with another Taylor order for the weak pairs (cheap)."""
+        _check_order(taylor_order)
+        return SmcgOperator(self.patch, self.k, self.near_radius, int(taylor_order),
+                            self.strong.dtype, strong=self.strong)  # fmt: skip
 
     @property
     def nbytes(self) -> int:
@@ -215,13 +229,17 @@ class SmcgOperator:
         return self.matvec(v)
 
 
+def _check_order(taylor_order) -> None:
+    if not isinstance(taylor_order, int | np.integer) or not 0 <= taylor_order <= 8:
+        raise ValueError(f"taylor_order must be an int in 0 … 8, got {taylor_order!r}")
+
+
 def smcg_operator(patch, k: float, *, near_radius: float, taylor_order: int = 3,
                   dtype=np.complex64) -> SmcgOperator:  # fmt: skip
     """The SMCG product for ``patch`` at wavenumber ``k`` [rad/m]: strong pairs within
     ``near_radius`` [m] (at least the near-correction stencil, ``√2·(WIDTH+1)`` cells),
     Taylor order ``taylor_order`` (0 … 8) for the rest; sparse entries stored in ``dtype``."""
-    if not isinstance(taylor_order, int | np.integer) or not 0 <= taylor_order <= 8:
-        raise ValueError(f"taylor_order must be an int in 0 … 8, got {taylor_order!r}")
+    _check_order(taylor_order)
     least = math.sqrt(2.0) * (WIDTH + 1) * max(patch.dx, patch.dy)
     if not near_radius >= least:
         raise ValueError(
