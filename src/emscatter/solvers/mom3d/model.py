@@ -16,8 +16,11 @@ realizations of the far-field amplitude ``A = p̂_s·F`` (:mod:`.farfield`):
   (reflected plus transmitted power, 1 when lossless; NaN for a lossy medium, whose
   reflectivity per realization is ``info["reflectivity"]``).
 
-Not registered in :mod:`emscatter.solvers` yet (a dense solve: minutes per realization for
-dielectric patches of a few wavelengths); call it as ``emscatter.solvers.mom3d.bistatic``.
+A perfect conductor is solved on the dense matrix up to :data:`SMCG_MIN_NODES` nodes (8λ × 8λ
+at 8 points/λ) and by the sparse-matrix/canonical-grid product of :mod:`.smcg` above
+(``accel=`` chooses); dielectrics always densely. Not registered in :mod:`emscatter.solvers`
+yet (a dense dielectric solve takes minutes per realization for patches of a few
+wavelengths); call it as ``emscatter.solvers.mom3d.bistatic``.
 """
 
 from __future__ import annotations

@@ -36,9 +36,14 @@ optimal ``r = 2ρ(P+1)/k`` (admissible for ``kρ > 2(P+1)``) gives, per pair,
 
 with ``c = O(1)``: the remainder of the phase series ``exp(i ξ)`` (the static part
 ``(Z/ρ)^{2P+2}`` is smaller for ``kρ ≫ 1``). For ``kσ ≤ 1`` and ``r_d = 2.5λ`` the worst pair
-(``|Z| ≈ 6σ``) has ``ξ ≤ 1.2`` and the typical one ``ξ ≈ 0.1``; the measured relative error
-of the whole product (tests/test_mom3d_smcg.py) is ~1e-5 at ``P = 2`` and ~1e-7 at ``P = 4``
-on a kσ = 1 surface.
+(``|Z| ≈ 6σ``) has ``ξ ≤ 1.2`` and the typical one ``ξ ≈ 0.1``. Measured relative error of
+the whole product against the dense one (tests/test_mom3d_smcg.py; 5λ patch, Gaussian kσ = 1,
+kℓ = 3), order 0…4: 6.3e-3, 7.2e-4, 8.5e-5, 9.3e-6, 9.5e-7 at ``r_d = 2.5λ``; 1.5e-2, 2.6e-3,
+5.4e-4, 1.3e-4, 2.9e-5 at ``1.5λ``. The series diverges where ``|Z| ≥ ρ``: the caller
+(:mod:`.model`) keeps the peak-to-valley height below ``0.8 r_d``.
+
+Cost per product: the sparse part ``4 N π (r_d/Δ)²`` nonzeros (≈ 8e7 for 16λ × 16λ at 8
+points/λ and ``r_d = 2.5λ``, 12 bytes each in complex64), the FFT part ``O((2P+2) N log N)``.
 """
 
 from __future__ import annotations
