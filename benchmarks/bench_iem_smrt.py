@@ -18,6 +18,9 @@ Contenders, all in this process, each timed warm (objects built once, result cac
   SMRT's ``iem_fung92``) and in the default configuration (AIEM with the transition, faded
   lower-medium terms and shadowing); both sum the series to their default ``rtol = 1e-8``
   (a bound on the neglected tail);
+* the IEM solver's ``bistatic`` called directly with the same 1992 options
+  (``emscatter_fung92_solver_only``): the API's own cost per call is the paired difference,
+  ``api_overhead_us_median_min_max`` in each row;
 * SMRT ``IEM_Fung92.diffuse_reflection_matrix`` with ``series_truncation`` = the smallest
   number of terms whose σ⁰ (every angle, hh and vv) is within 1e-8 relative of its longest
   finite sum (SMRT overflows past ~60 terms here; the last step of that sum is recorded;
@@ -134,12 +137,20 @@ def main(argv=None) -> dict:
                     rough, EPS, frequency=FREQ, theta_i=th, **opts, **kw, **extra
                 )
 
+            iem = em.solvers.get("iem")
+            th_a, ps, p0 = np.asarray(th, float), np.asarray(math.pi), np.asarray(0.0)
+
+            def solver(iem=iem, rough=rough, th=th_a, ps=ps, p0=p0):  # the solver alone
+                return lambda: iem.bistatic(rough, EPS, k, th, th, ps, p0, coherent=False,
+                                            crosspol=False, **FUNG92)  # fmt: skip
+
             def smrt(model, mu=mu):
                 return lambda: model.diffuse_reflection_matrix(FREQ, 1.0, EPS, mu, mu, math.pi, 2)
 
             fns = {
                 "emscatter_fung92": ems(**FUNG92),
                 "emscatter_default": ems(),
+                "emscatter_fung92_solver_only": solver(),
                 "smrt_converged": smrt(smrt_conv),
                 "smrt_10_terms": smrt(smrt_10),
             }
@@ -159,6 +170,9 @@ def main(argv=None) -> dict:
             a = np.stack([ours.sigma0[1, 1], ours.sigma0[0, 0]])
             b = np.stack([np.asarray(theirs[0]).ravel(), np.asarray(theirs[1]).ravel()])
             b = b * 4 * np.pi * mu  # SMRT's reflection coefficient → σ⁰
+            api_us = [1e6 * (a - b) for a, b in zip(per["emscatter_fung92"],
+                                                    per["emscatter_fung92_solver_only"],
+                                                    strict=True)]  # fmt: skip
             row = {
                 "k_sigma": ks,
                 "angles": n,
@@ -166,10 +180,15 @@ def main(argv=None) -> dict:
                 "smrt_last_relative_step": last_step,
                 "seconds_median": {m: statistics.median(v) for m, v in per.items()},
                 "fung92_vs_smrt_converged_max_rel_diff": float(np.max(np.abs(a - b) / b)),
+                "api_overhead_us_median_min_max": [
+                    statistics.median(api_us),
+                    min(api_us),
+                    max(api_us),
+                ],  # fmt: skip
             }
             ratios = {}
             for m in names:
-                if not m.startswith("emscatter"):
+                if not m.startswith("emscatter") or m.endswith("solver_only"):
                     continue
                 rr = [s / e for s, e in zip(per["smrt_converged"], per[m], strict=True)]
                 ratios[f"smrt_converged/{m}"] = [statistics.median(rr), min(rr), max(rr)]
@@ -180,7 +199,10 @@ def main(argv=None) -> dict:
             r92 = ratios["smrt_converged/emscatter_fung92"][0]
             rdf = ratios["smrt_converged/emscatter_default"][0]
             print(f"kσ {ks:4.2f} N {n:5d}  SMRT terms {n_conv:3d}  SMRT/ems fung92 ×{r92:5.2f}  "
-                  f"default ×{rdf:5.2f}  Δ {row['fung92_vs_smrt_converged_max_rel_diff']:.1e}",
+                  f"default ×{rdf:5.2f}  Δ {row['fung92_vs_smrt_converged_max_rel_diff']:.1e}  "
+                  f"API {1e6 * row['seconds_median']['emscatter_fung92']:.1f} µs = solver "
+                  f"{1e6 * row['seconds_median']['emscatter_fung92_solver_only']:.1f} µs + "
+                  f"{row['api_overhead_us_median_min_max'][0]:.1f} µs",
                   flush=True)  # fmt: skip
     worst = {
         key: min(r["ratio_median_min_max"][key][0] for r in rows)

@@ -733,6 +733,268 @@ def check_height_map_plate():
 CHECKS = {name[6:]: fn for name, fn in globals().items() if name.startswith("check_")}
 
 
+# Anisotropic roughness (issue 18): a textured plate. The texture axis X is the world direction
+# projected onto the plate (z = 0), so for direction x the surface frame is the world frame.
+def _textured_plate(case, direction, *, samples, diffuse, options=None, textured=True):
+    """Path gains (VV, HH, HV, VH), the solve time [s] (second solve: tables and kernels
+    cached) and the tables of the plate with a textured emscatter material."""
+    import time
+
+    import sionna.rt as rt
+
+    from emscatter.radio import scenes
+    from emscatter.radio.material import EmscatterRadioMaterial
+    from emscatter.radio.plate import _ANT, POL_PAIRS
+
+    def make(name, medium, thickness):
+        kw = {"texture_direction": direction} if textured else {}
+        return EmscatterRadioMaterial(
+            "em-plate", surface=case.surface, medium=case.medium, thickness=None,
+            method=case.method, table_options=options, **kw,
+        )  # fmt: skip
+
+    scene = scenes.load(scenes.plate(case.size), case.frequency, make)
+    arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization="VH")
+    scene.tx_array = scene.rx_array = arr
+    scene.add(rt.Transmitter("tx", position=case.tx.tolist()))
+    scene.add(rt.Receiver("rx", position=case.rx.tolist()))
+    solver = rt.PathSolver()
+    kw = dict(max_depth=1, samples_per_src=int(samples), max_num_paths_per_src=int(samples),
+              los=False, specular_reflection=not diffuse, diffuse_reflection=diffuse,
+              refraction=False, seed=1)  # fmt: skip
+    solver(scene, **kw)
+    seconds = math.inf
+    for _ in range(3):  # best of 3: the machine may be loaded
+        t0 = time.perf_counter()
+        paths = solver(scene, **kw)
+        re, im = (np.asarray(x.numpy()) for x in paths.a)
+        seconds = min(seconds, time.perf_counter() - t0)
+    power = re**2 + im**2
+    out = {p: float(power[0, _ANT[p[0]], 0, _ANT[p[1]]].sum()) for p in POL_PAIRS}
+    contrib = power[0, 1, 0, 1]
+    n = max(int(np.count_nonzero(contrib)), 1)
+    out["noise_vv"] = float(math.sqrt(n) * contrib.std() / max(contrib.sum(), 1e-300))
+    out["seconds"] = seconds
+    return out, scene.get("em-plate").active_tables
+
+
+def check_textured_plate():
+    """Textured plate at 28 GHz, 60°, PO tables: diffuse power vs the σ⁰ quadrature of the
+    anisotropic surface; direction x with (ℓx, ℓy) = direction y with (ℓy, ℓx); ℓx = ℓy through
+    the textured path = the isotropic material; specular = image × Fresnel × Kirchhoff; solve
+    times textured / isotropic."""
+    from emscatter.radio.plate import PlateCase, diffuse_prediction, specular_prediction
+    from emscatter.spectra import GaussianCorrelation as G
+
+    f, n = 28e9, int(os.environ.get("ANISO_SAMPLES", "300000"))
+    aniso = G(sigma=1e-3, length=30e-3, length_y=12e-3)  # inside PO's range at 28 GHz
+    swapped = G(sigma=1e-3, length=12e-3, length_y=30e-3)
+    iso = G(sigma=1e-3, length=10e-3)
+    case = PlateCase(f, aniso, method="po", size=20.0)
+    out = {"samples": n, "load": os.getloadavg()[0]}
+    dif, tab = _textured_plate(case, (1, 0, 0), samples=n, diffuse=True)
+    out["diffuse"] = dif
+    out["method"] = tab.method
+    out["diffuse_prediction"] = diffuse_prediction(case)
+    out["diffuse_rotated"] = _textured_plate(
+        PlateCase(f, swapped, method="po", size=20.0), (0, 1, 0), samples=n, diffuse=True
+    )[0]
+    out["specular"] = _textured_plate(case, (1, 0, 0), samples=10_000, diffuse=False)[0]
+    out["specular_prediction"] = specular_prediction(case)
+    ci = PlateCase(f, iso, method="po", size=20.0)
+    for key, textured in (("iso_textured", True), ("iso_plain", False)):
+        out[key] = _textured_plate(ci, (0, 0, 1), samples=n, diffuse=True, textured=textured)[0]
+        out[key + "_specular"] = _textured_plate(
+            ci, (0, 0, 1), samples=10_000, diffuse=False, textured=textured
+        )[0]
+    from emscatter.radio.material import EmscatterRadioMaterial
+
+    mat = EmscatterRadioMaterial
+    out["errors"] = {
+        "no_direction": _error(lambda: mat("a", surface=aniso, medium="wood")),
+        "flat": _error(lambda: mat("b", medium="wood", texture_direction=(0, 0, 1))),
+        "zero": _error(lambda: mat("c", surface=aniso, medium="wood", texture_direction=(0, 0, 0))),
+    }
+    return out
+
+
+CHECKS["textured_plate"] = check_textured_plate
+
+
+def check_textured_scenes():
+    """Textured materials where users meet them: an XML scene naming a textured material
+    (vertical grooves on a wall and, by the degenerate rule, on the floor) in both solvers;
+    roughen(simple_street_canyon) with (σ, ℓx, ℓy) and a texture direction; the solve-time
+    ratio textured / isotropic (same σ, ℓ = ℓx) with diffuse on (best of 3, tables built)."""
+    import time
+
+    import mitsuba as mi
+    import sionna.rt as rt
+
+    import emscatter.radio.material as m
+    from emscatter import radio
+    from emscatter.radio import scenes
+    from emscatter.radio.tables import TableOptions
+
+    out = {"load": os.getloadavg()[0], "cpus": os.cpu_count()}
+    with tempfile.TemporaryDirectory(prefix="radio-xml-") as tmp:
+        d = Path(tmp)
+        scenes.write_ply(d / "floor.ply", scenes.quad([-5, -5, 0], [10, 0, 0], [0, 10, 0]))
+        scenes.write_ply(d / "wall.ply", scenes.quad([-5, 3, 0], [10, 0, 0], [0, 0, 4]))
+        shapes = "".join(
+            f'<shape type="ply" id="{n}"><string name="filename" value="{n}.ply"/>'
+            '<ref id="grooved" name="bsdf"/></shape>\n'
+            for n in ("floor", "wall")
+        )
+        (d / "scene.xml").write_text(
+            '<scene version="2.1.0">\n'
+            f'<bsdf type="{m.PLUGIN_NAME}" id="grooved">'
+            '<string name="medium" value="concrete"/>'
+            '<float name="rms_height" value="0.001"/>'
+            '<float name="correlation_length" value="0.03"/>'
+            '<float name="correlation_length_y" value="0.012"/>'
+            '<string name="texture_direction" value="0 0 1"/>'
+            f'<float name="thickness" value="0.2"/></bsdf>\n{shapes}</scene>\n'
+        )
+        scene = scenes.load(d / "scene.xml", 28e9)
+    mat = scene.get("grooved")
+    _add_devices(scene, (0, 0, 2.0), [(2.0, 0.5, 1.5), (-2.0, 2.0, 1.0)])
+    paths = rt.PathSolver()(scene, max_depth=2, samples_per_src=50_000, diffuse_reflection=True)
+    p, _ = _paths_power(paths)
+    rm = rt.RadioMapSolver()(
+        scene, center=mi.Point3f(0, 0, 1.5), orientation=mi.Point3f(0, 0, 0),
+        size=mi.Point2f(6, 6), cell_size=mi.Point2f(0.5, 0.5), samples_per_tx=50_000,
+        max_depth=2, diffuse_reflection=True,
+    )  # fmt: skip
+    pg = np.asarray(rm.path_gain.numpy())
+    out["xml"] = {
+        "lengths": [mat.surface.length, mat.surface.length_y],
+        "direction": [float(v) for v in mat._texture],
+        "psi_nodes": int(mat.active_tables.psi_nodes.size),
+        "num_paths": int(np.count_nonzero(p)),
+        "finite": bool(np.all(np.isfinite(p)) and np.all(np.isfinite(pg))),
+        "nonneg": bool(np.all(p >= 0) and np.all(pg >= 0)),
+        "below_one": bool(p.sum(axis=1).max() < 1 and pg.max() < 1),
+        "map_cells_lit": int(np.count_nonzero(pg > 0)),
+    }
+    opts = TableOptions(n_cos=65, n_cos_spm=9, n_theta=16, n_alpha=13, n_s=32, n_psi=5)
+    sc = rt.load_scene(rt.scene.simple_street_canyon, merge_shapes=False)
+    sc.frequency = 28e9
+    arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization="V")
+    sc.tx_array = sc.rx_array = arr
+    sc.add(rt.Transmitter("tx", position=list(STREET_TX)))
+    for i, q in enumerate(STREET_RX):
+        sc.add(rt.Receiver(f"rx{i}", position=list(q)))
+    out["no_direction"] = _error(
+        lambda: radio.roughen(sc, "flat", {"brick": (1e-3, 30e-3, 12e-3)}, table_options=opts)
+    )
+    out["unchanged"] = not any(isinstance(x, m.EmscatterRadioMaterial)
+                               for x in sc.radio_materials.values())  # fmt: skip
+    h = radio.roughen(sc, "flat", {"brick": (1e-3, 30e-3, 12e-3)}, table_options=opts,
+                      texture_direction={"brick": (2, 0, 0)})  # fmt: skip
+    out["per_medium_direction"] = [float(v) for v in h.materials["rough-brick"]._texture]
+    radio.flatten(sc)
+    grooved = {"brick": (1e-3, 30e-3, 12e-3)}
+    out["bad_direction"] = _error(
+        lambda: radio.roughen(sc, "flat", grooved, texture_direction={"brick": "up"})
+    )
+    kw = {"max_depth": 2, "samples_per_src": 100_000, "diffuse_reflection": True, "seed": 1}
+    rmkw = {"center": mi.Point3f(55.0, 0.0, 1.5), "orientation": mi.Point3f(0, 0, 0),
+            "size": mi.Point2f(50.0, 16.0), "cell_size": mi.Point2f(2.0, 2.0),
+            "samples_per_tx": 200_000, "max_depth": 2, "diffuse_reflection": True}  # fmt: skip
+
+    def timed(fn):
+        fn()  # tables and kernels
+        best = math.inf
+        for _ in range(3):
+            t0 = time.perf_counter()
+            res = fn()
+            best = min(best, time.perf_counter() - t0)
+        return best, res
+
+    def path_run():
+        g = radio.roughening.path_gains(rt.PathSolver()(sc, **kw))
+        return g
+
+    def map_run():
+        return np.asarray(rt.RadioMapSolver()(sc, **rmkw).path_gain.numpy())
+
+    times = {}
+    for key, value, direction in (
+        ("isotropic", (1e-3, 30e-3), None),
+        ("textured", (1e-3, 30e-3, 12e-3), (0, 0, 1)),
+    ):
+        h = radio.roughen(sc, "flat", {"brick": value}, table_options=opts,
+                          texture_direction=direction)  # fmt: skip
+        if key == "textured":
+            out["rows_brick"] = [r for r in h.rows() if r["itu_type"] == "brick"][:1]
+        tp, g = timed(path_run)
+        tm, pgm = timed(map_run)
+        times[key] = {"paths_s": tp, "map_s": tm}
+        out[key + "_finite"] = bool(np.all(np.isfinite(g)) and np.all(np.isfinite(pgm)))
+        out[key + "_gain"] = np.asarray(g)[:, 0].tolist()
+        radio.flatten(sc)
+    out["times"] = times
+    out["ratio_paths"] = times["textured"]["paths_s"] / times["isotropic"]["paths_s"]
+    out["ratio_map"] = times["textured"]["map_s"] / times["isotropic"]["map_s"]
+    return out
+
+
+CHECKS["textured_scenes"] = check_textured_scenes
+
+
+def _oblique_prediction(case, beta, order=6):
+    """Radar-equation diffuse gain (VV, HH, HV) of the plate with the texture axis at azimuth
+    ``beta`` [rad] in the plate (as emscatter.radio.plate.diffuse_prediction, azimuths taken
+    relative to the texture axis)."""
+    from emscatter.constants import SPEED_OF_LIGHT
+    from emscatter.conventions import wavenumber
+    from emscatter.radio.plate import POL_PAIRS, _graded_nodes
+    from emscatter.solvers import get
+
+    k = wavenumber(frequency=case.frequency)
+    lam = SPEED_OF_LIGHT / case.frequency
+    x0, h, half = float(case.rx[0]), case.height, case.size / 2
+    xs, wx = _graded_nodes(half, 0.005, 2 * x0 + 2 * h, h / 4, order)
+    ys, wy = _graded_nodes(half, 0.005, 2 * h, h / 4, order)
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    p = np.stack([X, Y, np.zeros_like(X)], axis=-1)
+    d1, d2 = p - case.tx, case.rx - p
+    r1, r2 = np.linalg.norm(d1, axis=-1), np.linalg.norm(d2, axis=-1)
+    ti = np.arccos(np.clip(-d1[..., 2] / r1, 0.0, 1.0))
+    ts = np.arccos(np.clip(d2[..., 2] / r2, 0.0, 1.0))
+    pi_ = np.arctan2(d1[..., 1], d1[..., 0]) - beta
+    ps = np.arctan2(d2[..., 1], d2[..., 0]) - beta
+    sig = get(case.method).bistatic(case.surface, case.eps, k, ti, ts, ps, pi_,
+                                    coherent=False).sigma0  # fmt: skip
+    w = wx[:, None] * wy[None, :]
+    tot = np.einsum("psxy,xy->ps", lam**2 * sig / ((4 * math.pi) ** 3 * r1**2 * r2**2), w)
+    return {pair: float(tot[s, i]) for pair, (s, i) in POL_PAIRS.items()}
+
+
+def check_textured_plate_oblique():
+    """The textured plate with the texture axis at 37° in the plate (ψ between table nodes, both
+    signs of the folded azimuth): diffuse power vs the quadrature; the 0° and 90° predictions
+    beside it (how much the azimuth matters here)."""
+    from emscatter.radio.plate import PlateCase
+    from emscatter.spectra import GaussianCorrelation as G
+
+    n = int(os.environ.get("ANISO_SAMPLES", "300000"))
+    case = PlateCase(28e9, G(sigma=1e-3, length=30e-3, length_y=12e-3), method="po", size=20.0)
+    beta = math.radians(37.0)
+    out = {"samples": n}
+    out["diffuse"] = _textured_plate(
+        case, (math.cos(beta), math.sin(beta), 0.0), samples=n, diffuse=True
+    )[0]
+    out["prediction"] = _oblique_prediction(case, beta)
+    out["prediction_0"] = _oblique_prediction(case, 0.0)
+    out["prediction_90"] = _oblique_prediction(case, 0.5 * math.pi)
+    return out
+
+
+CHECKS["textured_plate_oblique"] = check_textured_plate_oblique
+
+
 def main(argv):
     results = {}
     for name in argv:

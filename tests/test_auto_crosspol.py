@@ -85,3 +85,41 @@ def test_iem_backscatter_entry_is_the_bistatic_solver_term(rough, eps):
     np.testing.assert_allclose(fast, sig[0, 1], rtol=1e-13, atol=0.0)
     np.testing.assert_array_equal(sig[0, 1], sig[1, 0])
     assert np.all(fast > 0)
+
+
+@pytest.mark.parametrize(
+    "cols",
+    [
+        np.array([[0.7, 0.0, 3.0, 0.1]]),  # one angle
+        np.array([[0.7, 0.0, 3.0, 0.1]] * 3),  # one distinct row
+        np.array([[0.7, 0.0], [0.2, 0.0], [0.7, 0.0], [-0.0, 1.0]]),  # θ and φ vary
+        np.array([[0.7, 0.0, 3.0, 0.1], [0.2, 1.0, 3.0, 0.1], [0.7, 0.0, 3.0, 0.1]]),
+        np.array([[0.7, 0.0, 3.0, 0.1], [0.2, 1.0, 4.0, 0.1], [0.2, 1.0, 3.0, 0.2]]),  # 4 vary
+    ],
+)
+def test_unique_rows_is_numpys(cols):
+    uniq, inv = auto_crosspol._unique_rows(cols)
+    ref, ref_inv = np.unique(cols, axis=0, return_inverse=True)
+    np.testing.assert_array_equal(uniq, ref)
+    np.testing.assert_array_equal(uniq[inv], cols)
+    np.testing.assert_array_equal(inv, ref_inv.reshape(-1))
+
+
+@pytest.mark.parametrize("eps", [15 + 3.5j, np.array([5 + 1j, 10 + 2j, 20 + 3j])])
+def test_auto_iem_in_backscatter_takes_the_remembered_term_equal_to_the_solver(eps):
+    """``auto``'s IEM branch in backscatter runs the IEM with ``crosspol=False`` and adds the
+    per-angle-remembered multiple-scattering hv (:data:`auto_crosspol.IEM_BACKSCATTER`): the
+    same σ⁰ as ``method="iem"`` (its own term), every polarization."""
+    import emscatter as em
+
+    rough = em.roughness("exponential", sigma=0.53 / K, length=8.0 / K)  # NMM3D-like soil
+    th = np.radians([20.0, 40.0, 60.0])
+    kw = dict(wavelength=2 * math.pi / K, theta_i=th, out_of_range="ignore")
+    auto = em.backscatter(rough, eps, **kw)
+    assert auto.method == "iem"
+    assert auto.info["crosspol"].startswith("multiple scattering (backscatter")
+    own = em.backscatter(rough, eps, method="iem", **kw)
+    np.testing.assert_allclose(auto.sigma0, own.sigma0, rtol=1e-12, atol=0.0)
+    assert np.all(auto.sigma0[0, 1] > 0)
+    again = em.backscatter(rough, eps, **kw)  # answered from the per-angle memory
+    np.testing.assert_array_equal(again.sigma0, auto.sigma0)

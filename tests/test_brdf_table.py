@@ -70,6 +70,36 @@ def test_evaluate_reproduces_nodes_anisotropic():
     assert got == pytest.approx(want, rel=1e-12)
 
 
+def test_evaluate_at_chosen_wavelengths_and_without_copying_the_table():
+    """Requested wavelengths (scalar, subsets, a non-adjacent pair) combine the table's
+    wavelength columns linearly, and evaluation reads the table in place: a few points of a
+    large table allocate far less than the table (a full copy per call once cost the
+    anisotropic RGL export most of its time)."""
+    import tracemalloc
+
+    rng = np.random.default_rng(5)
+    th, ph = default_theta(24), default_phi(48)
+    wl = np.array([4e-7, 5e-7, 6e-7, 7e-7])
+    v = rng.uniform(0, 1, (wl.size, th.size, ph.size, th.size, ph.size))
+    t = BrdfTable(wavelengths=wl, theta_i=th, theta_o=th, phi_i=ph, phi_o=ph, values=v)
+    wi = frames.directions(rng.uniform(0, 1.4, 50), rng.uniform(0, 6, 50))
+    wo = frames.directions(rng.uniform(0, 1.4, 50), rng.uniform(0, 6, 50))
+    full = t.evaluate(wi, wo)
+    np.testing.assert_allclose(t.evaluate(wi, wo, wavelength=wl[[0, 3]]), full[[0, 3]], rtol=1e-13)
+    np.testing.assert_allclose(t.evaluate(wi, wo, wavelength=wl[2]), full[2], rtol=1e-13)
+    mid = t.evaluate(wi, wo, wavelength=[4.5e-7, 6.75e-7])
+    np.testing.assert_allclose(mid[0], 0.5 * (full[0] + full[1]), rtol=1e-12)
+    np.testing.assert_allclose(mid[1], 0.25 * full[2] + 0.75 * full[3], rtol=1e-12)
+    tracemalloc.start()
+    try:
+        t.evaluate(wi, wo)
+        t.evaluate(wi, wo, wavelength=5.5e-7)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 0.05 * v.nbytes, (peak, v.nbytes)
+
+
 def test_horizon_grazing_and_wavelength_range():
     rng = np.random.default_rng(2)
     t = _random_iso(rng)

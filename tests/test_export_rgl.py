@@ -22,7 +22,7 @@ import pytest
 from emscatter.brdf import frames
 from emscatter.brdf.colour import spectrum_to_rgb_weights
 from emscatter.brdf.export_rgl import RglFormatError, read_rgl, write_rgl
-from emscatter.brdf.rgl_warp import estimate_alpha, marginal2d_sample
+from emscatter.brdf.rgl_warp import beckmann_d, estimate_alpha, marginal2d_sample
 from emscatter.brdf.source import BrdfFunction, as_brdf_source
 from emscatter.solvers.kirchhoff import go
 from emscatter.spectra import GaussianCorrelation
@@ -197,3 +197,42 @@ def test_bad_arguments_and_interrupted_export(tmp_path):
     with pytest.raises(RuntimeError, match="half-way"):
         write_rgl(out, BrdfFunction(broken, [5e-7]), alpha=0.2)
     assert not out.exists() and list(tmp_path.iterdir()) == []  # no partial file left
+
+
+def test_batched_export_equals_node_by_node(tmp_path, monkeypatch):
+    """The export evaluates a table over many incident nodes and all wavelengths per call; the
+    file equals (to float32 rounding) one made by evaluating it one incident node and one
+    wavelength at a time (``evaluate_angles`` with a scalar wavelength), and the chunk size
+    changes no byte."""
+    import emscatter.brdf.export_rgl as ex
+    from emscatter.brdf import BrdfTable
+    from emscatter.brdf.build import default_phi, default_theta
+
+    rng = np.random.default_rng(3)
+    th, ph = default_theta(9), default_phi(12)
+    wl = np.array([4.5e-7, 5.5e-7, 6.5e-7])
+    ti, pi_, to, po = np.meshgrid(th, ph, th, ph, indexing="ij")
+    wi, wo = frames.directions(ti, pi_), frames.directions(to, po)
+    h = (wi + wo) / np.linalg.norm(wi + wo, axis=-1, keepdims=True)
+    lobe = beckmann_d(h, 0.3, 0.5) / (4 * wi[..., 2] * wo[..., 2])  # an anisotropic lobe
+    v = lobe[None] * (1 + 0.2 * rng.uniform(size=(wl.size, *lobe.shape)))
+    table = BrdfTable(wavelengths=wl, theta_i=th, theta_o=th, phi_i=ph, phi_o=ph, values=v)
+
+    def one_at_a_time(wi, wo):
+        out = np.empty(wo.shape[:-1] + (wl.size,))
+        for node in np.ndindex(wo.shape[:-2]):  # one incident node per call
+            a = frames.angles(wi[node])
+            b = frames.angles(wo[node])
+            for j, lam in enumerate(wl):
+                out[node + (slice(None), j)] = table.evaluate_angles(*a, *b, wavelength=lam)
+        return out
+
+    kw = {"n_theta_i": 5, "n_samples": 16, "n_phi_i": 5, "theta_i_max_deg": 60.0}
+    batched = read_rgl(write_rgl(tmp_path / "batched.bsdf", table, **kw))
+    ref = BrdfFunction(one_at_a_time, wl, isotropic=False, name=table.describe())
+    single = read_rgl(write_rgl(tmp_path / "single.bsdf", ref, **kw))
+    assert batched["spectra"].shape == (5, 5, 3, 16, 16)
+    np.testing.assert_allclose(batched["spectra"], single["spectra"], rtol=2e-7, atol=0)
+    monkeypatch.setattr(ex, "_SLICES_PER_CHUNK", 1)
+    write_rgl(tmp_path / "chunk1.bsdf", table, **kw)
+    assert (tmp_path / "chunk1.bsdf").read_bytes() == (tmp_path / "batched.bsdf").read_bytes()

@@ -97,3 +97,89 @@ def test_height_map_errors_are_one_line_and_come_first(command, map_file, tmp_pa
     rc = main([command, *out, *hm, "--segments", "0"])
     _one_line_error(capsys, rc, "--segments")
     assert not list(tmp_path.glob("x.*"))  # nothing written by a refused command
+
+
+# ----------------------------------------------------------------------------- issue 17 gaps
+@pytest.fixture(scope="module")
+def brick_files(tmp_path_factory):
+    """A brick-like map (Gaussian σ = 1.2 mm, ℓ = 8 mm, 1 mm spacing, 256², the radio CLI
+    test's) with 40 NaN holes, and a 16² map too small for any spectrum estimate."""
+    d = tmp_path_factory.mktemp("gaps")
+    s = emscatter.generate_surface(GaussianCorrelation(1.2e-3, 8e-3), (256, 256), 1e-3, rng=4)
+    h = np.array(s.heights)
+    h[100:104, 30:40] = np.nan
+    holes = write_height_map(height_map(h, s.spacing, holes="mask"), d / "holes.nc", unit="mm")
+    tiny = height_map(np.random.default_rng(3).normal(size=(16, 16)) * 1e-7, DX)
+    return holes, write_height_map(tiny, d / "tiny.nc")
+
+
+def _command(command, tmp_path):
+    if command == "brdf":
+        return ["brdf", str(tmp_path / "x.npz"), "--method", "go", "--material", "pec", *GRID]
+    if command == "curves":
+        return ["curves", "--eps", "3", "--wavelength", "5e-6", "--theta-i-deg", "30",
+                "--method", "spm", "--json", str(tmp_path / "x.json")]  # fmt: skip
+    return ["radio", "--scene", "simple_street_canyon", "--frequencies-ghz", "28",
+            "--out", str(tmp_path / "x")]  # fmt: skip
+
+
+@pytest.mark.parametrize("command", ["brdf", "curves", "radio"])
+def test_a_map_too_small_for_a_spectrum_is_a_one_line_error(command, brick_files, tmp_path,
+                                                             capsys):  # fmt: skip
+    """A 16² map: 2 Welch segments of 16 samples need ≥ 32 per axis (MIN_MAP_SAMPLES); every
+    command refuses it before any work, naming the file and what is wrong."""
+    rc = main([*_command(command, tmp_path), "--height-map", str(brick_files[1])])
+    _one_line_error(capsys, rc, "tiny.nc", "too small for a spectrum estimate", "(16, 16)",
+                    "at least 32 samples")  # fmt: skip
+    assert not list(tmp_path.glob("x*"))
+
+
+@pytest.mark.parametrize("command", ["brdf", "curves", "radio"])
+def test_nan_holes_are_rejected_by_default_naming_the_option(command, brick_files, tmp_path,
+                                                              capsys):  # fmt: skip
+    argv = [*_command(command, tmp_path), "--height-map", str(brick_files[0])]
+    rc = main(argv)
+    _one_line_error(capsys, rc, "holes.nc", "40 NaN holes", "--holes mask")
+    rc = main([*argv, "--holes", "fill"])
+    assert rc == 2 and "--holes" in capsys.readouterr().err
+    assert not list(tmp_path.glob("x*"))
+
+
+def test_holes_mask_gives_a_result_and_records_it(brick_files, tmp_path, capsys):
+    """``--holes mask``: curves and brdf run on the valid samples and say so in their metadata;
+    the replayed command keeps the choice; without ``--height-map`` it is an error."""
+    path = str(brick_files[0])
+    js = tmp_path / "c.json"
+    argv = ["curves", "--height-map", path, "--holes", "mask", "--eps", "5+0.5j",
+            "--frequency", "28e9", "--theta-i-deg", "30", "--theta-s-deg", "0:60:7",
+            "--method", "spm", "--out-of-range", "ignore", "--json", str(js)]  # fmt: skip
+    assert main(argv) == 0
+    meta = json.loads(js.read_text())
+    r = meta["inputs"]["roughness"]
+    assert r["holes"] == "mask" and r["holes_count"] == 40
+    assert "40 NaN holes masked" in r["description"]
+    assert "--holes" in meta["command"] and "mask" in meta["command"]
+    col = np.asarray(meta["columns"]["sigma0_vv"], dtype=float)
+    assert np.all(np.isfinite(col)) and np.all(col > 0)
+    again = tmp_path / "again.json"
+    assert main(["curves", "--from", str(js), "--json", str(again)]) == 0
+    replay = np.asarray(json.loads(again.read_text())["columns"]["sigma0_vv"], dtype=float)
+    np.testing.assert_allclose(replay, col, rtol=1e-12)
+    out = tmp_path / "m.npz"
+    assert main(["brdf", str(out), "--height-map", path, "--holes", "mask", "--method", "go",
+                 "--material", "pec", *GRID]) == 0  # fmt: skip
+    assert "40 NaN holes masked" in json.dumps(read_npz(out).metadata, default=str)
+    capsys.readouterr()
+    rc = main(["curves", "--holes", "mask", "--sigma", "1e-7", "--length", "1e-6", "--eps", "3",
+               "--wavelength", "5e-6", "--theta-i-deg", "30"])  # fmt: skip
+    _one_line_error(capsys, rc, "--holes", "only with --height-map")
+
+
+def test_radio_holes_mask_is_recorded(brick_files):
+    """The radio path (``MaterialSpec.from_height_map``, what ``emscatter radio --holes mask``
+    calls): the masked map's record names the policy and the count."""
+    from emscatter.radio import MaterialSpec
+
+    spec = MaterialSpec.from_height_map(brick_files[0], holes="mask", frequencies=[28e9])
+    assert spec.map_record["holes"] == {"policy": "mask", "count": 40}
+    assert spec.surface.sigma == pytest.approx(1.2e-3, rel=0.1)

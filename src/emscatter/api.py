@@ -34,6 +34,7 @@ from emscatter.method_resolution import (
 )
 
 from . import cache, solvers
+from . import progress as _progress
 from .conventions import (
     broadcast_angles,
     broadcast_view,
@@ -97,6 +98,12 @@ def resolve_method(
     its roughness-level validity (the policy has been applied: warned or raised)."""
     select.check_out_of_range(out_of_range)
     name = _check_method(method)
+    return _resolve(roughness, k, name, out_of_range, eps, theta_i, stacklevel + 1)
+
+
+def _resolve(roughness, k, name, out_of_range, eps, theta_i, stacklevel):
+    """:func:`resolve_method` for a ``name`` and ``out_of_range`` already checked (the API's
+    own calls: each check once per call)."""
     if name == "auto":
         name = rank_methods(roughness, k, eps=eps)[0][0]
     # the per-angle checks are skipped where the policy does not need them (call_report)
@@ -150,7 +157,7 @@ def _bistatic_one(
     :mod:`emscatter.solvers.auto_crosspol` added to a closed-form branch."""
     ti, ts, ps, pi_ = angles
     if method == "auto":
-        blend = blend_weights(rough, k, eps=eps)
+        blend = blend_weights(rough, k, eps=eps, monostatic=monostatic)
         if len(blend["weights"]) > 1:
             return _bistatic_blend(
                 rough, eps, k, angles, blend, out_of_range, options, monostatic, depth
@@ -158,8 +165,8 @@ def _bistatic_one(
         method, picked = next(iter(blend["weights"])), True
     name = method
     opts = _map_options(name, options, picked)  # before any warning
-    name, module, report, make_nan = resolve_method(
-        rough, k, name, out_of_range, eps, theta_i=ti, stacklevel=6 + depth
+    name, module, report, make_nan = _resolve(
+        rough, k, name, out_of_range, eps, ti, 6 + depth
     )  # warnings point at the caller of bistatic/backscatter
     # BOARD interface 3: the coherent part is computed on first read, unless asked for eagerly
     lazy = _takes(module.bistatic, "coherent") and not opts.pop("coherent", False)
@@ -167,18 +174,35 @@ def _bistatic_one(
     entry = _solver_entry(module)
     if monostatic and _takes(entry, "monostatic"):
         extra["monostatic"] = True
+    # auto's IEM in backscatter: its multiple-scattering hv (×3–6 the co-pol cost) is the
+    # per-angle-remembered term of auto_crosspol (equal to the solver's to 1e-13,
+    # tests/test_auto_crosspol.py), so a repeated scene pays it once
+    iem_hv = (
+        picked
+        and name == "iem"
+        and monostatic
+        and rough.dimension == 2
+        and not {"crosspol", "crosspol_order", "rms_slope"} & opts.keys()
+        and _takes(entry, "crosspol")
+    )
+    if iem_hv:
+        extra["crosspol"] = False
     result = entry(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
     shape = result.sigma0.shape[2:]
     info = {**result.info, "validity": report}
     info.pop("coherent", None)
     sigma0 = result.sigma0
     if picked:  # auto's closed-form branches: the backscatter cross-pol they lack
-        hv, how = auto_crosspol.supplement(name, rough, eps, k, ti, ts, ps, pi_)
+        what = auto_crosspol.IEM_BACKSCATTER if iem_hv else name
+        hv, how = auto_crosspol.supplement(what, rough, eps, k, ti, ts, ps, pi_)
         if hv is not None:
             sigma0 = np.array(sigma0, dtype=float)
             sigma0[0, 1] += hv
             sigma0[1, 0] += hv
-            info["crosspol_added"] = how
+            if iem_hv:  # the IEM's own term, from the per-angle memory
+                info["crosspol"] = "multiple scattering (backscatter; solvers.auto_crosspol)"
+            else:
+                info["crosspol_added"] = how
     if lazy:
 
         def coherent():  # the specular geometry: depends on θi, φi, ε only
@@ -210,7 +234,7 @@ def _bistatic_one(
             else np.where(mask, np.nan, coh_in)
         )
         info["out_of_range"] = True if make_nan else blank
-    return Scattering(
+    return Scattering._of(
         sigma0=sigma0,
         coherent=coherent,
         method=name,
@@ -292,11 +316,15 @@ def _merged_validity(parts) -> dict:
     }
 
 
-def _bistatic_groups(rough, groups: list[Group], shape, k_b, angles, method, out_of_range, opts):
+def _bistatic_groups(
+    rough, groups: list[Group], shape, k_b, angles, method, out_of_range, opts, monostatic=False
+):
     """Several frequencies: one solver run per group, results placed back element-wise."""
     parts = []
     for g in groups:  # (a loop, not a comprehension: its frame count differs across Pythons)
-        res = _bistatic_one(rough, g.eps, g.k, g.take(angles), method, out_of_range, opts, depth=1)
+        res = _bistatic_one(
+            rough, g.eps, g.k, g.take(angles), method, out_of_range, opts, monostatic, depth=1
+        )
         parts.append((g, res))
     sigma0 = np.empty((2, 2, *shape))
     methods = np.empty(shape, dtype=object)
@@ -396,7 +424,9 @@ def _bistatic_checked(
         e = eps_at(eps, k)
         return _bistatic_one(rough, e, k, angles, method, out_of_range, options, monostatic)
     shape, k_b, groups = spec
-    return _bistatic_groups(rough, groups, shape, k_b, angles, method, out_of_range, options)
+    return _bistatic_groups(
+        rough, groups, shape, k_b, angles, method, out_of_range, options, monostatic
+    )
 
 
 def backscatter(
@@ -462,6 +492,8 @@ def _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options):
         finest=lobe_width(rough, k),
         tol=tol,
     )
+    if getattr(module, "COHERENT_IN_SIGMA0", False):  # GO: σ⁰ is the whole intensity
+        return np.zeros_like(r_inc), r_inc, err, evals
     r_coh = module.bistatic(rough, eps, k, ti, ti, pi_, pi_, **options).coherent
     return np.asarray(r_coh), r_inc, err, evals
 
@@ -598,6 +630,7 @@ def emissivity(
     method: str = "auto",
     tol: float = 1e-4,
     out_of_range: str = "warn",
+    progress: bool | None = None,
     **options,
 ) -> Emissivity:
     """h and v emissivity ``e_p = 1 − r_coh,p − r_incoh,p`` (Kirchhoff's law) by hemispherical
@@ -615,8 +648,12 @@ def emissivity(
     (``info["methods"]`` has the method of each angle, ``result.method`` lists them, e.g.
     ``"spm+go"``): the rest of the curve keeps the best method for the regime, and the angles
     that an approximation gets wrong (typically near grazing) get one that holds there.
+
+    ``progress``: a tqdm bar on stderr counting σ⁰ evaluations of the quadrature, advanced
+    per chunk (its total grows as refinements start) — ``None`` (auto) on a terminal past
+    2 s, ``True`` always, ``False`` never (:mod:`emscatter.progress`).
     """
-    with call_deadline():  # one budget for the whole call, fallbacks included
+    with call_deadline(), _progress.task("emissivity", None, progress, unit="σ⁰"):
         rough = _check_roughness(surface)
         eps = as_eps_or_material(eps)
         k = wavenumber(frequency, wavelength)

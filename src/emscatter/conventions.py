@@ -151,8 +151,11 @@ def check_angle(name: str, value, *, low: float = 0.0, high: float = math.pi / 2
         if low <= value <= high:
             return np.array(value, dtype=float)
     elif type(value) is np.ndarray and value.dtype.char == "d" and value.size:
+        if value.size == 1:  # one angle: a scalar comparison, no reductions
+            if low <= value.item() <= high:
+                return value.copy()
         # real floats: min and max in range ⇒ finite and in range (NaN fails the comparison)
-        if low <= value.min() and value.max() <= high:
+        elif low <= value.min() and value.max() <= high:
             return value.astype(float)
     return _check_angle_slow(name, value, low, high)
 

@@ -47,6 +47,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from . import progress as _progress
 from .conventions import pol_index
 
 __all__ = [
@@ -245,12 +246,14 @@ def _evaluate(sigma0_fn, theta_s, phi_s, lead: int, clock: _Clock):
     rest = (slice(None),) * (len(tail) - 1)
     parts = []
     start, size = 0, 1
+    _progress.expect(total)  # the bar of the call, if any, counts σ⁰ evaluations
     while start < m:
         stop = min(m, start + size)
         t = time.perf_counter()
         idx = (Ellipsis, slice(start, stop), *rest)
         parts.append(sigma0_fn(ts[idx], ps[idx]))
         rate = (time.perf_counter() - t) / ((stop - start) * per_index)
+        _progress.advance((stop - start) * per_index)
         clock.rate = rate if clock.rate is None else min(clock.rate, rate)
         start = stop
         left = (m - start) * per_index + clock.follow * total

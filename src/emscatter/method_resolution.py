@@ -300,14 +300,21 @@ def rank_methods(roughness, k: float, *, eps=None, theta_i=None, methods=None):
     return [(n, reports[n]) for n in (first, *rest)]
 
 
-def blend_weights(roughness, k: float, *, eps=None) -> dict:
+def blend_weights(roughness, k: float, *, eps=None, monostatic: bool = False) -> dict:
     """:func:`emscatter.solvers.blend.blend_weights` (``auto``'s methods and their continuous
-    weights), cached on ``(roughness, k, eps)``; a fresh dict each call."""
-    parts = ("blend", roughness, float(k), _key_of(eps))
+    weights; ``monostatic``: for backscatter, where a dielectric's order puts the IEM before
+    PO), cached on ``(roughness, k, eps, monostatic)``; a fresh dict each call. The methods'
+    validity reports come from :func:`validity_report` (cached: the method that then runs
+    does not check its validity again)."""
+    parts = ("blend", roughness, float(k), _key_of(eps), bool(monostatic))
     key = None if _UNCACHEABLE in parts else parts
     hit = _recall(key)
     if hit is None:
-        hit = blend.blend_weights(roughness, k, eps=eps)
+
+        def report(name):  # the reports the chosen methods' runs then find cached
+            return validity_report(name, roughness, k, eps=eps)
+
+        hit = blend.blend_weights(roughness, k, eps=eps, monostatic=monostatic, report=report)
         _remember(key, hit)
     return {**hit, "weights": dict(hit["weights"])}
 

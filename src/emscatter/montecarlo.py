@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .progress import task
+
 __all__ = ["MonteCarloResult", "run", "realization_seeds"]
 
 
@@ -112,7 +114,7 @@ def run(
     *,
     seed=None,
     executor: cf.Executor | None = None,
-    progress: bool = True,
+    progress: bool | None = None,
     chunk: int | None = None,
     desc: str = "realizations",
 ) -> MonteCarloResult:
@@ -126,7 +128,9 @@ def run(
     seed : ``int``, ``SeedSequence`` or ``None`` (fresh entropy, recorded in the result).
     executor : any :class:`concurrent.futures.Executor` (thread/process pool, dask's
         ``client.get_executor()``); ``None`` runs serially in this process.
-    progress : show a tqdm progress bar (on stderr).
+    progress : a tqdm bar over the realizations on stderr, advanced per chunk: ``None`` (auto)
+        when stderr is a terminal and the run lasts past 2 s, ``True`` always, ``False``
+        never (:mod:`emscatter.progress`).
     chunk : realizations per task; default ``ceil(n/32)``. It depends on ``n`` only, so the
         same seed gives the same numbers on every executor.
     """
@@ -149,9 +153,7 @@ def run(
     starts = list(range(0, n_realizations, chunk))
     parts: list = [None] * len(starts)
 
-    from tqdm.auto import tqdm
-
-    with tqdm(total=n_realizations, desc=desc, disable=not progress, leave=False) as bar:
+    with task(desc, n_realizations, progress, unit="realization") as bar:
         if executor is None:
             for j, s in enumerate(starts):
                 parts[j] = _run_chunk(func, seeds[s : s + chunk], s)

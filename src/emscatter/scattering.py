@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -11,6 +11,24 @@ from .constants import SPEED_OF_LIGHT
 from .conventions import check_pol_pair, pol_index
 
 __all__ = ["Scattering"]
+
+
+class _LazyCoherent:
+    """The :attr:`Scattering.coherent` field: a zero-argument callable stored there is called
+    on first read and replaced by its array. A data descriptor on this one field, so that
+    reading every other attribute costs a plain lookup (no ``__getattribute__`` override)."""
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        value = obj.__dict__["coherent"]
+        if callable(value):
+            value = np.asarray(value())
+            obj.__dict__["coherent"] = value
+        return value
+
+    def __set__(self, obj, value):  # the dataclass __init__ (object.__setattr__) lands here
+        obj.__dict__["coherent"] = value
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,22 +70,25 @@ class Scattering:
     dimension: int = 2
     info: dict = field(default_factory=dict)
 
-    def __getattribute__(self, name):
-        value = object.__getattribute__(self, name)
-        if name == "coherent" and callable(value):
-            value = np.asarray(value())
-            object.__setattr__(self, "coherent", value)
-        return value
-
     def __getstate__(self):  # pickling (e.g. to a worker process) computes a lazy part first
         state = dict(self.__dict__)
         state["coherent"] = self.coherent
         return state
 
+    @classmethod
+    def _of(cls, **fields) -> Scattering:
+        """A result from all ten fields by keyword, without the frozen ``__init__``'s one
+        ``object.__setattr__`` per field (the API builds one per call; same object)."""
+        obj = object.__new__(cls)
+        if len(fields) != len(_FIELDS) or fields.keys() != _FIELDS:
+            raise TypeError(f"Scattering._of needs exactly the fields {sorted(_FIELDS)}")
+        obj.__dict__.update(fields)
+        return obj
+
     @property
     def coherent_computed(self) -> bool:
         """Whether :attr:`coherent` has been computed (False while it is still lazy)."""
-        return not callable(object.__getattribute__(self, "coherent"))
+        return not callable(self.__dict__["coherent"])
 
     @property
     def frequency(self):
@@ -119,3 +140,7 @@ class Scattering:
         """σ⁰ for unpolarized incidence summed over received polarizations:
         ``(hh + vh + hv + vv) / 2``."""
         return 0.5 * self.sigma0.sum(axis=(0, 1))
+
+
+Scattering.coherent = _LazyCoherent()  # after @dataclass: the field stays required
+_FIELDS = frozenset(f.name for f in fields(Scattering))

@@ -132,6 +132,13 @@ def _equivalence_rows():
     return rows
 
 
+def _htsg_section() -> list[str]:
+    sys.path.insert(0, str(HERE))
+    from catalogue_htsg import section, stam_section
+
+    return section() + stam_section()
+
+
 def main() -> int:
     lines = [
         "# The seed's chapter-2 analytic BRDF catalogue (issue 21)",
@@ -206,6 +213,7 @@ def main() -> int:
         ],
         "h = 0 (half cylinders, vertical walls) has infinite rms slope.",
         "",
+        *_htsg_section(),
     ]
     with atomic_path(HERE / "catalogue.md") as tmp:
         tmp.write_text("\n".join(lines))

@@ -7,11 +7,30 @@ Used by the RGB ``.bsdf`` export and by the Mitsuba plugin in Mitsuba's RGB vari
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .source import check_wavelengths
 
-__all__ = ["cie1931_xyz", "spectrum_to_rgb_weights", "RGB_LUMINANCE", "VISIBLE_NM"]
+__all__ = [
+    "cie1931_xyz",
+    "colour_error",
+    "normal_reflectance",
+    "spectrum_to_rgb_weights",
+    "wavelengths_for",
+    "RGB_LUMINANCE",
+    "VISIBLE_NM",
+    "COLOUR_TOL",
+]
+
+#: Default tolerance of :func:`wavelengths_for`: the largest relative error of a linear-sRGB
+#: channel of the reflectance, 0.5 % (about a third of a just-noticeable difference in
+#: lightness at mid grey; the issue-21 16-wavelength gold tables were off by 1–2 %).
+COLOUR_TOL = 0.005
+
+#: Wavelengths [nm] of the dense reference of :func:`colour_error` (1 nm steps).
+_DENSE_NM = np.linspace(360.0, 830.0, 471)
 
 #: The wavelength range [nm] of the CIE 1931 tables and of Mitsuba's spectral sampling.
 VISIBLE_NM = (360.0, 830.0)
@@ -76,3 +95,59 @@ def spectrum_to_rgb_weights(wavelengths) -> np.ndarray:
     hat = np.stack([np.interp(grid, lam, np.eye(lam.size)[k]) for k in range(lam.size)])
     w = rgb_cmf @ hat.T  # (3, n): weight of each table wavelength
     return w / w.sum(axis=1, keepdims=True)
+
+
+def normal_reflectance(material, wavelengths) -> np.ndarray:
+    """Normal-incidence Fresnel reflectance ``|(√ε − 1)/(√ε + 1)|²`` [-] of ``material`` at
+    ``wavelengths`` [m] (Born & Wolf §1.5.2; ``exp(−iωt)``, ``Im ε ≥ 0``): anything
+    :func:`emscatter.materials.eps_at` takes, or a callable ``eps(wavelength [m])``; ``"pec"``
+    reflects 1."""
+    from .. import materials
+
+    lam = np.atleast_1d(np.asarray(wavelengths, dtype=float))
+    if callable(material) and not isinstance(material, materials.Material):
+        eps = np.array([complex(np.asarray(material(x)).item()) for x in lam])
+    else:
+        eps = materials.eps_at(material, wavelength=lam)
+        if isinstance(eps, str):  # "pec"
+            return np.ones(lam.shape)
+        eps = np.broadcast_to(np.asarray(eps, dtype=complex), lam.shape)
+    n = np.sqrt(eps)
+    return np.abs((n - 1.0) / (n + 1.0)) ** 2
+
+
+def colour_error(material, wavelengths) -> float:
+    """Largest relative error [-] of a linear-sRGB channel of ``material``'s normal-incidence
+    reflectance (:func:`normal_reflectance`) seen through a table at ``wavelengths`` [m]
+    (linear in λ between them, constant beyond: :func:`spectrum_to_rgb_weights`) against a
+    dense 1-nm reference over 360–830 nm. Channels are compared relative to the largest one
+    (a channel near 0 has no relative colour error of its own)."""
+    lam = check_wavelengths(np.atleast_1d(np.asarray(wavelengths, dtype=float)))
+    dense = _DENSE_NM * 1e-9
+    ref = spectrum_to_rgb_weights(dense) @ normal_reflectance(material, dense)
+    got = spectrum_to_rgb_weights(lam) @ normal_reflectance(material, lam)
+    scale = np.maximum(np.abs(ref), 0.05 * np.abs(ref).max())
+    return float(np.max(np.abs(got - ref) / scale))
+
+
+def wavelengths_for(material, tol: float = COLOUR_TOL, *, n_max: int = 128) -> np.ndarray:
+    """The fewest wavelengths ``n`` [m], uniform over 360–830 nm (``np.linspace``, the tables'
+    convention), whose :func:`colour_error` is ≤ ``tol``: every ``n' < n`` is above it.
+    ``ValueError`` naming the error reached when even ``n_max`` does not meet ``tol``.
+
+    A grey material (a constant ε) needs 1; gold ~30 at 0.5 %, silver fewer (its reflectance
+    is flat above 400 nm) — the counts are the material's spectral variation, measured."""
+    if isinstance(tol, bool) or not (isinstance(tol, int | float) and 0 < tol < 1):
+        raise ValueError(f"tol must be a number in (0, 1) (relative sRGB error), got {tol!r}")
+    if isinstance(n_max, bool) or not isinstance(n_max, int) or n_max < 1:
+        raise ValueError(f"n_max must be an integer ≥ 1, got {n_max!r}")
+    err = math.inf
+    for n in range(1, n_max + 1):
+        lam = np.array([550e-9]) if n == 1 else np.linspace(360e-9, 830e-9, n)
+        err = colour_error(material, lam)
+        if err <= tol:
+            return lam
+    raise ValueError(
+        f"no wavelength count up to n_max = {n_max} meets tol = {tol:g} for this material "
+        f"(error {err:.3g} at {n_max}); raise n_max or tol"
+    )

@@ -4,42 +4,20 @@
 default: show only when ``sys.stderr`` is a terminal, so tests, pipes and CI logs stay clean).
 :func:`build_progress` is the hook :func:`emscatter.brdf.build_table` opens around its fill:
 the bar counts wavelengths, advanced in fractions as the chunks of each wavelength finish
-(:func:`tick`), so a long single-wavelength IEM table still moves.
+(:func:`tick`), so a long single-wavelength IEM table still moves. :func:`wanted` and
+:func:`bar` are the package-wide ones of :mod:`emscatter.progress`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import contextvars
-import sys
+
+from ..progress import bar, wanted
 
 __all__ = ["wanted", "bar", "build_progress", "tick"]
 
 _CURRENT: contextvars.ContextVar = contextvars.ContextVar("emscatter_brdf_bar", default=None)
-
-
-def wanted(progress) -> bool:
-    """Whether to draw: ``progress`` True/False, or None → stderr is a terminal."""
-    if progress is None:
-        stream = sys.stderr
-        return bool(stream is not None and hasattr(stream, "isatty") and stream.isatty())
-    if not isinstance(progress, bool):
-        raise ValueError(f"progress must be True, False or None (auto), got {progress!r}")
-    return progress
-
-
-def bar(total: float, desc: str, progress=None, unit: str = "it"):
-    """A tqdm bar on stderr (``disable=True`` when not :func:`wanted`)."""
-    from tqdm.auto import tqdm
-
-    return tqdm(
-        total=total,
-        desc=desc,
-        unit=unit,
-        disable=not wanted(progress),
-        leave=False,
-        delay=0.5 if progress is None else 0.0,
-    )
 
 
 @contextlib.contextmanager

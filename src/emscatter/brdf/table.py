@@ -189,10 +189,14 @@ class BrdfTable:
 
     # ---------------------------------------------------------------- evaluation
     def _wavelength_weights(self, wavelength, out_of_range: str):
-        """``(scalar, columns, matrix)``: requested rows as combinations of table columns."""
+        """``(scalar, columns, matrix)``: requested rows as combinations of table columns.
+
+        ``columns`` is a slice (the contiguous range of table wavelengths the request touches),
+        so that ``values[columns]`` is a view: a copy of a large table on every call cost the
+        anisotropic RGL export most of its time."""
         wl = self.wavelengths
         if wavelength is None:
-            return False, np.arange(wl.size), np.eye(wl.size)
+            return False, slice(0, wl.size), np.eye(wl.size)
         req = np.asarray(wavelength, dtype=float)
         scalar = req.ndim == 0
         req = req.reshape(-1)
@@ -211,7 +215,8 @@ class BrdfTable:
         rows = np.arange(req.size)
         np.add.at(mat, (rows, i0), 1 - t)
         np.add.at(mat, (rows, i1), t)
-        cols = np.flatnonzero(np.any(mat != 0, axis=0))
+        used = np.flatnonzero(np.any(mat != 0, axis=0))
+        cols = slice(int(used[0]), int(used[-1]) + 1)
         return scalar, cols, mat[:, cols]
 
     def _grid_values(self, pol):

@@ -14,6 +14,12 @@ def register(subparsers) -> None:
     p.add_argument("names", nargs="*", help="a subset (default: all; see --list)")
     p.add_argument("--quick", action="store_true", help="smaller sizes and fewer repeats")
     p.add_argument("--list", action="store_true", help="list the benchmarks and exit")
+    p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bars in the benchmark processes (EMSCATTER_PROGRESS=0 in their "
+        "environment; bars are drawn only on a terminal anyway)",
+    )
     p.set_defaults(func=run)
 
 
@@ -43,6 +49,7 @@ def _bench_names(path) -> list[str]:
 
 
 def run(a) -> int:
+    import os
     import subprocess
     import sys
 
@@ -57,4 +64,5 @@ def run(a) -> int:
     if known and unknown:
         raise ValueError(f"unknown benchmark(s) {unknown}; choose from {', '.join(known)}")
     cmd = [sys.executable, str(path), *a.names] + ["--quick"] * a.quick + ["--list"] * a.list
-    return subprocess.call(cmd)
+    env = {**os.environ, "EMSCATTER_PROGRESS": "0"} if a.quiet else None
+    return subprocess.call(cmd, env=env)

@@ -97,6 +97,7 @@ def check_inputs(a) -> tuple[str, object, object]:
     from ..brdf.build import material_eps
 
     fmt_name = check_format(a.output, a.format, FORMATS, "output")
+    default_wavelengths = a.wavelengths_nm is None
     if a.wavelengths_nm is None:
         a.wavelengths_nm = _wavelengths_nm(
             PBSDF_WAVELENGTHS_NM if fmt_name == "pbsdf" else DEFAULT_WAVELENGTHS_NM
@@ -121,7 +122,32 @@ def check_inputs(a) -> tuple[str, object, object]:
             material_eps(a.material, float(lam))
         except (ValueError, TypeError) as exc:
             raise ValueError(f"--material {a.material!s} at {fmt(lam * 1e9)} nm: {exc}") from None
+    if default_wavelengths and fmt_name != "pbsdf":
+        _warn_colour(a.material, wl)
     return fmt_name, rough, wl
+
+
+def _warn_colour(material, wl) -> None:
+    """Warn when the default wavelengths shift the material's colour beyond
+    :data:`~emscatter.brdf.colour.COLOUR_TOL`, naming the error and the count that meets it
+    (:func:`~emscatter.brdf.colour.wavelengths_for`); a grey material gets no warning."""
+    import warnings
+
+    from ..brdf.colour import COLOUR_TOL, colour_error, wavelengths_for
+
+    try:
+        err = colour_error(material, wl)
+        if err <= COLOUR_TOL:
+            return
+        n = wavelengths_for(material, COLOUR_TOL).size
+    except (ValueError, TypeError):  # a material without visible-range data: no colour advice
+        return
+    warnings.warn(
+        f"the default wavelengths ({DEFAULT_WAVELENGTHS_NM} nm) shift this material's rendered "
+        f"colour by {100 * err:.2g} % (linear sRGB of its normal-incidence reflectance, worst "
+        f"channel); --wavelengths-nm 360:830:{n} keeps it within {100 * COLOUR_TOL:g} %",
+        stacklevel=2,
+    )
 
 
 def _check_pbsdf(a) -> None:

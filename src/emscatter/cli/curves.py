@@ -130,6 +130,12 @@ def register(subparsers) -> None:
         help="recompute from a JSON or CSV written by 'emscatter curves' (only --png, --csv, "
         "--json may be given with it)",
     )
+    c.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar (drawn on stderr only when it is a terminal and the work runs past "
+        "2 s anyway)",
+    )
     c.set_defaults(func=run, _parser=c)
 
 
@@ -249,7 +255,7 @@ def _load_inputs(path: str) -> dict:
 
 def _reparse(a):
     """``a`` with its inputs replaced by those of ``--from FILE`` (outputs kept)."""
-    extra = sorted(given_options(a) - {"--from", *OUTPUTS})
+    extra = sorted(given_options(a) - {"--from", "--quiet", *OUTPUTS})
     if extra:
         raise ValueError(
             f"--from takes every input from the file; only {', '.join(OUTPUTS)} may be given "
@@ -257,7 +263,7 @@ def _reparse(a):
         )
     argv = _argv_from_inputs(_load_inputs(a.from_file))
     b = a._parser.parse_args(argv)
-    for opt in ("png", "csv", "json"):
+    for opt in ("png", "csv", "json", "quiet"):
         setattr(b, opt, getattr(a, opt))
     b._argv = argv
     return b
@@ -380,7 +386,10 @@ def run(a) -> int:
     a.tol = 1e-4 if a.tol is None else a.tol
     _check_material(a)
     rough = height_map_roughness(a) or roughness_from_args(a)
-    cols, fig, method, report = _compute(a, rough)
+    from ..progress import silenced
+
+    with silenced(a.quiet):
+        cols, fig, method, report = _compute(a, rough)
     inputs = _inputs(a, rough)
     meta = {
         "schema": SCHEMA,

@@ -1,13 +1,16 @@
-"""``--height-map FILE --detrend --unit --segments --tail``: a measured surface in place of
-``--kind --sigma --length …`` for ``emscatter brdf`` and ``emscatter curves``.
+"""``--height-map FILE --detrend --unit --holes --segments --tail``: a measured surface in
+place of ``--kind --sigma --length …`` for ``emscatter brdf``, ``curves`` and ``radio``.
 
 The file is read through SurfaceTopography's readers (:func:`emscatter.surfaces.read_height_map`:
 units from the file, ``--unit`` only when it stores none) and turned into a
 :class:`~emscatter.surfaces.measured.MeasuredRoughness` (Welch spectrum, n-fold spectra, slope
-histogram) before any solver runs. The parametric options are mutually exclusive with it:
-typing ``--sigma`` (or ``--kind``, ``--length``, ``--length-y``, ``--hurst``, ``--profile``)
-together with ``--height-map`` is an error naming both, and the height-map options without
-``--height-map`` are errors too — honoured or rejected, never ignored.
+histogram) before any solver runs. NaN holes (unmeasured points) are an error naming the file
+and the count unless ``--holes mask`` (the spectrum and slopes from the valid samples only;
+the policy and the count recorded in the output's metadata). The parametric options are
+mutually exclusive with it: typing ``--sigma`` (or ``--kind``, ``--length``, ``--length-y``,
+``--hurst``, ``--profile``) together with ``--height-map`` is an error naming both, and the
+height-map options without ``--height-map`` are errors too — honoured or rejected, never
+ignored.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ __all__ = [
     "height_map_roughness",
     "height_map_inputs",
     "height_map_argv",
+    "map_error",
     "PARAMETRIC",
     "HEIGHT_MAP_OPTIONS",
 ]
@@ -26,9 +30,10 @@ __all__ = [
 #: The parametric roughness options a height map replaces.
 PARAMETRIC = ("--kind", "--sigma", "--length", "--length-y", "--hurst", "--profile")
 #: The options that only apply with ``--height-map``.
-HEIGHT_MAP_OPTIONS = ("--detrend", "--unit", "--segments", "--tail")
+HEIGHT_MAP_OPTIONS = ("--detrend", "--unit", "--holes", "--segments", "--tail")
 
 _DETRENDS = ("none", "mean", "plane", "quadratic")
+HOLES_API = "holes='mask'"  # the API's advice in HeightMapError, the option's name on the CLI
 
 
 def add_height_map_args(p) -> None:
@@ -55,6 +60,13 @@ def add_height_map_args(p) -> None:
         default=None,
         choices=sorted(UNITS),
         help="height unit when the file stores none (with --height-map; the file's own wins)",
+    )
+    g.add_argument(
+        "--holes",
+        default="reject",
+        choices=["reject", "mask"],
+        help="NaN holes (unmeasured points) in the map: reject (an error naming the count) or "
+        "mask (left out of the spectrum and slopes; recorded) (with --height-map)",
     )
     g.add_argument(
         "--segments",
@@ -90,10 +102,16 @@ def height_map_roughness(a):
     from ..surfaces.measured import measured_roughness
 
     try:
-        hm = read_height_map(path, unit=a.unit, detrend=a.detrend)
+        hm = read_height_map(path, unit=a.unit, detrend=a.detrend, holes=a.holes)
         return measured_roughness(hm, segments=a.segments, tail=a.tail)
     except (HeightMapError, ImportError) as exc:
-        raise ValueError(f"--height-map {path}: {exc}") from None
+        raise map_error(path, exc) from None
+
+
+def map_error(path, exc: Exception) -> ValueError:
+    """The CLI's one-line error for a map that cannot be used: ``--height-map FILE: why``, the
+    API's ``holes='mask'`` advice spelled as the option ``--holes mask``."""
+    return ValueError(f"--height-map {path}: {str(exc).replace(HOLES_API, '--holes mask')}")
 
 
 def height_map_inputs(a, rough) -> dict:
@@ -103,6 +121,8 @@ def height_map_inputs(a, rough) -> dict:
         "height_map": str(a.height_map),
         "detrend": a.detrend,
         "unit": a.unit,
+        "holes": a.holes,
+        "holes_count": int(rough.info.get("holes", {}).get("count", 0)),
         "segments": a.segments,
         "tail": a.tail,
         "sigma_m": float(rough.sigma),
@@ -118,4 +138,5 @@ def height_map_argv(r: dict) -> list[str]:
     argv = ["--height-map", r["height_map"], "--detrend", r["detrend"]]
     if r.get("unit") is not None:
         argv += ["--unit", r["unit"]]
+    argv += ["--holes", r.get("holes", "reject")]
     return argv + ["--segments", str(r["segments"]), "--tail", r["tail"]]

@@ -6,6 +6,14 @@ as ``simple_street_canyon``, or a Mitsuba/Sionna ``*.xml`` file), "any scene rou
 own materials against emscatter's rough equivalents (:func:`emscatter.radio.roughen`), radio
 maps of rough − flat as PNG and CSV per frequency. Every argument, the media named, the bands
 and the output folder are checked before a ray is traced.
+
+``--height-map FILE`` (with ``--detrend``, ``--unit``, ``--segments``, ``--tail`` as for
+``emscatter brdf`` and ``curves``, and ``--map-model measured|fit``) takes a medium's roughness
+from a measured map through :meth:`emscatter.radio.MaterialSpec.from_height_map` (the map's
+ring-averaged spectrum, or σ, ℓ of a fitted correlation), with the band each frequency needs
+checked against the map before a ray is traced: ``--medium NAME=map`` gives it to the media
+named, without any ``NAME=map`` it is the roughness of every medium not named by ``--medium``.
+The map's record (file, choices, σ, ℓ, band checks) is written to ``<scene>_height_map.json``.
 """
 
 from __future__ import annotations
@@ -15,10 +23,25 @@ import importlib.util
 import math
 import re
 from pathlib import Path
+from typing import NamedTuple
 
-from .args import Integer, Number, OutputFolder, OutputPath, add_command
+from .args import Integer, Number, OutputFolder, OutputPath, add_command, reject_unless
+from .heightmap_args import HEIGHT_MAP_OPTIONS, add_height_map_args, map_error
 
 SCENES = ("room", "floor_wall", "box")
+
+
+class Textured(NamedTuple):
+    """An anisotropic ``--medium`` value: the surface and the world direction of its ℓx axis."""
+
+    surface: object
+    direction: tuple | None
+
+
+#: The ``--medium NAME=map`` value: the medium's roughness is ``--height-map``'s.
+MAP = "map"
+#: How ``--height-map`` becomes a radio roughness (``radio.from_map.surface_from_map``).
+MAP_MODELS = ("measured", "fit")
 #: Transmitters [m] for the scenes that need none on the command line (simple_street_canyon:
 #: in the main street, 10 m up, facing the brick building_2).
 DEFAULT_TX = {"simple_street_canyon": (20.0, 0.0, 10.0)}
@@ -54,21 +77,35 @@ def _scene(text: str) -> str:
 
 
 def _medium(text: str) -> tuple[str, object]:
-    """``NAME=σ,ℓ`` [m] (Gaussian correlation) or ``NAME=flat`` → ``(NAME, (σ, ℓ) | None)``."""
+    """``NAME=σ,ℓ`` [m] (Gaussian correlation), ``NAME=σ,ℓx,ℓy@DIR`` (anisotropic, ``DIR`` the
+    world direction of the ℓx axis: ``x|y|z|vertical`` or ``dx,dy,dz``;
+    :func:`emscatter.radio.texture.parse_medium_option`), ``NAME=flat`` or ``NAME=map`` (the
+    roughness of ``--height-map``) → ``(NAME, (σ, ℓ) | Textured | None | "map")``."""
     m = re.fullmatch(r"\s*([^=\s]+)\s*=\s*(.+?)\s*", text)
     if m is None:
         raise argparse.ArgumentTypeError(
-            "expected NAME=SIGMA,LENGTH in metres (e.g. brick=0.8e-3,8e-3) or NAME=flat, "
+            "expected NAME=SIGMA,LENGTH in metres (e.g. brick=0.8e-3,8e-3), "
+            "NAME=SIGMA,LENGTH_X,LENGTH_Y@DIR, NAME=flat or NAME=map (with --height-map), "
             f"got {text!r}"
         )
     name, value = m.groups()
     if value.lower() == "flat":
         return name, None
+    if value.lower() == "map":
+        return name, MAP
+    if "@" in value or value.count(",") == 2:
+        from ..radio.texture import parse_medium_option
+
+        try:
+            parsed = parse_medium_option(f"{name}={value}")
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc).removeprefix("--medium ")) from None
+        return name, Textured(parsed["surface"], parsed["texture_direction"])
     parts = value.split(",")
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(
-            f"{name}: expected SIGMA,LENGTH in metres (two numbers, e.g. 0.8e-3,8e-3), "
-            f"got {value!r}"
+            f"{name}: expected SIGMA,LENGTH in metres (two numbers, e.g. 0.8e-3,8e-3) or "
+            f"SIGMA,LENGTH_X,LENGTH_Y@DIR, got {value!r}"
         )
     sigma = Number(low=0.0, high=1.0, unit="m")(parts[0].strip())
     length = Number(low=0.0, high=100.0, unit="m")(parts[1].strip())
@@ -76,11 +113,19 @@ def _medium(text: str) -> tuple[str, object]:
 
 
 def _point(text: str) -> tuple[float, float, float]:
+    """``X,Y,Z`` [m]: three finite numbers within ±1e6 m."""
     parts = text.split(",")
     if len(parts) != 3:
-        raise argparse.ArgumentTypeError(f"expected X,Y,Z in metres, got {text!r}")
-    v = tuple(float(Number(low=-1e6, high=1e6, unit="m")(p.strip())) for p in parts)
-    return v  # type: ignore[return-value]
+        raise argparse.ArgumentTypeError(
+            f"expected X,Y,Z in metres (three comma-separated numbers), got {text!r}"
+        )
+    out = []
+    for axis, part in zip("XYZ", parts, strict=True):
+        try:
+            out.append(float(Number(low=-1e6, high=1e6, unit="m")(part.strip())))
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentTypeError(f"{axis} of {text!r}: {exc}") from None
+    return tuple(out)  # type: ignore[return-value]
 
 
 def _frequencies_ghz(text: str) -> tuple[float, ...]:
@@ -125,7 +170,9 @@ def register(subparsers) -> None:
         metavar="NAME=SIGMA,LENGTH",
         help=(
             "roughness of an ITU type, material or object of the scene: rms height and "
-            "correlation length [m] (Gaussian), or NAME=flat; repeat for more. Unnamed media "
+            "correlation length [m] (Gaussian), NAME=SIGMA,LENGTH_X,LENGTH_Y@DIR (anisotropic: "
+            "DIR = x|y|z|vertical|dx,dy,dz, the world direction of the LENGTH_X axis), or "
+            "NAME=flat; repeat for more. Unnamed media "
             "take emscatter's default table (emscatter.radio.DEFAULT_ROUGHNESS)"
         ),
     )
@@ -191,16 +238,44 @@ def register(subparsers) -> None:
             "in (emscatter.radio.builtin_equivalent); no ray is traced"
         ),
     )
+    add_height_map_args(r)
+    r.add_argument(
+        "--map-model",
+        default="measured",
+        choices=MAP_MODELS,
+        help=(
+            "with --height-map: the map's ring-averaged measured spectrum, or σ, ℓ of the "
+            "correlation family (Gaussian or exponential) that fits the map best"
+        ),
+    )
     r.add_argument("--quick", action="store_true", help="few rays, coarse maps and tables")
+    r.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar (drawn on stderr only when it is a terminal and the work runs past "
+        "2 s anyway)",
+    )
     r.add_argument("--plate", action="store_true", help="run the large-plate cross-check")
     r.add_argument("--out", type=OutputFolder(), default="out/radio", help="output folder")
     r.set_defaults(func=run)
 
 
 def run(a) -> int:
+    """``emscatter radio`` (module docstring); ``--quiet`` silences every progress bar of the
+    tables and sweeps it builds (:func:`emscatter.progress.silenced`)."""
+    from ..progress import silenced
+
+    with silenced(a.quiet):
+        return _run(a)
+
+
+def _run(a) -> int:
     from pathlib import Path
 
     out = Path(a.out)
+    if a.plate and a.height_map:
+        raise ValueError("--height-map applies to scenes, not to --plate")
+    a.map_spec = _map_spec(a)  # the map read and its band checked before anything else
     if a.builtin_json is not None:
         if a.plate or a.tx is not None or a.extrapolate:
             raise ValueError(
@@ -219,7 +294,7 @@ def run(a) -> int:
         for p in demo.run(out, a.quick):
             print(f"  {p}")
         return 0
-    if a.medium or a.tx is not None or a.rx or a.scene not in (*SCENES, "all"):
+    if a.medium or a.tx is not None or a.rx or a.height_map or a.scene not in (*SCENES, "all"):
         return run_any_scene(a)
     if a.cell_size is None:
         a.cell_size = 0.1
@@ -255,6 +330,75 @@ def run(a) -> int:
             f"{s['median_abs_dpg_vs_sionna_db']:.2f} dB, {s['median_abs_dds_vs_sionna_ns']:.2f} ns"
         )
     return 0
+
+
+def _map_spec(a):
+    """The :class:`~emscatter.radio.MaterialSpec` of ``--height-map`` (its ``surface`` and
+    ``map_record``), or None; every option and the band of every frequency checked here,
+    before Sionna is imported. ValueError naming the option or the file."""
+    reject_unless(a, a.height_map is not None, (*HEIGHT_MAP_OPTIONS, "--map-model"),
+                  "only with --height-map FILE")  # fmt: skip
+    named = [n for n, v in a.medium if v is MAP]
+    if a.height_map is None:
+        if named:
+            raise ValueError(
+                f"--medium {named[0]}=map takes the roughness of --height-map FILE, which is "
+                "missing: give the map, or NAME=SIGMA,LENGTH"
+            )
+        return None
+    from ..radio import MaterialSpec
+    from ..surfaces.heightmap import HeightMapError
+
+    try:
+        return MaterialSpec.from_height_map(
+            a.height_map, model=a.map_model, segments=a.segments, tail=a.tail, unit=a.unit,
+            detrend=a.detrend, holes=a.holes, frequencies=a.frequencies_ghz,
+        )  # fmt: skip
+    except (HeightMapError, ImportError, ValueError) as exc:
+        raise map_error(a.height_map, exc) from None
+
+
+def _map_roughness(a) -> tuple[dict, object]:
+    """``(mapping, roughness)`` for :func:`~emscatter.radio.roughening.roughen`: ``--medium``'s
+    entries with ``NAME=map`` replaced by the map's roughness; without any ``NAME=map`` the
+    map's roughness is the common one (every medium not named by ``--medium``)."""
+    spec = getattr(a, "map_spec", None)
+    mapping = {
+        n: (spec.surface if v is MAP else v.surface if isinstance(v, Textured) else v)
+        for n, v in a.medium
+    }
+    if spec is None or any(v is MAP for _, v in a.medium):
+        return mapping, None
+    return mapping, spec.surface
+
+
+def _texture_directions(a) -> dict | None:
+    """``{medium: direction}`` of the anisotropic ``--medium NAME=σ,ℓx,ℓy@DIR`` entries (None
+    when there are none), for :func:`~emscatter.radio.roughening.roughen`'s
+    ``texture_direction``."""
+    dirs = {n: v.direction for n, v in a.medium if isinstance(v, Textured) and v.direction}
+    return dirs or None
+
+
+def _write_map_record(a, out: Path, stem: str) -> None:
+    spec = getattr(a, "map_spec", None)
+    if spec is None:
+        return
+    from ..io import write_json
+
+    record = {"height_map": str(a.height_map), "detrend": a.detrend, "unit": a.unit,
+              "applies_to": [n for n, v in a.medium if v is MAP] or "every medium not named "
+              "by --medium", **spec.map_record}  # fmt: skip
+    print(f"  {write_json(out / f'{stem}_height_map.json', record)}")
+    band = ", ".join(
+        f"{b['frequency_hz'] / 1e9:g} GHz {100 * b['fraction_below']:.0f}% of |K| ≤ 2k below "
+        "the map's band"
+        for b in spec.map_record.get("band", [])
+    )
+    print(
+        f"height map {a.height_map}: σ = {spec.map_record['sigma_m']:.4g} m, ℓ(1/e) = "
+        f"{spec.map_record['length_1_over_e_m']:.4g} m ({a.map_model}; {band})"
+    )
 
 
 def _quick_tables():
@@ -298,7 +442,7 @@ def run_any_scene(a) -> int:
         raise ValueError(
             f"--tx X,Y,Z [m] is required for scene {a.scene!r} (where the transmitter stands)"
         )
-    mapping = dict(a.medium)
+    mapping, common = _map_roughness(a)
     freqs = a.frequencies_ghz
     import sionna.rt as rt
 
@@ -309,7 +453,7 @@ def run_any_scene(a) -> int:
         )
     sc = _load_any(a)
     # every name, medium and band checked before a ray is traced
-    plan(sc, mapping=mapping, frequencies=freqs, extrapolate=a.extrapolate)
+    plan(sc, common, mapping=mapping, frequencies=freqs, extrapolate=a.extrapolate)
     arr = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization="V")
     sc.tx_array = sc.rx_array = arr
     sc.add(rt.Transmitter("tx", position=[float(x) for x in tx]))
@@ -325,11 +469,12 @@ def run_any_scene(a) -> int:
         cell = max(cell, float(size.max() / 60.0))
     stem = Path(a.scene).stem
     out = Path(a.out)
+    _write_map_record(a, out, stem)
     for f in freqs:
         sc.frequency = f
         res = compare_rough_flat(
-            sc, mapping=mapping, extrapolate=a.extrapolate, table_options=opts,
-            frequencies=freqs, xpd=bool(a.rx),
+            sc, common, mapping=mapping, extrapolate=a.extrapolate, table_options=opts,
+            frequencies=freqs, xpd=bool(a.rx), texture_direction=_texture_directions(a),
             paths={"samples_per_src": samples, "max_depth": depth} if a.rx else False,
             radio_map={"center": (*((lo[:2] + hi[:2]) / 2), a.map_height),
                        "orientation": (0.0, 0.0, 0.0), "size": tuple(size),
@@ -361,7 +506,19 @@ def run_builtin_json(a) -> int:
     from ..spectra import GaussianCorrelation
 
     opts = _quick_tables() if a.quick else None
-    given = {n: (None if v is None else GaussianCorrelation(sigma=v[0], length=v[1]))
+    if a.map_spec is not None and not any(v is MAP for _, v in a.medium):
+        raise ValueError(
+            "--builtin-json with --height-map: name the medium the map is of with --medium "
+            "NAME=map (e.g. --medium concrete=map)"
+        )
+    textured = [n for n, v in a.medium if isinstance(v, Textured)]
+    if textured:
+        raise ValueError(
+            f"--builtin-json fits Sionna's isotropic built-in models; --medium {textured[0]}= "
+            "is anisotropic (σ,ℓx,ℓy@DIR): give it as NAME=σ,ℓ"
+        )
+    given = {n: (None if v is None else a.map_spec.surface if v is MAP
+                 else GaussianCorrelation(sigma=v[0], length=v[1]))
              for n, v in a.medium}  # fmt: skip
     media = given or {n: r for n, r in DEFAULT_ROUGHNESS.items() if r is not None}
     fits = []

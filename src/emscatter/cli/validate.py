@@ -11,6 +11,12 @@ def register(subparsers) -> None:
     )
     v.add_argument("--out", type=OutputFolder(), default="out/validation", help="output folder")
     v.add_argument("--full", action="store_true", help="the published grid (≈ 17 min, 2 cores)")
+    v.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar (drawn on stderr only when it is a terminal and the work runs past "
+        "2 s anyway)",
+    )
     v.set_defaults(func=run)
 
 
@@ -19,7 +25,7 @@ def run(a) -> int:
 
     from ..validity_maps import run_validation
 
-    written = run_validation(Path(a.out), full=a.full)
+    written = run_validation(Path(a.out), full=a.full, progress=False if a.quiet else None)
     for p in written:
         print(f"  {p}")
     return 0

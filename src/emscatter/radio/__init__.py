@@ -86,7 +86,9 @@ __all__ = [
 class MaterialSpec:
     """A radio material described without Sionna: roughness statistics (or ``None``: flat),
     a medium (ITU name, Material or permittivity; or ``eps_real`` + ``conductivity`` [S/m]),
-    a slab ``thickness`` [m] (``None``: half-space), the emscatter ``method`` and grid options."""
+    a slab ``thickness`` [m] (``None``: half-space), the emscatter ``method`` and grid options;
+    ``texture_direction``: the world direction of the ``ℓx`` axis of anisotropic roughness
+    (:mod:`emscatter.radio.texture`; required when ``length_y ≠ length``)."""
 
     surface: object = None
     medium: object = None
@@ -96,10 +98,15 @@ class MaterialSpec:
     method: str = "auto"
     out_of_range: str = "warn"
     options: TableOptions | None = None
+    texture_direction: object = None
 
     def __post_init__(self):
         # checked where it enters (a wrong thickness would otherwise surface only in Sionna)
         object.__setattr__(self, "thickness", check_thickness(self.thickness))
+        if self.texture_direction is not None:
+            from .texture import check_direction
+
+            object.__setattr__(self, "texture_direction", check_direction(self.texture_direction))
 
     @classmethod
     def from_height_map(
@@ -141,7 +148,10 @@ class MaterialSpec:
         """The tables at ``frequency`` [Hz] (raises out of the medium's band)."""
         frequency = real_number("frequency", frequency)
         eps = complex(self.material().eps(frequency=frequency))
-        return build_tables(
+        build = build_tables
+        if self.texture_direction is not None or not getattr(self.surface, "is_isotropic", True):
+            from .texture import build_textured_tables as build
+        return build(
             self.surface,
             eps,
             frequency,
@@ -165,5 +175,6 @@ class MaterialSpec:
             method=self.method,
             out_of_range=self.out_of_range,
             table_options=self.options,
+            texture_direction=self.texture_direction,
             color=color,
         )

@@ -173,6 +173,7 @@ def surface_from_map(
         "length_1_over_e_m": float(m.length),
         "segments": m.info.get("segments"),
         "tail": m.tail,
+        "holes": dict(m.info.get("holes") or {}),
     }
     if frequencies is not None:
         record["band"] = _band(m, frequencies, float(max_below))

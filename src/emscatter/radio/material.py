@@ -22,6 +22,10 @@ Per ray, at the scene frequency and the ray's incidence angle:
 * **diffraction** uses Sionna's own UTD wedge coefficients with the flat slab of the medium
   (roughness does not enter the wedge).
 
+**Anisotropic roughness** (walls with a texture direction, ``texture_direction=``): the
+tables get the incidence-azimuth axis and the lobe lookup works in the texture frame of each hit
+(:mod:`emscatter.radio.texture`, Dr.Jit side in :mod:`emscatter.radio.texture_jit`).
+
 Tables are built lazily, the first time a solver traces the material at a frequency, and only
 if some object of the scene uses it (Dr.Jit traces every live material, used or not). Changing
 ``scene.frequency`` checks the medium's band at once (an out-of-band ITU material fails even
@@ -65,32 +69,22 @@ from ..spectra import ExponentialCorrelation, GaussianCorrelation
 from .convention import sionna_permittivity, to_sionna
 from .medium import check_thickness, resolve_medium
 from .tables import TableOptions, build_tables, check_policy, check_surface
+from .texture import build_textured_tables, check_direction, check_textured_surface
+from .texture_jit import (
+    TexturedSlice,
+    folded_azimuth,
+    opaque_float,
+    tex_coord,
+    texture,
+    texture_axes,
+    textured_lookup,
+    to_texture_frame,
+)
 
 __all__ = ["EmscatterRadioMaterial", "PLUGIN_NAME"]
 
 PLUGIN_NAME = "emscatter-radio-material"
 _HALF_SPACE_DIFFRACTION_THICKNESS = 1e3  # [m] a half-space seen by Sionna's UTD wedge code
-
-
-def _tex_coord(x, n):
-    """Texture coordinate of a node-based grid of ``n`` nodes on [0, 1] (texel centres)."""
-    return (x * (n - 1) + 0.5) / n
-
-
-def _texture(array: np.ndarray, dim: int):
-    tensor = mi.TensorXf(np.ascontiguousarray(array, dtype=np.float32))
-    cls = {1: mi.Texture1f, 3: mi.Texture3f}[dim]
-    return cls(
-        tensor, use_accel=False, filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp
-    )
-
-
-def _opaque(x) -> mi.Float:
-    """A host scalar as an opaque Dr.Jit variable: kernels do not embed it as a literal, so
-    a new frequency or table does not trigger a new kernel compilation."""
-    v = mi.Float(float(x))
-    dr.make_opaque(v)
-    return v
 
 
 class _Slice:
@@ -117,14 +111,15 @@ class _Slice:
             axis=-1,
         )
         self.n_cos = tables.cos_nodes.size
-        self.per_cos = _texture(per_cos, 1)  # roughness correction + diffuse share, on cosθi
+        self.per_cos = texture(per_cos, 1)  # roughness correction + diffuse share, on cosθi
         self.n_theta = tables.theta_nodes.size
-        self.inv_theta_max = _opaque(1.0 / float(tables.theta_nodes[-1]))
+        self.inv_theta_max = opaque_float(1.0 / float(tables.theta_nodes[-1]))
         self.n_alpha = tables.alpha_nodes.size
         self.n_s = tables.s_nodes.size
         self.linear_s = tables.grading == 1.0
-        self.inv_grading = _opaque(1.0 / tables.grading)
-        self.lobe = _texture(tables.lobe, 3)
+        self.inv_grading = opaque_float(1.0 / tables.grading)
+        self.lobe = texture(tables.lobe, 3)
+        self.n_psi = 0
 
 
 def _parse_props(props: mi.Properties) -> dict:
@@ -136,10 +131,11 @@ def _parse_props(props: mi.Properties) -> dict:
         del props[key]
         return v
 
-    for key in ("medium", "method", "correlation"):
+    for key in ("medium", "method", "correlation", "texture_direction"):
         if key in props:
             out[key] = str(take(key))
-    for key in ("eps_real", "conductivity", "thickness", "rms_height", "correlation_length"):
+    floats = ("eps_real", "conductivity", "thickness", "rms_height", "correlation_length")
+    for key in (*floats, "correlation_length_y"):
         if key in props:
             out[key] = float(take(key))
     if "half_space" in props and bool(take("half_space")):
@@ -157,7 +153,17 @@ def _parse_props(props: mi.Properties) -> dict:
                 f"emscatter-radio-material {props.id()!r}: correlation must be 'gaussian' or "
                 f"'exponential', got {kind!r}"
             )
-        out["surface"] = cls(sigma=out.pop("rms_height"), length=out.pop("correlation_length"))
+        out["surface"] = cls(sigma=out.pop("rms_height"), length=out.pop("correlation_length"),
+                             length_y=out.pop("correlation_length_y", None))  # fmt: skip
+    if "texture_direction" in out:  # "0 0 1" or "0, 0, 1"
+        text = out["texture_direction"]
+        try:
+            out["texture_direction"] = [float(v) for v in text.replace(",", " ").split()]
+        except ValueError:
+            raise ValueError(
+                f"emscatter-radio-material {props.id()!r}: texture_direction must be three "
+                f"numbers (e.g. '0 0 1'), got {text!r}"
+            ) from None
     return out
 
 
@@ -167,8 +173,9 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     Parameters
     ----------
     name : unique name in the scene (required unless loaded from XML).
-    surface : isotropic 2-D roughness statistics (:mod:`emscatter.spectra`), or ``None``
-        for a flat face — then the material is Sionna's own ``RadioMaterial`` with ``S = 0``.
+    surface : 2-D roughness statistics (:mod:`emscatter.spectra`; anisotropic, ``length_y ≠
+        length``, with ``texture_direction``), or ``None`` for a flat face — then the
+        material is Sionna's own ``RadioMaterial`` with ``S = 0``.
     medium : ITU-R P.2040 name (``"concrete"``), a :class:`~emscatter.materials.Material`, or
         a permittivity (``exp(−iωt)``, ``Im ε ≥ 0``); or give ``eps_real`` [-] and
         ``conductivity`` [S/m] instead.
@@ -178,6 +185,11 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     out_of_range : ``"warn"`` (default), ``"raise"`` or ``"ignore"`` when that solver is
         outside its validity range at the scene frequency.
     table_options : :class:`~emscatter.radio.tables.TableOptions` (grid sizes).
+    texture_direction : world-frame direction of the surface's ``ℓx`` axis (three numbers),
+        required for anisotropic roughness (``length_y ≠ length``), allowed for isotropic
+        roughness (then the textured tables are used: a check of the textured path); projected
+        onto each hit's tangent plane, with the degenerate rule of
+        :mod:`emscatter.radio.texture` where it is parallel to the normal.
     color : RGB in [0, 1] for Sionna's previews.
     """
 
@@ -193,6 +205,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         method: str = "auto",
         out_of_range: str = "warn",
         table_options: TableOptions | None = None,
+        texture_direction=None,
         color=None,
         props: mi.Properties | None = None,
     ):
@@ -211,11 +224,33 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             conductivity = kw.get("conductivity")
             thickness = kw.get("thickness", DEFAULT_THICKNESS)
             method = kw.get("method", "auto")
+            texture_direction = kw.get("texture_direction")
         super().__init__(props)
         self._medium = resolve_medium(medium, eps_real=eps_real, conductivity=conductivity)
         thickness = check_thickness(thickness)
         self._thickness = thickness
-        self._surface = None if surface is None else check_surface(surface)
+        self._texture = None
+        if surface is None:
+            if texture_direction is not None:
+                raise ValueError(
+                    f"texture_direction={texture_direction!r} given for a flat surface "
+                    "(surface=None); a texture direction needs roughness"
+                )
+            self._surface = None
+        elif texture_direction is not None:
+            self._surface = check_textured_surface(surface)
+            self._texture = check_direction(texture_direction)
+            self._dir = mi.Vector3f(*(float(v) for v in self._texture))
+            dr.make_opaque(self._dir)
+        elif getattr(surface, "dimension", 2) == 2 and not getattr(surface, "is_isotropic", True):
+            raise ValueError(
+                "radio materials need isotropic 2-D roughness unless a texture direction is "
+                f"given: anisotropic roughness ({surface.describe()}) needs texture_direction="
+                "(dx, dy, dz), the world direction of the ℓx axis, e.g. (0, 0, 1) for vertical "
+                "grooves"
+            )
+        else:
+            self._surface = check_surface(surface)
         self._sigma = 0.0 if surface is None else float(surface.sigma)
         check_policy(out_of_range)
         if not isinstance(method, str) or (method != "auto" and method not in solvers.available()):
@@ -277,11 +312,11 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         dr.make_opaque(self._eta)
         k = 2.0 * math.pi * frequency / 299_792_458.0
         self._wavenumber = k
-        self._k = _opaque(k)
-        self._lam = _opaque(2.0 * math.pi / k)
-        self._sig2 = _opaque(self._sigma**2)
+        self._k = opaque_float(k)
+        self._lam = opaque_float(2.0 * math.pi / k)
+        self._sig2 = opaque_float(self._sigma**2)
         d = self._thickness
-        self._d_op = None if d is None else _opaque(d)
+        self._d_op = None if d is None else opaque_float(d)
         # A rough wall so thick and lossy that one pass through it leaves < 1e-6 of the field
         # (−120 dB) is a half-space: its back face and transmission are dropped (saves the
         # slab arithmetic per ray). Flat materials keep Sionna's slab exactly.
@@ -307,7 +342,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         scene = self.scene
         if scene is None or not self.is_used or self._frequency is None:
             return self._dummy()
-        tables = build_tables(
+        build = build_tables if self._texture is None else build_textured_tables
+        tables = build(
             self._surface,
             self._eps,
             self._frequency,
@@ -316,7 +352,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             label=self.name,
             options=self._options,
         )
-        self._active = self._tables[self._frequency] = _Slice(tables)
+        cls = _Slice if self._texture is None else TexturedSlice
+        self._active = self._tables[self._frequency] = cls(tables)
         return self._active
 
     def _dummy(self) -> _Slice:
@@ -326,10 +363,18 @@ class EmscatterRadioMaterial(RadioMaterialBase):
                 None, 1.0 + 0j, DEFAULT_FREQUENCY, label=self.name, options=self._options
             )
             self._dummy_slice = _Slice(t)
+            if self._texture is not None:
+                t = build_textured_tables(
+                    self._surface, 1.0 + 0j, DEFAULT_FREQUENCY, method=self._method,
+                    out_of_range="ignore", label=self.name,
+                    options=TableOptions(n_cos=4, n_cos_spm=4, n_theta=4, n_alpha=4, n_s=4,
+                                         n_psi=2),
+                )  # fmt: skip
+                self._dummy_slice = TexturedSlice(t)
         return self._dummy_slice
 
     # ------------------------------------------------------------------ per ray (Dr.Jit)
-    def _coefficients(self, cos_i, sl: _Slice | None, active):
+    def _coefficients(self, cos_i, sl: _Slice | None, active, ki=None, tex=None):
         """Coherent ``(r_te, r_tm, t_te, t_tm)`` (Sionna convention) of the rough slab, and the
         diffuse share ``r_incoh,h + r_incoh,v`` at this incidence."""
         eta = self._eta
@@ -345,7 +390,12 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         r_te = (cos_i - a) * dr.rcp(cos_i + a)
         r_tm = (eta * cos_i - a) * dr.rcp(eta * cos_i + a)
         if sl is not None:
-            v = sl.per_cos.eval(mi.Point1f(_tex_coord(cos_i, sl.n_cos)), active)
+            if sl.n_psi:
+                psi = folded_azimuth(ki, tex)[0] * (2.0 / math.pi)
+                pos = mi.Point2f(tex_coord(cos_i, sl.n_cos), tex_coord(psi, sl.n_psi))
+                v = sl.per_cos.eval(pos, active)
+            else:
+                v = sl.per_cos.eval(mi.Point1f(tex_coord(cos_i, sl.n_cos)), active)
             r1_te = r_te + mi.Complex2f(v[0], v[1])
             r1_tm = r_tm + mi.Complex2f(v[2], v[3])
             diffuse = dr.maximum(v[4] + v[5], 0.0)
@@ -374,9 +424,12 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         """``exp(expo)`` with ``Re(expo)`` clipped at 0 (a passive mean field cannot grow)."""
         return dr.exp(mi.Complex2f(dr.minimum(dr.real(expo), 0.0), dr.imag(expo)))
 
-    def _lobe(self, ki, ko, sl: _Slice, active):
+    def _lobe(self, ki, ko, sl: _Slice, active, tex=None):
         """``(hh, hv, vh, vv)`` lobe values [1/sr] for local directions ``ki`` (incident,
         propagating) and ``ko`` (scattered)."""
+        if sl.n_psi:
+            psi, flip = folded_azimuth(ki, tex)
+            ki, ko = to_texture_frame(ki, tex), to_texture_frame(ko, tex)
         cos_i = -ki.z
         sin_i = dr.safe_sqrt(1.0 - cos_i * cos_i)
         degenerate = sin_i < 1e-6
@@ -386,7 +439,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         dx0 = ko.x - ki.x
         dy0 = ko.y - ki.y
         dx = dx0 * e1x + dy0 * e1y
-        dy = dr.abs(dy0 * e1x - dx0 * e1y)
+        dy = dy0 * e1x - dx0 * e1y
+        dy = dr.select(flip, -dy, dy) if sl.n_psi else dr.abs(dy)
         rho = dr.sqrt(dx * dx + dy * dy)
         has = rho > 1e-9
         inv_rho = dr.select(has, dr.rcp(rho), 0.0)
@@ -400,20 +454,24 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         else:
             s = dr.select(t > 0.0, dr.exp(dr.log(dr.maximum(t, 1e-30)) * sl.inv_grading), 0.0)
         th = dr.clip(dr.safe_acos(cos_i) * sl.inv_theta_max, 0.0, 1.0)
+        if sl.n_psi:
+            return textured_lookup(sl, s, alpha, th, psi, active)
         pos = mi.Point3f(
-            _tex_coord(s, sl.n_s),
-            _tex_coord(alpha * (1.0 / math.pi), sl.n_alpha),
-            _tex_coord(th, sl.n_theta),
+            tex_coord(s, sl.n_s),
+            tex_coord(alpha * (1.0 / math.pi), sl.n_alpha),
+            tex_coord(th, sl.n_theta),
         )
         v = sl.lobe.eval(pos, active)
         return [dr.maximum(x, 0.0) for x in v]
 
-    def _local_diffuse_matrix(self, ki, ko, sl: _Slice, solid_angle, active) -> mi.Matrix2f:
+    def _local_diffuse_matrix(
+        self, ki, ko, sl: _Slice, solid_angle, active, tex=None
+    ) -> mi.Matrix2f:
         """Real Jones matrix of a diffuse reflection into ``ko`` in the local ``(h, v)`` bases
         of the incident and scattered planes: ``√(lobe_qp · Ω)``, co-pol on the diagonal,
         cross-pol with the sign pattern of Sionna's XPD matrix ``[[a, −b], [b, a]]``
         (norm-preserving when hv = vh, hh = vv)."""
-        hh, hv, vh, vv = self._lobe(ki, ko, sl, active)
+        hh, hv, vh, vv = self._lobe(ki, ko, sl, active, tex)
         root_omega = dr.sqrt(dr.maximum(solid_angle, 0.0))
         return mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv)) * root_omega
 
@@ -435,11 +493,13 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         ki = si.wi
         cos_i = dr.clip(-ki.z, 0.0, 1.0)
         to_world = mi.Matrix3f(si.sh_frame.s, si.sh_frame.t, si.sh_frame.n).T
-        return ki, cos_i, to_world
+        tex = None if self._texture is None else texture_axes(self._dir, si)
+        return ki, cos_i, to_world, tex
 
     def _jones(
-        self, si, to_world, ki, coefs, sl, events, ko_diff, ko_diffr, diffraction_on, active
-    ):
+        self, si, to_world, ki, coefs, sl, events, ko_diff, ko_diffr, diffraction_on, active,
+        tex=None,
+    ):  # fmt: skip
         """Jones matrix (world implicit frame) of the event of each lane: specular reflection or
         transmission, diffuse reflection into ``ko_diff``, diffraction into ``ko_diffr``."""
         r_te, r_tm, t_te, t_tm, _ = coefs
@@ -451,7 +511,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             jones = jones_matrix_to_world_implicit(c_te, c_tm, to_world, ki, ko_spec)
         else:
             jones = self._specular_or_diffuse_matrix(
-                to_world, ki, ko_spec, c_te, c_tm, sl, diffuse, ko_diff, si.t, active
+                to_world, ki, ko_spec, c_te, c_tm, sl, diffuse, ko_diff, si.t, active, tex
             )
         if diffraction_on:
             jf = RadioMaterial._diffraction_matrix(
@@ -461,8 +521,9 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         return jones
 
     def _specular_or_diffuse_matrix(
-        self, to_world, ki, ko_spec, c_te, c_tm, sl, diffuse, ko_diff, solid_angle, active
-    ) -> mi.Matrix4f:
+        self, to_world, ki, ko_spec, c_te, c_tm, sl, diffuse, ko_diff, solid_angle, active,
+        tex=None,
+    ) -> mi.Matrix4f:  # fmt: skip
         """Jones matrix (world implicit frame): ``R_out · D · R_in`` with ``D`` = diag(c_te,
         c_tm) for a specular lane and the local diffuse matrix for a diffuse lane, as
         :func:`sionna.rt.utils.jones_matrix_to_world_implicit` builds it — but with one
@@ -477,7 +538,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         h_out = dr.select(diffuse, transverse_basis_from_normal(ko_diff, n), h_in)
         ko_w = to_world @ ko
         r_out = jones_matrix_rotator(ko_w, to_world @ h_out, implicit_basis_vector(ko_w))
-        d = self._local_diffuse_matrix(ki, ko_diff, sl, solid_angle, mi.Bool(active) & diffuse)
+        d = self._local_diffuse_matrix(ki, ko_diff, sl, solid_angle, mi.Bool(active) & diffuse, tex)
         zero = mi.Float(0.0)
         d_re = dr.select(diffuse, d, mi.Matrix2f(c_te.real, zero, zero, c_tm.real))
         d_im = dr.select(diffuse, mi.Matrix2f(0.0), mi.Matrix2f(c_te.imag, zero, zero, c_tm.imag))
@@ -485,11 +546,11 @@ class EmscatterRadioMaterial(RadioMaterialBase):
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         sl = self._slice()
-        ki, cos_i, to_world = self._context(si)
+        ki, cos_i, to_world, tex = self._context(si)
         diffraction_on = (ctx.component & InteractionType.DIFFRACTION) > 0
         enabled = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         diffraction = mi.Bool(active) & (enabled == InteractionType.DIFFRACTION)
-        coefs = self._coefficients(cos_i, sl, active)
+        coefs = self._coefficients(cos_i, sl, active, ki, tex)
         prs, prd, pt, none = self._event_probabilities(coefs, enabled)
         specular = sample1 < prs
         diffuse = (sample1 >= prs) & (sample1 < prs + prd)
@@ -514,8 +575,9 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         if (ctx.component & NO_JONES_MATRIX) == 0:
             events = (reflection, diffuse, diffraction)
             jones = self._jones(
-                si, to_world, ki, coefs, sl, events, ko_diff, ko_diffr, diffraction_on, active
-            )
+                si, to_world, ki, coefs, sl, events, ko_diff, ko_diffr, diffraction_on, active,
+                tex,
+            )  # fmt: skip
             # the sampled event is weighted by 1/√p (Sionna's convention for sample())
             jones *= dr.detach(dr.select(prob > 0.0, dr.rsqrt(prob), 0.0))
             jones = mi.Spectrum(jones)
@@ -531,27 +593,29 @@ class EmscatterRadioMaterial(RadioMaterialBase):
 
     def eval(self, ctx, si, wo, active=True):
         sl = self._slice()
-        ki, cos_i, to_world = self._context(si)
+        ki, cos_i, to_world, tex = self._context(si)
         event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         diffuse = event == InteractionType.DIFFUSE
         reflection = (event == InteractionType.SPECULAR) | diffuse
         diffraction = event == InteractionType.DIFFRACTION
         ko = si.to_local(wo)
-        coefs = self._coefficients(cos_i, sl, active)
+        coefs = self._coefficients(cos_i, sl, active, ki, tex)
         diffraction_on = (ctx.component & InteractionType.DIFFRACTION) > 0
         events = (reflection, diffuse, diffraction)
-        jones = self._jones(si, to_world, ki, coefs, sl, events, ko, ko, diffraction_on, active)
+        jones = self._jones(
+            si, to_world, ki, coefs, sl, events, ko, ko, diffraction_on, active, tex
+        )
         return mi.Spectrum(jones)
 
     def pdf(self, ctx, si, wo, active=True):
         """Probability of the event stored in ``si.dp_du.z`` with all reflection and
         transmission events enabled (the solvers read ``bs.pdf`` from :meth:`sample`)."""
         sl = self._slice()
-        _, cos_i, _ = self._context(si)
+        ki, cos_i, _, tex = self._context(si)
         event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         every = InteractionType.SPECULAR | InteractionType.DIFFUSE | InteractionType.REFRACTION
         prs, prd, pt, _ = self._event_probabilities(
-            self._coefficients(cos_i, sl, active), mi.UInt(every)
+            self._coefficients(cos_i, sl, active, ki, tex), mi.UInt(every)
         )
         p = dr.select(event == InteractionType.SPECULAR, prs, prd)
         p = dr.select(event == InteractionType.REFRACTION, pt, p)

@@ -30,6 +30,7 @@ import numpy as np
 from ..coherent import ament_factor, boithias_factor, coherent_amplitude
 from ..conventions import wavenumber
 from ..fresnel import fresnel
+from ..progress import task
 from .medium import resolve_medium
 
 __all__ = ["sweep", "write_outputs", "DEFAULT_WALL"]
@@ -42,11 +43,15 @@ def DEFAULT_WALL():  # noqa: N802  (a constant that needs an import)
     return ROUGHNESS["concrete"]
 
 
-def sweep(surface, medium="concrete", *, theta_deg: float = 30.0, frequencies=None) -> dict:
+def sweep(
+    surface, medium="concrete", *, theta_deg: float = 30.0, frequencies=None, progress=None
+) -> dict:
     """Specular loss to roughness [dB] (module docstring) per frequency [Hz].
 
-    The ITU medium is used with its documented extrapolation where a frequency falls between
-    or beyond its bands (concrete has none at 100–110 GHz and above 330 GHz)."""
+    ``progress``: a tqdm bar over the frequencies on stderr — ``None`` (auto) on a terminal
+    past 2 s, ``True`` always, ``False`` never (:mod:`emscatter.progress`). The ITU medium is
+    used with its documented extrapolation where a frequency falls between or beyond its bands
+    (concrete has none at 100–110 GHz and above 330 GHz)."""
     from .. import materials
 
     f = np.geomspace(1e9, 300e9, 60) if frequencies is None else np.asarray(frequencies, float)
@@ -57,25 +62,30 @@ def sweep(surface, medium="concrete", *, theta_deg: float = 30.0, frequencies=No
     out = {k: [] for k in ("frequency_ghz", "method", "valid", "k_sigma", "k_length")}
     for key in ("emscatter_h_db", "emscatter_v_db", "ament_db", "boithias_db"):
         out[key] = []
-    for fi in f:
-        k = wavenumber(frequency=float(fi))
-        eps = complex(np.asarray(med.eps(frequency=float(fi))))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # validity is recorded per row instead
-            c = coherent_amplitude(surface, eps, k, th, out_of_range="ignore")
-        rh, rv = fresnel(eps, th)
-        out["frequency_ghz"].append(fi / 1e9)
-        out["method"].append(c.method)
-        out["valid"].append(bool(c.validity.get("valid", True)))
-        out["k_sigma"].append(k * surface.sigma)
-        out["k_length"].append(k * surface.length)
-        out["emscatter_h_db"].append(10 * math.log10(max(float(c.power[0]) / abs(rh) ** 2, 1e-300)))
-        out["emscatter_v_db"].append(10 * math.log10(max(float(c.power[1]) / abs(rv) ** 2, 1e-300)))
-        out["ament_db"].append(
-            20 * math.log10(max(float(ament_factor(k, surface.sigma, th)), 1e-150))
-        )
-        out["boithias_db"].append(20 * math.log10(float(boithias_factor(k, surface.sigma, th))))
+    with task("frequency sweep", f.size, progress, unit="f") as bar:
+        for fi in f:
+            _sweep_row(out, surface, med, th, float(fi))
+            bar.update(1)
     return {k: np.asarray(v) for k, v in out.items()} | {"theta_deg": theta_deg}
+
+
+def _sweep_row(out: dict, surface, med, th: float, fi: float) -> None:
+    """One frequency's row of :func:`sweep`, appended to ``out``."""
+    k = wavenumber(frequency=float(fi))
+    eps = complex(np.asarray(med.eps(frequency=float(fi))))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # validity is recorded per row instead
+        c = coherent_amplitude(surface, eps, k, th, out_of_range="ignore")
+    rh, rv = fresnel(eps, th)
+    out["frequency_ghz"].append(fi / 1e9)
+    out["method"].append(c.method)
+    out["valid"].append(bool(c.validity.get("valid", True)))
+    out["k_sigma"].append(k * surface.sigma)
+    out["k_length"].append(k * surface.length)
+    out["emscatter_h_db"].append(10 * math.log10(max(float(c.power[0]) / abs(rh) ** 2, 1e-300)))
+    out["emscatter_v_db"].append(10 * math.log10(max(float(c.power[1]) / abs(rv) ** 2, 1e-300)))
+    out["ament_db"].append(20 * math.log10(max(float(ament_factor(k, surface.sigma, th)), 1e-150)))
+    out["boithias_db"].append(20 * math.log10(float(boithias_factor(k, surface.sigma, th))))
 
 
 def write_outputs(results: list, out_dir, stem: str = "frequency_sweep") -> list:

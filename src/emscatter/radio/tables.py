@@ -37,6 +37,7 @@ import numpy as np
 from ..conventions import wavenumber
 from ..emissivity import lobe_width
 from ..fresnel import fresnel_cos
+from ..progress import task
 from ..spectra import Roughness, check_roughness
 from .medium import real_number
 
@@ -73,7 +74,9 @@ class TableOptions:
     ``n_cos`` nodes in ``cosθi`` for the coherent correction (SPM's costly second-order term
     on ``n_cos_spm`` of them, spline-interpolated: it is smooth in ``cosθ``); ``n_theta``
     incidence angles on ``[0, theta_max_deg]`` for the lobe; ``n_alpha`` azimuths on
-    ``[0, π]`` and ``n_s`` radial nodes around the specular point. Where
+    ``[0, π]`` and ``n_s`` radial nodes around the specular point; ``n_psi`` incidence
+    azimuths on ``[0, π/2]`` for a textured (anisotropic) surface only
+    (:mod:`emscatter.radio.texture`). Where
     ``r_coh + r_incoh > 1 + energy_tolerance`` the lobe is scaled down to conserve energy
     (recorded in ``RadioTables.energy_scale``), with an :class:`EnergyWarning` when that
     starts below ``energy_warn_below_deg`` (a solver far out of its range, not only the usual
@@ -84,6 +87,7 @@ class TableOptions:
     n_theta: int = 46
     n_alpha: int = 37
     n_s: int = 96
+    n_psi: int = 7
     theta_max_deg: float = 89.0
     energy_tolerance: float = 0.01
     energy_warn_below_deg: float = 60.0
@@ -94,6 +98,10 @@ class TableOptions:
             if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Integral) or v < 4:
                 raise ValueError(f"TableOptions.{name} must be an integer >= 4, got {v!r}")
             object.__setattr__(self, name, int(v))  # np.int64 too; one key for the cache
+        v = self.n_psi
+        if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Integral) or v < 2:
+            raise ValueError(f"TableOptions.n_psi must be an integer >= 2, got {v!r}")
+        object.__setattr__(self, "n_psi", int(v))
         for name in ("theta_max_deg", "energy_tolerance", "energy_warn_below_deg"):
             object.__setattr__(self, name, real_number(f"TableOptions.{name}", getattr(self, name)))
         if not 10.0 <= self.theta_max_deg < 90.0:
@@ -334,6 +342,7 @@ def build_tables(
     out_of_range: str = "warn",
     label: str = "material",
     options: TableOptions | None = None,
+    progress: bool | None = None,
 ) -> RadioTables:
     """The tables of one material at one frequency [Hz] (module docstring).
 
@@ -344,7 +353,9 @@ def build_tables(
 
     Identical requests (same roughness, permittivity, frequency, method and grid) reuse the
     tables already built in this process (several walls of one material cost one build); only
-    real builds enter :func:`build_log`.
+    real builds enter :func:`build_log`. ``progress``: a tqdm bar over the build's three
+    stages (coherent amplitude, lobe, its integral) on stderr — ``None`` (auto) on a terminal
+    past 2 s, ``True`` always, ``False`` never (:mod:`emscatter.progress`).
     """
     opts = options or TableOptions()
     key = (repr(surface), complex(np.asarray(eps)), float(frequency), method, out_of_range, opts)
@@ -352,14 +363,16 @@ def build_tables(
     if hit is not None:
         _CACHE.move_to_end(key)
         return hit
-    tables = _build(surface, eps, frequency, method, out_of_range, label, opts)
+    desc = f"radio tables {label} {float(frequency) / 1e9:g} GHz"
+    with task(desc, 3, progress, unit="stage") as bar:
+        tables = _build(surface, eps, frequency, method, out_of_range, label, opts, bar)
     _CACHE[key] = tables
     while len(_CACHE) > _CACHE_SIZE:
         _CACHE.popitem(last=False)
     return tables
 
 
-def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioTables:
+def _build(surface, eps, frequency, method, out_of_range, label, opts, bar) -> RadioTables:
     from .. import api
 
     policy = check_policy(out_of_range)
@@ -411,6 +424,7 @@ def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioT
         if policy == "warn":
             warnings.warn(msg, RadioValidityWarning, stacklevel=3)
     coherent, n_coh = _coherent_on_grid(rough, eps, k, name, cos_nodes, fres, opts.n_cos_spm)
+    bar.update(1)
     grading = _grading(rough, k, opts.n_s)
     theta_s, phi_s = lobe_directions(theta_nodes, alpha_nodes, s_nodes, grading)
     ti = np.broadcast_to(theta_nodes[:, None, None], theta_s.shape)
@@ -418,6 +432,7 @@ def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioT
         {"coherent": False} if "coherent" in inspect.signature(module.bistatic).parameters else {}
     )
     res = module.bistatic(rough, eps, k, ti, theta_s, phi_s, 0.0, **skip)
+    bar.update(1)
     sig = np.nan_to_num(np.asarray(res.sigma0, dtype=float), nan=0.0, posinf=0.0)
     sig = np.maximum(sig, 0.0)
     cos_i = np.cos(theta_nodes)[:, None, None]
@@ -450,6 +465,7 @@ def _build(surface, eps, frequency, method, out_of_range, label, opts) -> RadioT
                 stacklevel=3,
             )
     seconds = time.perf_counter() - t0
+    bar.update(1)
     evals = {"bistatic_points": int(theta_s.size), "coherent_points": n_coh}
     _LOG.append(
         {"label": label, "frequency": float(frequency), "method": name, **evals, "seconds": seconds}

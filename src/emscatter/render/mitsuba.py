@@ -12,7 +12,11 @@ and a scalar one would call Python once per ray)::
     #     <bsdf type="emscatter"><string name="table" value="KEY"/></bsdf>
 
 Scene-dict / XML parameters: ``table`` (a key from :func:`register_table`), ``coherent``
-(bool, default true: include the coherent delta lobe), ``sampling_resolution`` (int, 64).
+(bool, default true: include the coherent delta lobe), ``sampling_resolution`` (int, 64), and
+the seed's ch. 4 porosity applied to the table at load time (:mod:`emscatter.brdf.porosity`,
+:func:`~emscatter.brdf.porosity.from_plugin_params`): ``porosity``, ``pore_shape``,
+``pore_slope``, ``diffuse_albedo``, ``specular_albedo``, ``wetness``, ``pollution_time``,
+``pollution_fill_time``, ``pollution_albedo`` (floats).
 
 What it does (numpy preparation in :mod:`emscatter.render.plugin_data`):
 
@@ -181,6 +185,19 @@ def _prepared(key: str, channels: str, resolution: int) -> PluginData:
     return _PREPARED[cache_key]
 
 
+def _porous_key(key: str, props) -> str:
+    """``key``, or the key of its porous transform when the porosity parameters are given."""
+    from ..brdf.porosity import PLUGIN_PARAMS, from_plugin_params
+
+    params = {n: float(props.get(n)) for n in PLUGIN_PARAMS if n in props}
+    if not params or key not in _TABLES:
+        return key
+    derived = f"{key}|porosity{sorted(params.items())}"
+    if derived not in _TABLES:
+        _TABLES[derived] = from_plugin_params(_TABLES[key], params)
+    return derived
+
+
 def _prepared_mueller(key: str, channels: str):
     """``(flat Mueller array, n_channels, wavelengths [nm] or None)`` for the polarized class."""
     from .polarized import mueller_channels
@@ -269,7 +286,7 @@ def _bsdf_class(mi):
                     "emscatter.render.mitsuba.register_table)"
                 )
             res = props.get("sampling_resolution", 64)
-            self._key = props.get("table")
+            self._key = _porous_key(str(props.get("table")), props)
             data = _prepared(str(self._key), channels, int(res))
             self._data = data
             self._use_delta = bool(props.get("coherent", True)) and data.has_coherent

@@ -19,7 +19,11 @@ import numpy as np
 
 from ..io import atomic_path
 
+#: The lights :func:`sphere_row` can set up.
+EMITTERS = ("sky+sun", "sky", "sun", "constant")
+
 __all__ = [
+    "EMITTERS",
     "block_mean",
     "environment",
     "environment_image",
@@ -71,14 +75,19 @@ def sphere_row(
     env_width: int = 256,
     max_depth: int = 4,
     sampler: str = "independent",
+    emitter: str = "sky+sun",
 ) -> dict:
     """A scene dict with one unit sphere per BSDF dict, left to right along x.
 
     The camera looks down −z from a little above; ``height`` defaults to what fits the row.
     ``sampler``: a Mitsuba sampler plugin name (``"independent"``, ``"multijitter"``, ...).
+    ``emitter``: ``"sky+sun"`` (the procedural sky and a directional light, default), ``"sky"``,
+    ``"sun"`` or ``"constant"`` (a uniform white environment of radiance ``env_scale``).
     """
     if not bsdfs:
         raise ValueError("bsdfs must hold at least one BSDF dict")
+    if emitter not in EMITTERS:
+        raise ValueError(f"emitter must be one of {list(EMITTERS)}, got {emitter!r}")
     import mitsuba as mi
 
     n = len(bsdfs)
@@ -105,13 +114,17 @@ def sphere_row(
             },
             "sampler": {"type": sampler, "sample_count": int(spp)},
         },
-        "sky": environment(env_scale, env_width),
-        "sun": {
+    }
+    if emitter in ("sky+sun", "sky"):
+        scene["sky"] = environment(env_scale, env_width)
+    if emitter == "constant":
+        scene["sky"] = {"type": "constant", "radiance": {"type": "rgb", "value": float(env_scale)}}
+    if emitter in ("sky+sun", "sun"):
+        scene["sun"] = {
             "type": "directional",
             "direction": [0.55, -0.6, -0.58],
             "irradiance": {"type": "rgb", "value": float(light_irradiance)},
-        },
-    }
+        }
     x0 = -0.5 * (n - 1) * spacing
     for k, bsdf in enumerate(bsdfs):
         scene[f"sphere_{k}"] = {

@@ -33,6 +33,10 @@ so ``R_h`` and ``R_v`` act on one polarization each, no mixing; Ulaby, Moore & F
   published comparisons
   (issue 20: emscatter IEM −4.4 dB bias, SMRT −5.1, pyi2em −4.6): a lower bound.
 
+* ``iem`` picked by ``auto`` in backscatter: the IEM's own multiple-scattering hv is this same
+  term (:func:`emscatter.solvers.iem.crosspol.backscatter`, equal to the solver's to 1e-13), so
+  the API runs the IEM with ``crosspol=False`` and adds it from here (:data:`IEM_BACKSCATTER`).
+
 Both terms are remembered per (roughness, ε, k, θi, φi) — SPM2's per unit σ⁴, since
 σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k and the angles only — so a repeated scene, a σ sweep or the
 blend's second method pays once (:func:`clear_cache`).
@@ -56,6 +60,9 @@ from ..fresnel import is_pec
 __all__ = ["backscatter_mask", "supplement", "clear_cache"]
 
 _BACK_TOL = 1e-9
+#: The ``name`` under which :func:`supplement` gives the IEM's own backscatter hv (for ``auto``'s
+#: IEM run with ``crosspol=False``: the same term, remembered per angle).
+IEM_BACKSCATTER = "iem (backscatter)"
 SPM2_NODES = 6
 #: Backscatter hv values remembered (per method family, roughness, ε, k and angle); SPM2's
 #: are stored divided by σ⁴ (σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k, θ only), so a σ sweep reuses them.
@@ -88,6 +95,25 @@ def _cached(keys, compute):
         while len(_CACHE) > _CACHE_SIZE:
             _CACHE.popitem(last=False)
     return out
+
+
+def _unique_rows(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(cols, axis=0, return_inverse=True)`` (rows of a 2-D float array) without
+    its per-call cost where it is not needed: one row (a single backscatter angle, the usual
+    call) is its own unique row, and at most two varying columns are made unique as one
+    complex column (lexicographic order, as ``axis=0``)."""
+    n = cols.shape[0]
+    if n == 1:
+        return cols, np.zeros(1, dtype=np.intp)
+    varying = [j for j in range(cols.shape[1]) if not np.all(cols[:, j] == cols[0, j])]
+    if not varying:
+        return cols[:1], np.zeros(n, dtype=np.intp)
+    if len(varying) <= 2:
+        z = cols[:, varying[0]] + (1j * cols[:, varying[1]] if len(varying) == 2 else 0j)
+        _, first, inv = np.unique(z, return_index=True, return_inverse=True)
+        return cols[first], inv.reshape(-1)
+    uniq, inv = np.unique(cols, axis=0, return_inverse=True)
+    return uniq, inv.reshape(-1)
 
 
 def backscatter_mask(ti, ts, ps, pi_) -> np.ndarray:
@@ -140,7 +166,7 @@ def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
 
 def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     """:func:`supplement` without its per-call cache (per-angle values still remembered)."""
-    if name not in ("spm", "po", "go") or rough.dimension != 2 or rough.sigma == 0:
+    if name not in ("spm", "po", "go", IEM_BACKSCATTER) or rough.dimension != 2 or rough.sigma == 0:
         return None, None
     back = backscatter_mask(ti, ts, ps, pi_)
     if not back.any():
@@ -155,7 +181,7 @@ def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
         # σ⁰⁽²²⁾ depends on φi only through an anisotropic spectrum's axes
         iso = rough.length == rough.length_y
         pairs = np.stack([tb, np.zeros_like(pb) if iso else np.mod(pb, 2 * math.pi)], -1)
-        uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+        uniq, inv = _unique_rows(pairs)
         e = complex(eps)
         base = ("spm2", type(rough), rough.length, rough.length_y, e, float(k))
         keys = [(*base, float(t), float(f)) for t, f in uniq]
@@ -178,7 +204,7 @@ def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     e = eps if is_pec(eps) or np.ndim(eps) == 0 else np.broadcast_to(eps, shape)[back]
     ea = np.broadcast_to(np.asarray(e if not is_pec(e) else 0.0, dtype=complex), tb.shape)
     cols = np.stack([tb, np.mod(pb, 2 * math.pi), ea.real, ea.imag], -1)
-    uniq, inv = np.unique(cols, axis=0, return_inverse=True)
+    uniq, inv = _unique_rows(cols)
     tag = "pec" if is_pec(e) else "eps"
     keys = [("iem", tag, rough, float(k), *map(float, row)) for row in uniq]
 

@@ -41,6 +41,28 @@ tolerance. Linear (not dB) blending because σ⁰ integrates linearly: the blend
 reflectivity is the same convex combination of the methods' ones, so a blend of
 energy-conserving answers conserves energy. What is not smoothed: the medium class of the
 measured maps (conductor for ``|ε| ≥ 100`` or Re ε < 0) is a switch in ε.
+
+**Backscatter of a dielectric: IEM before PO** (:func:`auto_order`). In backscatter
+(``θs = θi``, ``φs = φi + π``; :func:`emscatter.backscatter` tells the API, which passes
+``monostatic=True``) the order is :data:`BACKSCATTER_DIELECTRIC_ORDER` — ``spm, go, iem, po`` —
+for a dielectric (not PEC, Re ε ≥ 0, ``|ε| < 100``): where both IEM and PO hold, the IEM is
+taken. Why: PO's backscatter is the stationary-phase (specular-point) Kirchhoff field, and the
+facet that reflects back to the radar is normal to the incident direction, so both
+polarizations see the Fresnel coefficient at normal incidence, ``R_h(0) = −R_v(0)``, and
+``σ⁰hh = σ⁰vv`` exactly (Ulaby, Moore & Fung 1982 vol. II ch. 12, the stationary-phase Kirchhoff
+solution with ``R(0)``; the same for GO). Exact solutions and measurements of dielectric
+surfaces at kσ ≲ 2 give ``σ⁰hh < σ⁰vv`` by 1–2 dB at 30–50° (NMM3D, ``validation/auto/``; Oh et
+al. 1992's ``p = σhh/σvv ≤ 1``): the polarization dependence there is the complementary
+(non-specular, local-slope) part of the tangent-plane field, which the IEM adds to the same
+Kirchhoff term (Fung, Li & Chen 1992; Fung 1994; Ulaby, Moore & Fung vol. II ch. 12 on the
+Kirchhoff field's slope terms), with the IEM's PO limit checked within 0.03 dB
+(``tests/test_iem*.py``). GO stays before both (its regime kσ ≳ 2–3 is where ``hh → vv`` is the
+physics); for a conductor (``R_h = −R_v`` at every angle, no dielectric polarization contrast)
+and for bistatic geometries (PO's local Fresnel coefficients at the specular facet's own angle
+do tell the polarizations apart; BRDF tables and emissivity keep their cost) the order stays
+:data:`~emscatter.solvers.AUTO_ORDER`. The order is a switch in the geometry (backscatter or
+not) and in the medium class, never in the roughness: for either order the weights stay
+continuous in every roughness parameter.
 """
 
 from __future__ import annotations
@@ -53,7 +75,14 @@ from . import AUTO_ORDER
 from .measured import TOL_DB, interpolated_errors
 from .select import _report
 
-__all__ = ["BLEND_FACTOR", "MEASURED_WIDTH_DB", "blend_weights", "margins"]
+__all__ = [
+    "BACKSCATTER_DIELECTRIC_ORDER",
+    "BLEND_FACTOR",
+    "MEASURED_WIDTH_DB",
+    "auto_order",
+    "blend_weights",
+    "margins",
+]
 
 #: Half-width of a transition, as a factor on the parameter a criterion reads (kσ, kℓ, slope):
 #: within a factor :data:`BLEND_FACTOR` of a limit the methods on both sides are blended.
@@ -66,6 +95,26 @@ CATEGORY_CHECKS = frozenset({"smoothness"})
 #: ``w s((w − lo)/(hi − lo))`` (0 below ``lo``, untouched above ``hi``) and the rest is
 #: renormalized (the heaviest weight, ≥ 1/4, is never touched, so the sum stays ≥ 1/4).
 FADE_WEIGHTS = (0.01, 0.03)
+#: ``auto``'s order in backscatter of a dielectric: the IEM before PO (module docstring).
+BACKSCATTER_DIELECTRIC_ORDER: tuple[str, ...] = ("spm", "go", "iem", "po")
+
+
+def _dielectric(eps) -> bool:
+    """True for a dielectric medium (every element: Re ε ≥ 0 and ``|ε| < 100``), False for a
+    PEC, a conductor or an unknown medium (``eps`` None)."""
+    if eps is None or isinstance(eps, str):
+        return False
+    e = np.asarray(eps, dtype=complex)
+    return bool(e.size) and bool(np.all((e.real >= 0) & (np.abs(e) < 100.0)))
+
+
+def auto_order(eps=None, *, monostatic: bool = False) -> tuple[str, ...]:
+    """The methods ``auto`` tries, in order: :data:`BACKSCATTER_DIELECTRIC_ORDER` for the
+    backscatter (``monostatic``) of a dielectric ``eps``, else
+    :data:`~emscatter.solvers.AUTO_ORDER` (module docstring)."""
+    if monostatic and _dielectric(eps):
+        return BACKSCATTER_DIELECTRIC_ORDER
+    return AUTO_ORDER
 
 
 def _smooth(t):
@@ -74,12 +123,19 @@ def _smooth(t):
     return t * t * (3.0 - 2.0 * t)
 
 
-def margins(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> tuple[dict, dict]:
+def margins(
+    roughness, k: float, *, eps=None, methods=AUTO_ORDER, report=None, stop_below=None
+) -> tuple[dict, dict]:
     """``({method: cₘ}, {method: report})``: each method's margin ``max log(ratio)`` over its
-    roughness checks (≤ 0 valid; ∞ unsupported; module docstring) and its validity report."""
-    reports = {n: _report(n, roughness, k, eps, None) for n in methods}
-    out = {}
-    for n, rep in reports.items():
+    roughness checks (≤ 0 valid; ∞ unsupported; module docstring) and its validity report.
+    ``report(name)``: the roughness-level validity report of a method (default: its
+    ``check_validity``; the API passes its cached reports, so that the method it then runs
+    reuses the one computed here). ``stop_below``: the methods are checked in order and the
+    rest is not checked (left out of both dicts) after the first with a finite margin
+    ``cₘ ≤ stop_below``."""
+    out, reports = {}, {}
+    for n in methods:
+        rep = reports[n] = _report(n, roughness, k, eps, None) if report is None else report(n)
         ratios = [
             (d.get("ratio", math.inf) if name not in CATEGORY_CHECKS else
              (0.0 if d.get("ok") else math.inf))
@@ -92,6 +148,8 @@ def margins(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> tuple[dict,
         else:
             c = max((math.log(r) if r > 0 else -math.inf) for r in ratios)
         out[n] = math.inf if math.isnan(c) else c
+        if stop_below is not None and math.isfinite(out[n]) and out[n] <= stop_below:
+            break
     return out, reports
 
 
@@ -113,24 +171,32 @@ def _soft_argmin(values: np.ndarray, width: float, present: np.ndarray) -> np.nd
     return raw / total if total > 0 else raw
 
 
-def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
+def blend_weights(
+    roughness, k: float, *, eps=None, methods=None, monostatic: bool = False, report=None
+) -> dict:
     """The methods ``method="auto"`` blends for this roughness at wavenumber ``k`` [rad/m]
-    (permittivity ``eps``, optional) and their weights (module docstring).
+    (permittivity ``eps``, optional) and their weights (module docstring); ``methods`` in
+    order (default :func:`auto_order` of ``eps`` and ``monostatic``: True for backscatter);
+    ``report``: as in :func:`margins`.
 
     Returns ``{"weights": {name: w}, "pick": name, "soft_valid": {name: vₘ},
     "margins": {name: cₘ}, "measured": {...} or None}``: weights sum to 1, names in
     decreasing weight (small ones faded out: :data:`FADE_WEIGHTS`); ``pick`` is the heaviest, whose
-    validity the blend reports; ``measured`` the interpolated errors and availabilities used."""
-    methods = tuple(methods)
-    c, reports = margins(roughness, k, eps=eps, methods=methods)
-    cm = np.array([c[n] for n in methods])
+    validity the blend reports; ``measured`` the interpolated errors and availabilities used;
+    ``soft_valid`` and ``margins`` name the methods checked (those after the first one valid
+    a factor :data:`BLEND_FACTOR` inside its limits are not: their weight is 0)."""
+    methods = tuple(auto_order(eps, monostatic=monostatic) if methods is None else methods)
+    d = math.log(BLEND_FACTOR)
+    # after a method valid with v = 1 (c ≤ −δ) every later one has weight 0 whatever its
+    # criteria (stick-breaking; the measured step reads the maps, not the reports): unchecked
+    c, reports = margins(roughness, k, eps=eps, methods=methods, report=report, stop_below=-d)
+    cm = np.array([c.get(n, math.nan) for n in methods])
     supported = np.isfinite(cm).astype(float)
     if not supported.any():
         raise ValueError(
             "no solver supports this roughness: "
             + "; ".join(f"{n}: {r['reasons'][0]}" for n, r in reports.items())
         )
-    d = math.log(BLEND_FACTOR)
     v = np.where(supported > 0, _smooth(0.5 - np.where(supported > 0, cm, 0.0) / (2 * d)), 0.0)
     first, rest = _first_of(v)
     crit = first + rest * _soft_argmin(cm, d, supported)
@@ -159,7 +225,7 @@ def blend_weights(roughness, k: float, *, eps=None, methods=AUTO_ORDER) -> dict:
     return {
         "weights": weights,
         "pick": methods[order[0]],
-        "soft_valid": {n: float(x) for n, x in zip(methods, v, strict=True)},
+        "soft_valid": {n: float(x) for n, x in zip(methods, v, strict=True) if n in c},
         "margins": dict(c),
         "measured": meas,
     }

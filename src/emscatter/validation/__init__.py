@@ -26,7 +26,7 @@ def run_validation(
     *,
     full: bool = False,
     config: MapConfig | None = None,
-    progress: bool = True,
+    progress: bool | None = None,
     plots: bool = True,
 ) -> list[Path]:
     """Compute and write the validity maps (``emscatter validate``): the small PEC grid
@@ -37,7 +37,8 @@ def run_validation(
     ``validity_<tag>.csv/.json/.md`` and ``validity_<tag>_{h,v}.png``; with ``full=True``
     also ``measured_errors.json`` (the table ``auto`` reads, :mod:`emscatter.solvers.measured`;
     :func:`reselect_all` installs it) and ``validity_iem.png``; ``plots=False`` skips the
-    PNGs (tests); returns the paths."""
+    PNGs (tests); ``progress``: the tqdm bar over the MoM cells (``None``: on a terminal past
+    2 s, :mod:`emscatter.progress`); returns the paths."""
     from .emissivity_table import emissivity_table
     from .map_files import write_map
     from .measured_table import write_measured

@@ -332,13 +332,13 @@ def _same_config(stored, key: dict, cfg: MapConfig) -> bool:
     return stored == key
 
 
-def references(cfg: MapConfig, store: Path | None = None, *, progress: bool = True) -> dict:
+def references(cfg: MapConfig, store: Path | None = None, *, progress: bool | None = None) -> dict:
     """MoM references of every cell, ``{(i, j): reference}``; with ``store`` (a JSON path)
     cells already there (same configuration) are reused and each new cell is written as soon
-    as it is done (atomically), so a long run can be resumed."""
-    from tqdm.auto import tqdm
-
+    as it is done (atomically), so a long run can be resumed. ``progress``: a tqdm bar over
+    the cells (:mod:`emscatter.progress`: ``None`` auto, on a terminal past 2 s)."""
     from ..io import atomic_path
+    from ..progress import bar as progress_bar
 
     done: dict = {}
     key = _store_key(cfg)
@@ -370,7 +370,7 @@ def references(cfg: MapConfig, store: Path | None = None, *, progress: bool = Tr
         with atomic_path(Path(store)) as tmp:
             tmp.write_text(json.dumps({"config": key, "cells": cells}, indent=0))
 
-    with tqdm(total=len(jobs), desc=f"MoM cells {tag_of(cfg)}", disable=not progress) as bar:
+    with progress_bar(len(jobs), f"MoM cells {tag_of(cfg)}", progress, unit="cell") as bar:
         if cfg.workers == 1:
             for a in jobs:
                 done[a[3]] = _ref_job(a)
@@ -532,7 +532,7 @@ def _energy_balance(ref: dict, cfg: MapConfig) -> list:
     return [ref["reflected"][i] + t[i] for i in (0, 1)]
 
 
-def compute_map(cfg: MapConfig, *, store: Path | None = None, progress: bool = True) -> list:
+def compute_map(cfg: MapConfig, *, store: Path | None = None, progress: bool | None = None) -> list:
     """Rows of :func:`evaluate_cell` over the whole grid (MoM references from ``store``
     where present, computed otherwise, :func:`references`)."""
     refs = references(cfg, store, progress=progress)

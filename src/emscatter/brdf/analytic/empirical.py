@@ -14,6 +14,10 @@ horizon; vectorized over directions).
   ``max(cosθi, cosθo)``, reciprocal, with a constant that bounds the albedo by 1.
 * :func:`~.cylinders.poulin_fournier` — Poulin & Fournier 1990's parallel cylinders (seed
   §2.6.1), single scattering with exact 2-D shadowing and masking.
+* :func:`~.htsg.htsg` — He, Torrance, Sillion & Greenberg 1991 (seed §2.3.2), Kirchhoff wave
+  optics with shadowing and an effective roughness; emscatter's PO when both are off.
+* :func:`~.stam.stam` — Stam 1999's diffraction shader for a Gaussian surface (seed §2.3.3),
+  anisotropic ``(τ_x, τ_y)``; HTSG without shadowing and effective roughness.
 * :func:`evaluate` — any catalogue model (these and the ones of :mod:`.analytic`) by name;
   :func:`equivalent_beckmann` — the chapter-3 "general roughness" of each model (its Beckmann
   ``m``, by :mod:`.equivalence`'s criterion).
@@ -64,6 +68,8 @@ from emscatter.brdf.analytic.equivalence import (
     blinn_from_beckmann,
     phong_from_beckmann,
 )
+from emscatter.brdf.analytic.htsg import htsg, htsg_equivalent_beckmann
+from emscatter.brdf.analytic.stam import stam, stam_equivalent_beckmann
 from emscatter.conventions import check_in_range, check_positive
 
 __all__ = [
@@ -254,6 +260,8 @@ MODELS = {
     "strauss": strauss,
     "neumann": neumann,
     "poulin-fournier": poulin_fournier,
+    "htsg": htsg,
+    "stam": stam,
 }
 
 #: whether ``f(wi, wo) = f(wo, wi)`` holds for the model (tested both ways)
@@ -267,6 +275,8 @@ RECIPROCAL = {
     "strauss": False,  # F(θi), c_s(θi) and 1/cosθi: Strauss 1990 is a direct-lighting model
     "neumann": True,
     "poulin-fournier": True,
+    "htsg": True,
+    "stam": True,
 }
 
 
@@ -291,7 +301,15 @@ def equivalent_beckmann(model: str, **params) -> Equivalence:
     ``−C_x = −C_y = C_z``); ``ward``/``cook-torrance`` are Beckmann already; for
     ``ashikhmin-shirley`` use :func:`~.equivalence.ashikhmin_from_ward`; ``poulin-fournier``
     (``d``, ``h``) returns the anisotropic ``(m_x, m_y) = (rms slope across the cylinders, 0)``
-    of its profile (exact, ``error = 0``; :func:`~.cylinders.poulin_fournier_rms_slope`)."""
+    of its profile (exact, ``error = 0``; :func:`~.cylinders.poulin_fournier_rms_slope`);
+    ``htsg`` (``sigma0``, ``tau``, optional ``wavelength``) returns ``m = 2σ₀/τ`` or the fit
+    to its lobe at that wavelength (:func:`~.htsg.htsg_equivalent_beckmann`)."""
+    if model == "htsg":
+        return htsg_equivalent_beckmann(
+            params["sigma0"], params["tau"], wavelength=params.get("wavelength")
+        )
+    if model == "stam":
+        return stam_equivalent_beckmann(params["sigma"], params["tau_x"], params.get("tau_y"))
     if model == "poulin-fournier":
         mx = poulin_fournier_rms_slope(params.get("d", 2.5), params.get("h", -0.3))
         return Equivalence((mx, 0.0), 0.0, "rms slope of the cylinder profile (seed eq. 3.1)")
@@ -313,9 +331,9 @@ def equivalent_beckmann(model: str, **params) -> Equivalence:
     if model in ("blinn-phong", "neumann"):
         return beckmann_from_blinn(params["n"])
     raise ValueError(
-        f"equivalent_beckmann takes one of ['blinn-phong', 'lafortune', 'neumann', 'phong', "
-        f"'poulin-fournier', 'strauss'], got {model!r} (ward and cook-torrance are Beckmann; for "
-        "ashikhmin-shirley use equivalence.ashikhmin_from_ward)"
+        f"equivalent_beckmann takes one of ['blinn-phong', 'htsg', 'lafortune', 'neumann', "
+        f"'phong', 'poulin-fournier', 'stam', 'strauss'], got {model!r} (ward and "
+        "cook-torrance are Beckmann; for ashikhmin-shirley use equivalence.ashikhmin_from_ward)"
     )
 
 

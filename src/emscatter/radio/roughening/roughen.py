@@ -54,6 +54,7 @@ from ... import materials
 from ...spectra import GaussianCorrelation, Roughness
 from ..indoor import ROUGHNESS as _INDOOR_ROUGHNESS
 from ..tables import check_surface
+from ..texture import check_direction, check_textured_surface
 
 __all__ = [
     "DEFAULT_ROUGHNESS",
@@ -102,18 +103,20 @@ def as_roughness(value, what: str = "roughness") -> Roughness | None:
         return None
     if isinstance(value, Roughness):
         try:
-            return check_surface(value)
+            return check_surface(value) if value.is_isotropic else check_textured_surface(value)
         except ValueError as exc:
             raise ValueError(f"{what}: {exc}") from None
-    if isinstance(value, tuple | list) and len(value) == 2:
+    if isinstance(value, tuple | list) and len(value) in (2, 3):
         try:
-            sigma, length = (float(v) for v in value)
+            vals = [float(v) for v in value]
         except (TypeError, ValueError):
-            sigma = length = math.nan
-        if math.isfinite(sigma) and math.isfinite(length) and sigma > 0 and length > 0:
-            return GaussianCorrelation(sigma=sigma, length=length)
+            vals = [math.nan]
+        if all(math.isfinite(v) and v > 0 for v in vals):
+            ly = vals[2] if len(vals) == 3 else None
+            return GaussianCorrelation(sigma=vals[0], length=vals[1], length_y=ly)
     raise ValueError(
-        f"{what} must be (sigma, length) in metres (both finite and > 0, e.g. (0.4e-3, 4e-3)), "
+        f"{what} must be (sigma, length) or (sigma, length_x, length_y) in metres (finite and "
+        "> 0, e.g. (0.4e-3, 4e-3); ℓx ≠ ℓy needs roughen(texture_direction=...)), "
         f"an emscatter Roughness (e.g. GaussianCorrelation(sigma=..., length=...)), or None / "
         f"'flat'; got {value!r}"
     )
@@ -147,6 +150,7 @@ class Assignment:
             "correlation": "flat" if s is None else s.name,
             "sigma_m": 0.0 if s is None else float(s.sigma),
             "length_m": 0.0 if s is None else float(s.length),
+            "length_y_m": 0.0 if s is None else float(s.length_y),
             "roughness_from": self.source,
             "material": self.material,
         }
@@ -371,6 +375,7 @@ def roughen(
     table_options=None,
     flat: bool = False,
     prefix: str = "rough-",
+    texture_direction=None,
 ) -> Roughened:
     """Every object of the Sionna ``scene`` gets its emscatter equivalent (module docstring);
     returns the :class:`Roughened` handle (``flatten()`` undoes it).
@@ -382,8 +387,28 @@ def roughen(
     object flat (emscatter's flat equivalents, equal to Sionna's own ITU slab);
     ``method``, ``out_of_range``, ``table_options``: as for
     :class:`~emscatter.radio.material.EmscatterRadioMaterial`. Tables are built lazily, at the
-    first trace, only for used materials."""
+    first trace, only for used materials. ``texture_direction``: world direction of the ``ℓx``
+    axis of every anisotropic roughness (``(σ, ℓx, ℓy)``; :mod:`emscatter.radio.texture`), or
+    a dict material name or ITU type → direction (per medium, keyed as ``mapping``), required
+    where one is given."""
     from ..material import EmscatterRadioMaterial
+
+    if isinstance(texture_direction, dict):
+        directions = {
+            str(k): check_direction(v, f"texture_direction[{k!r}]")
+            for k, v in texture_direction.items()
+        }
+    else:
+        common_dir = None if texture_direction is None else check_direction(texture_direction)
+        directions = {}
+
+    def direction_of(a):
+        if not directions:
+            return common_dir
+        for key in (a.original, a.itu_type, a.medium_key):
+            if key in directions:
+                return directions[key]
+        return None
 
     assignments = plan(scene, roughness, mapping, frequencies=frequencies, extrapolate=extrapolate)
     if flat:
@@ -391,6 +416,17 @@ def roughen(
             Assignment(**{**a.__dict__, "surface": None, "source": "flat=True"})
             for a in assignments
         ]
+    textured = [
+        a.object
+        for a in assignments
+        if a.surface is not None and not a.surface.is_isotropic and direction_of(a) is None
+    ]
+    if textured:
+        raise ValueError(
+            f"roughen: anisotropic roughness (ℓx ≠ ℓy) on {textured[:4]} needs "
+            "texture_direction=(dx, dy, dz), the world direction of the ℓx axis (e.g. (0, 0, 1): "
+            "vertical grooves)"
+        )
     if not isinstance(prefix, str) or not prefix:
         raise ValueError(f"prefix must be a non-empty string, got {prefix!r}")
     old = _HANDLES.get(scene)
@@ -408,6 +444,9 @@ def roughen(
                 method=method,
                 out_of_range=out_of_range,
                 table_options=table_options,
+                texture_direction=None
+                if a.surface is None or a.surface.is_isotropic
+                else direction_of(a),
             )
     originals = {}
     for a in assignments:

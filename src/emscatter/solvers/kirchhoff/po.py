@@ -489,7 +489,7 @@ def bistatic(
     ----------
     roughness : Gaussian, exponential or power-law :class:`~emscatter.spectra.Roughness`, or a
         measured map's (:class:`~emscatter.surfaces.measured.MeasuredRoughness`: its n-fold
-        spectra tabulated by :mod:`emscatter.surfaces.nfold`), ``dimension`` 2 (all four
+        spectra tabulated by :mod:`emscatter.surfaces.measured.nfold`), ``dimension`` 2 (all four
         polarizations) or 1 (hh, vv; ``φ ∈ {0, π}``).
     eps : relative permittivity (``Im ε ≥ 0``, broadcasts with the angles) or "pec".
     k : free-space wavenumber [rad/m].

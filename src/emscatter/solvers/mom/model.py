@@ -191,7 +191,7 @@ def bistatic(
     tol: float = 1e-6,
     max_iter: int = 60,
     executor=None,
-    progress: bool = True,
+    progress: bool | None = None,
     chunk: int | None = None,
 ) -> Scattering:
     """Monte Carlo method-of-moments σ⁰ per unit length of a 1-D rough profile.

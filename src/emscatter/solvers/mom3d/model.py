@@ -32,6 +32,7 @@ import numpy as np
 
 from emscatter.conventions import check_angle, check_finite, check_positive, fmt
 from emscatter.fresnel import check_eps, is_pec
+from emscatter.progress import task
 from emscatter.scattering import Scattering
 from emscatter.solvers.mom3d.dielectric_model import solve_dielectric_realization
 from emscatter.solvers.mom3d.farfield import amplitudes, hemisphere
@@ -260,7 +261,7 @@ def bistatic(
     tol: float = 1e-5,
     max_iter: int = 300,
     max_matrix_bytes: int = MAX_MATRIX_BYTES,
-    progress: bool = False,
+    progress: bool | None = None,
     accel: str = "auto",
     near_radius: float | None = None,
     taylor_order: int = TAYLOR_ORDER,
@@ -283,6 +284,8 @@ def bistatic(
     tol, max_iter : GMRES relative residual and iteration cap (an unconverged solve raises).
     max_matrix_bytes : refuse patches whose dense (or SMCG sparse) matrix exceeds this
         (default 2 GiB).
+    progress : a tqdm bar over the realizations on stderr (seconds and energy of the last one
+        beside it): ``None`` (auto) on a terminal past 2 s, ``True`` always, ``False`` never.
     accel, near_radius, taylor_order : ``"dense"``, ``"smcg"`` (PEC only: strong pairs within
         ``near_radius`` wavelengths sparse, the rest by FFT, :mod:`.smcg`) or ``"auto"``
         (SMCG above :data:`SMCG_MIN_NODES` nodes); see :func:`solve_realization`.
@@ -309,27 +312,27 @@ def bistatic(
     seeds = np.random.SeedSequence(seed).spawn(realizations)
     amps, hemis, energy, iters, secs, refl = [], [], [], [], [], []
     out = None
-    for i, ss in enumerate(seeds):  # one dense solve per realization
-        surf = generate_surface(roughness, (n_side, n_side), spacing, rng=np.random.default_rng(ss))
-        args = (ti, ts_b.ravel(), ps_b.ravel(), pi_)
-        opts = {"taper_g": taper_g, "tol": tol, "max_iter": max_iter}
-        if is_pec(eps):
-            fast = {"accel": mode, "near_radius": near_radius, "taylor_order": taylor_order}
-            out = solve_realization(surf.heights, spacing, k, *args, **opts, **fast)
-        else:
-            out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args, **opts)
-            out["energy"] = out["reflectivity"] + out["transmissivity"]
-            out["matrix_bytes"] = out["unknowns"] ** 2 * 16
-            refl.append(out["reflectivity"])
-        amps.append(out["amplitude"])
-        hemis.append(out["hemisphere"])
-        energy.append(out["energy"])
-        iters.append(out["iterations"])
-        secs.append(out["seconds"]["total"])
-        if progress:
-            print(
-                f"mom3d realization {i + 1}/{realizations}: {secs[-1]:.1f} s, energy {energy[-1]}"
-            )
+    with task("mom3d realizations", realizations, progress, unit="realization") as bar:
+        for ss in seeds:  # one solve per realization
+            rng = np.random.default_rng(ss)
+            surf = generate_surface(roughness, (n_side, n_side), spacing, rng=rng)
+            args = (ti, ts_b.ravel(), ps_b.ravel(), pi_)
+            opts = {"taper_g": taper_g, "tol": tol, "max_iter": max_iter}
+            if is_pec(eps):
+                fast = {"accel": mode, "near_radius": near_radius, "taylor_order": taylor_order}
+                out = solve_realization(surf.heights, spacing, k, *args, **opts, **fast)
+            else:
+                out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args, **opts)
+                out["energy"] = out["reflectivity"] + out["transmissivity"]
+                out["matrix_bytes"] = out["unknowns"] ** 2 * 16
+                refl.append(out["reflectivity"])
+            amps.append(out["amplitude"])
+            hemis.append(out["hemisphere"])
+            energy.append(out["energy"])
+            iters.append(out["iterations"])
+            secs.append(out["seconds"]["total"])
+            bar.set_postfix_str(f"{secs[-1]:.1f} s, energy {np.round(energy[-1], 4)}")
+            bar.update(1)
     n = realizations
     a = np.stack(amps)  # (n, 2, 2, D)
     scale = k * k / (16.0 * math.pi**2) / out["power"]

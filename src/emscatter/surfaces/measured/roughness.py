@@ -40,14 +40,33 @@ import scipy.fft as sfft
 
 from emscatter.spectra import Roughness
 from emscatter.surfaces.heightmap import HeightMap, HeightMapError
-from emscatter.surfaces.nfold import nfold_table
+from emscatter.surfaces.measured.nfold import nfold_table
 
-__all__ = ["MeasuredRoughness", "measured_roughness", "BandWarning", "TAILS"]
+__all__ = [
+    "MeasuredRoughness",
+    "measured_roughness",
+    "BandWarning",
+    "TAILS",
+    "MIN_PATCH",
+    "MIN_SEGMENTS",
+    "MIN_MAP_SAMPLES",
+]
 
 #: The choices for the spectrum beyond the band the map resolves.
 TAILS = ("none", "power-law")
 
-_MIN_PATCH = 8
+#: The fewest samples per axis of a Welch patch. The Hann window's main lobe is ±2 bins, so
+#: the band ``[2π/L, π/Δ]`` (bins 1…N/2) keeps bins 2…N/2 free of the leakage from K = 0:
+#: 7 bins for N = 16 (a factor 4 in |K|), 3 for N = 8. The power-law tail is fitted on the
+#: bins in ``[π/(4Δ), 0.9 π/Δ]`` (N/8…0.45 N) and needs at least 4: 6 for N = 16, 3 for
+#: N = 8; and ρ, the inverse transform of the same PSD, reaches lags up to N/2 samples.
+MIN_PATCH = 16
+#: The fewest Welch segments per axis: 2 segments overlapping by half are 3 patches per axis
+#: (9 on a map), the relative standard deviation of each bin ≈ √(1.06/K) (Welch 1967, Hann
+#: at 50 % overlap): 0.34 on a map, 0.6 on a profile; one patch is a bare periodogram (100 %).
+MIN_SEGMENTS = 2
+#: The smallest map (samples along every axis) a measured roughness is estimated from.
+MIN_MAP_SAMPLES = MIN_SEGMENTS * MIN_PATCH
 
 
 class BandWarning(UserWarning):
@@ -125,7 +144,7 @@ def _welch(hm: HeightMap, segments: int, smooth: int = 0):
     step per axis [rad/m] and the patch shape."""
     h, m = hm.heights, hm.mask.astype(float)
     shape = h.shape
-    patch = tuple(max(_MIN_PATCH, n // segments) for n in shape)
+    patch = tuple(max(MIN_PATCH, n // segments) for n in shape)
     step = tuple(max(1, p // 2) for p in patch)
     win = np.hanning(patch[0] + 2)[1:-1]
     if h.ndim == 2:
@@ -386,7 +405,8 @@ class MeasuredRoughness(Roughness):
 
     def log_nfold_table(self):
         """``f(n, s) = log(w_n/L)`` for the PO and IEM series (``po.log_nfold``'s scaled ``s``):
-        FFT of the measured ``ρⁿ`` averaged over ellipses (:mod:`emscatter.surfaces.nfold`)."""
+        FFT of the measured ``ρⁿ`` averaged over ellipses
+        (:mod:`emscatter.surfaces.measured.nfold`)."""
         return self._nfold[0]
 
     nfold_info = property(lambda self: dict(self._nfold[1]), doc="how the table was built")
@@ -471,11 +491,13 @@ class MeasuredRoughness(Roughness):
         raise TypeError("a measured profile has no 2-D spectrum; measure a map instead")
 
     def describe(self) -> str:
+        holes = (self.info or {}).get("holes") or {}
+        masked = f", {holes['count']} NaN holes masked" if holes.get("count") else ""
         return (
             f"measured ({self.source}): σ={self.sigma:.4g} m, ℓ={self.length:.4g} m, "
             f"ℓy={self.length_y:.4g} m, rms slopes {math.sqrt(self.slopes_ms[0]):.4g}/"
             f"{math.sqrt(self.slopes_ms[1]):.4g}, band [{self.band_lo:.4g}, {self.band_hi:.4g}]"
-            f" rad/m, tail {self.tail}"
+            f" rad/m, tail {self.tail}{masked}"
         )
 
 
@@ -505,8 +527,12 @@ def measured_roughness(
     ----------
     hm : a :class:`~emscatter.surfaces.heightmap.HeightMap` (:func:`read_height_map`,
         :func:`height_map`).
-    segments : Welch patches per axis (patch side ``n // segments``, at least 8 samples;
-        overlap ½): more segments, less variance, coarser resolution ``2π/L_patch``.
+    segments : Welch patches per axis (patch side ``n // segments``, overlap ½): more
+        segments, less variance, coarser resolution ``2π/L_patch``. Lowered (recorded in
+        ``info["segments"]``, the request in ``info["segments_requested"]``) where a patch
+        would be shorter than :data:`MIN_PATCH` samples; a map shorter than
+        :data:`MIN_MAP_SAMPLES` along an axis (2 segments of 16) is a :class:`HeightMapError`
+        naming its source and shape.
     tail : ``"none"`` or ``"power-law"`` (module docstring): the spectrum beyond ``π/Δ``.
     isotropic : True averages the spectrum over rings (for a map known to be isotropic).
     smooth : half-width in bins of a moving average of the Welch estimate (0: none; 1: 3×3
@@ -522,8 +548,17 @@ def measured_roughness(
         raise ValueError(f"segments must be a positive integer, got {segments!r}")
     if tail not in TAILS:
         raise ValueError(f"tail must be one of {TAILS}, got {tail!r}")
-    if min(hm.shape) // segments < _MIN_PATCH and segments > 1:
-        segments = max(1, min(hm.shape) // _MIN_PATCH)
+    if min(hm.shape) < MIN_MAP_SAMPLES:
+        where = "array" if hm.source == "array" else f"file {hm.source!r}"
+        raise HeightMapError(
+            f"the map from the {where} is too small for a spectrum estimate: shape "
+            f"{hm.shape}; Welch's estimate needs at least {MIN_SEGMENTS} segments of "
+            f"{MIN_PATCH} samples per axis (overlapping by half), i.e. at least "
+            f"{MIN_MAP_SAMPLES} samples along every axis"
+        )
+    requested = segments
+    if min(hm.shape) // segments < MIN_PATCH:
+        segments = max(1, min(hm.shape) // MIN_PATCH)
     if isinstance(smooth, bool) or not isinstance(smooth, int) or not 0 <= smooth <= 8:
         raise ValueError(f"smooth must be an integer 0…8 (bins), got {smooth!r}")
     psd, k0, dk, patch = _welch(hm, segments, smooth)
@@ -535,7 +570,8 @@ def measured_roughness(
     mss = (float(np.mean(zx * zx)), float(np.mean(zy * zy)) if zy is not None else 0.0)
     band_lo = 2 * math.pi / max(p * d for p, d in zip(patch, hm.spacing, strict=True))
     band_hi = math.pi / max(hm.spacing)
-    info = {"spacing": hm.spacing, "patch": patch, "segments": segments, "window": "hann",
+    info = {"spacing": hm.spacing, "patch": patch, "segments": segments,
+            "segments_requested": requested, "window": "hann",
             "overlap": 0.5, "smooth": smooth, "slope_bins": bins,
             "slopes_outside_histogram": float(lost),
             "map_band": hm.band, "detrend": hm.detrend, "holes": hm.holes,
