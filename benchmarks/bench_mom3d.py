@@ -17,9 +17,12 @@ rerun on an idle machine for final numbers), 8 points/λ, SMCG defaults r_d = 2.
       8  dense      8192         512           690        2.59     1.22     4.31         7/7
       8   smcg      8192         178           363        3.28     3.39     7.37         7/7
      16   smcg     32768         826          1264        9.37    20.06    41.48         8/8
+     32   smcg    131072        3540          4887       28.62    45.03   178.36         9/8
 
-(energy 0.9925/0.9945 at 8λ by both products, 0.9940/0.9953 at 16λ). 16λ dense would need
-an 8 GiB matrix. Commands: ``--sizes 8 16 --accel smcg`` and ``--sizes 8 --accel dense``.
+(energy 0.9925/0.9945 at 8λ by both products, 0.9940/0.9953 at 16λ, 0.9955/0.9957 at 32λ).
+At 32λ the far field on the hemisphere quadrature (``O(N · n_mu²)``, not accelerated) is
+105 of the 178 s. 16λ dense would need an 8 GiB matrix. Commands: ``--sizes 8 16 --accel
+smcg``, ``--sizes 32 --accel smcg`` and ``--sizes 8 --accel dense``.
 """
 
 from __future__ import annotations
