@@ -132,7 +132,7 @@ def test_bad_inputs_name_the_parameter():
         mom3d.bistatic(rough, "pec", K, 0.3, 0.3, realizations=1)
     with pytest.raises(ValueError, match="points_per_wavelength must be ≥ 6"):
         mom3d.bistatic(rough, "pec", K, 0.3, 0.3, points_per_wavelength=4)
-    with pytest.raises(ValueError, match="length=20 m .* max_matrix_bytes"):
-        mom3d.bistatic(rough, "pec", K, 0.3, 0.3, length=20.0)
+    with pytest.raises(ValueError, match="length=20 m .* dense matrix, over max_matrix_bytes"):
+        mom3d.bistatic(rough, "pec", K, 0.3, 0.3, length=20.0, accel="dense")
     with pytest.raises(ValueError, match="theta_i"):
         mom3d.bistatic(rough, "pec", K, 1.5, 0.3)

@@ -1,13 +1,15 @@
 """The exact 3-D reference (issue 19): method of moments for a perfectly conducting or
 dielectric 2-D rough surface ``z = f(x, y)`` — MFIE (PEC) or Müller's equations (dielectric),
 pulse bases, point matching, a tapered incident wave
-(Tsang, Kong, Ding & Ao 2001 vol. II ch. 10), dense GMRES, Monte Carlo over realizations.
+(Tsang, Kong, Ding & Ao 2001 vol. II ch. 10), GMRES on the dense matrix or (PEC, large
+patches) the sparse-matrix/canonical-grid product, Monte Carlo over realizations.
 
 =========================  ===============================================================
 module                     what it holds
 =========================  ===============================================================
 :mod:`.model`              ``bistatic`` (Monte Carlo σ⁰, coherent part), ``solve_realization``
 :mod:`.operator`           the MFIE matrix (pulse basis, point matching, J/2 self term), GMRES
+:mod:`.smcg`               the SMCG product of the MFIE: near pairs sparse, far pairs by FFT
 :mod:`.dielectric`         Müller's equations (J and M, both media's Green functions), self cells
 :mod:`.dielectric_model`   one dielectric realization: reflected/transmitted power, Fresnel beam
 :mod:`.incident`           the tapered wave as a Gaussian plane-wave spectrum, its exact power

@@ -16,8 +16,11 @@ realizations of the far-field amplitude ``A = p̂_s·F`` (:mod:`.farfield`):
   (reflected plus transmitted power, 1 when lossless; NaN for a lossy medium, whose
   reflectivity per realization is ``info["reflectivity"]``).
 
-Not registered in :mod:`emscatter.solvers` yet (a dense solve: minutes per realization for
-dielectric patches of a few wavelengths); call it as ``emscatter.solvers.mom3d.bistatic``.
+A perfect conductor is solved on the dense matrix up to :data:`SMCG_MIN_NODES` nodes (8λ × 8λ
+at 8 points/λ) and by the sparse-matrix/canonical-grid product of :mod:`.smcg` above
+(``accel=`` chooses); dielectrics always densely. Not registered in :mod:`emscatter.solvers`
+yet (a dense dielectric solve takes minutes per realization for patches of a few
+wavelengths); call it as ``emscatter.solvers.mom3d.bistatic``.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from emscatter.solvers.mom3d.dielectric_model import solve_dielectric_realizatio
 from emscatter.solvers.mom3d.farfield import amplitudes, hemisphere
 from emscatter.solvers.mom3d.incident import tapered_beam
 from emscatter.solvers.mom3d.operator import assemble, make_patch, rhs, solve
+from emscatter.solvers.mom3d.smcg import smcg_operator
 
 __all__ = ["bistatic", "matrix_bytes", "solve_realization"]
 
@@ -42,11 +46,57 @@ __all__ = ["bistatic", "matrix_bytes", "solve_realization"]
 MAX_MATRIX_BYTES = 2 * 2**30
 #: Below this many points per wavelength the pulse-basis MFIE is not trusted.
 MIN_PPW = 6.0
+#: ``accel="auto"`` takes the SMCG product (:mod:`.smcg`) above this many nodes, dense below.
+SMCG_MIN_NODES = 4096
+#: Default strong-pair radius of SMCG [wavelengths] (Tsang et al.'s r_d) and Taylor order.
+NEAR_RADIUS = 2.5
+TAYLOR_ORDER = 3
+#: The Taylor series in ``Z²/ρ²`` converges for ``|Z| < ρ``: SMCG needs the patch's
+#: peak-to-valley height below this fraction of ``r_d`` (``(Z/ρ)² < 0.64`` on every weak pair).
+MAX_PTP_OVER_RD = 0.8
+ACCELS = ("auto", "dense", "smcg")
 
 
 def matrix_bytes(n_nodes: int, dtype=np.complex128) -> int:
     """Bytes of the dense ``(2N, 2N)`` MFIE matrix for ``n_nodes`` nodes."""
     return (2 * n_nodes) ** 2 * np.dtype(dtype).itemsize
+
+
+def smcg_bytes(n_nodes: int, near_radius_cells: float) -> int:
+    """Estimated bytes of the SMCG strong matrix (complex64 + int32 per nonzero, four
+    ``π r_d²`` blocks per node) for ``n_nodes`` nodes and ``r_d`` in grid cells."""
+    return int(4 * n_nodes * math.pi * near_radius_cells**2 * 12)
+
+
+def _accel_for(accel, n_nodes: int, pec: bool) -> str:
+    if accel not in ACCELS:
+        raise ValueError(f"accel must be one of {ACCELS}, got {accel!r}")
+    if accel == "smcg" and not pec:
+        raise ValueError(
+            "accel='smcg' is for perfect conductors (eps='pec') only; a dielectric patch is "
+            "solved densely (accel='dense' or 'auto')"
+        )
+    if accel == "auto":
+        return "smcg" if pec and n_nodes > SMCG_MIN_NODES else "dense"
+    return accel
+
+
+def _near_radius(near_radius, heights: np.ndarray, k: float) -> float:
+    """``r_d`` [m] from ``near_radius`` [λ] (default :data:`NEAR_RADIUS`, enlarged to
+    keep the Taylor series convergent); an explicit radius too small for it is refused."""
+    lam = 2 * math.pi / k
+    ptp = float(np.ptp(heights))
+    if near_radius is None:
+        return max(NEAR_RADIUS * lam, ptp / MAX_PTP_OVER_RD)
+    rd = check_positive("near_radius", near_radius, unit="wavelengths") * lam
+    if ptp >= MAX_PTP_OVER_RD * rd:
+        raise ValueError(
+            f"near_radius={fmt(near_radius)} λ is too small for this surface: its "
+            f"peak-to-valley height {ptp / lam:.3g} λ must be < {MAX_PTP_OVER_RD:g}·r_d for the "
+            f"SMCG Taylor series to converge; use near_radius ≥ "
+            f"{ptp / MAX_PTP_OVER_RD / lam:.3g} or accel='dense'"
+        )
+    return rd
 
 
 def _dtype_for(n_nodes: int):
@@ -70,6 +120,9 @@ def solve_realization(
     tol: float = 1e-5,
     max_iter: int = 300,
     dtype=None,
+    accel: str = "auto",
+    near_radius: float | None = None,
+    taylor_order: int = TAYLOR_ORDER,
 ) -> dict:
     """Solve the MFIE on one ``(ny, nx)`` height map [m] with square ``spacing`` [m].
 
@@ -80,6 +133,13 @@ def solve_realization(
     the density ``u = sJ`` on ``points`` ``(N, 3)``, ``energy`` ``(P,)`` the
     scattered-to-incident power ratio,
     ``iterations``, ``residual``, ``seconds`` and the sizes.
+
+    ``accel``: ``"dense"`` (the full matrix, :func:`.operator.assemble`), ``"smcg"`` (the
+    sparse-matrix/canonical-grid product of :mod:`.smcg`: pairs closer than ``near_radius``
+    [wavelengths, default 2.5, enlarged to 1.25 × the peak-to-valley height] exact and sparse,
+    the rest by a Taylor series of order ``taylor_order`` in ``Z²`` and FFTs) or ``"auto"``
+    (SMCG above :data:`SMCG_MIN_NODES` nodes). ``matrix_bytes`` is then the sparse matrix
+    plus kernel spectra; ``nonzeros`` its entries.
     """
     t0 = time.perf_counter()
     h = np.asarray(heights, dtype=float)
@@ -89,8 +149,19 @@ def solve_realization(
     g = taper_g if taper_g is not None else min(nx, ny) * spacing / 4.0
     beam = tapered_beam(k, theta_i, phi_i, g, math.hypot(half_x, half_y))
     points = patch.points
+    mode = _accel_for(accel, patch.n, True)
     dt = dtype if dtype is not None else _dtype_for(patch.n)
-    mat = assemble(patch, k, dtype=dt)
+    extra = {"accel": mode}
+    if mode == "smcg":
+        rd = _near_radius(near_radius, h, k)
+        sdt = np.complex64 if dtype is None else dtype
+        mat = smcg_operator(patch, k, near_radius=rd, taylor_order=taylor_order, dtype=sdt)
+        nbytes = mat.nbytes
+        extra.update(near_radius=rd * k / (2 * math.pi), taylor_order=taylor_order)
+        extra["nonzeros"] = mat.strong.nnz
+    else:
+        mat = assemble(patch, k, dtype=dt)
+        nbytes = matrix_bytes(patch.n, dt)
     t_assemble = time.perf_counter() - t0
     b = [rhs(patch, beam.fields(points, p)[1]) for p in polarizations]
     sol = solve(mat, patch, b, tol=tol, max_iter=max_iter)
@@ -122,11 +193,13 @@ def solve_realization(
         "unknowns": 2 * patch.n,
         "taper_g": g,
         "n_mu": n_mu,
-        "matrix_bytes": matrix_bytes(patch.n, dt),
+        "matrix_bytes": nbytes,
+        **extra,
     }
 
 
-def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes):
+def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes, accel="dense",
+           near_radius=None):  # fmt: skip
     eps = check_eps(eps)
     if not is_pec(eps):
         if np.ndim(eps) != 0:
@@ -154,16 +227,21 @@ def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes):
     lam0 = 2 * math.pi / k
     length = 8.0 * lam0 if length is None else check_positive("length", length, unit="m")
     n_side = int(math.ceil(length / lam * ppw))
+    mode = _accel_for(accel, n_side * n_side, is_pec(eps))
     need = matrix_bytes(n_side * n_side, _dtype_for(n_side * n_side))
+    what = "dense matrix"
+    if mode == "smcg":
+        rd_cells = (near_radius or NEAR_RADIUS) * ppw
+        need, what = smcg_bytes(n_side * n_side, rd_cells), "SMCG sparse matrix"
     if not is_pec(eps):
         need = (4 * n_side * n_side) ** 2 * 16
     if need > max_bytes:
         raise ValueError(
             f"length={fmt(length)} m at points_per_wavelength={fmt(ppw)} needs "
-            f"{n_side}² nodes and a {need / 2**30:.3g} GiB dense matrix, over "
+            f"{n_side}² nodes and a {need / 2**30:.3g} GiB {what}, over "
             f"max_matrix_bytes={max_bytes / 2**30:.3g} GiB: use a smaller patch or raise it"
         )
-    return eps, k, ti, length, n_side, lam
+    return eps, k, ti, length, n_side, lam, mode
 
 
 def bistatic(
@@ -184,6 +262,9 @@ def bistatic(
     max_iter: int = 300,
     max_matrix_bytes: int = MAX_MATRIX_BYTES,
     progress: bool | None = None,
+    accel: str = "auto",
+    near_radius: float | None = None,
+    taylor_order: int = TAYLOR_ORDER,
 ) -> Scattering:
     """Monte Carlo MoM σ⁰ per unit area of a perfectly conducting 2-D rough surface.
 
@@ -201,9 +282,13 @@ def bistatic(
         dielectric per wavelength inside it, ``λ / Re √ε`` (the denser grid it needs).
     taper_g : taper radius [m] (default ``length/4``).
     tol, max_iter : GMRES relative residual and iteration cap (an unconverged solve raises).
-    max_matrix_bytes : refuse patches whose dense matrix exceeds this (default 2 GiB).
+    max_matrix_bytes : refuse patches whose dense (or SMCG sparse) matrix exceeds this
+        (default 2 GiB).
     progress : a tqdm bar over the realizations on stderr (seconds and energy of the last one
         beside it): ``None`` (auto) on a terminal past 2 s, ``True`` always, ``False`` never.
+    accel, near_radius, taylor_order : ``"dense"``, ``"smcg"`` (PEC only: strong pairs within
+        ``near_radius`` wavelengths sparse, the rest by FFT, :mod:`.smcg`) or ``"auto"``
+        (SMCG above :data:`SMCG_MIN_NODES` nodes); see :func:`solve_realization`.
 
     Returns
     -------
@@ -214,9 +299,10 @@ def bistatic(
     """
     from emscatter.surfaces.generate import generate_surface
 
-    eps, k, ti, length, n_side, lam = _check(
-        roughness, eps, k, theta_i, length, points_per_wavelength, realizations, max_matrix_bytes
-    )
+    eps, k, ti, length, n_side, lam, mode = _check(
+        roughness, eps, k, theta_i, length, points_per_wavelength, realizations,
+        max_matrix_bytes, accel, near_radius,
+    )  # fmt: skip
     pi_ = float(check_finite("phi_i", phi_i))
     ts = check_angle("theta_s", theta_s)
     ps = check_finite("phi_s", phi_s)
@@ -227,13 +313,14 @@ def bistatic(
     amps, hemis, energy, iters, secs, refl = [], [], [], [], [], []
     out = None
     with task("mom3d realizations", realizations, progress, unit="realization") as bar:
-        for ss in seeds:  # one dense solve per realization
+        for ss in seeds:  # one solve per realization
             rng = np.random.default_rng(ss)
             surf = generate_surface(roughness, (n_side, n_side), spacing, rng=rng)
             args = (ti, ts_b.ravel(), ps_b.ravel(), pi_)
             opts = {"taper_g": taper_g, "tol": tol, "max_iter": max_iter}
             if is_pec(eps):
-                out = solve_realization(surf.heights, spacing, k, *args, **opts)
+                fast = {"accel": mode, "near_radius": near_radius, "taylor_order": taylor_order}
+                out = solve_realization(surf.heights, spacing, k, *args, **opts, **fast)
             else:
                 out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args, **opts)
                 out["energy"] = out["reflectivity"] + out["transmissivity"]
@@ -287,5 +374,6 @@ def bistatic(
             "points_per_wavelength": points_per_wavelength,
             "taper_g": out["taper_g"],
             "realizations": n,
+            "accel": mode,
         },
     )
