@@ -174,18 +174,9 @@ def _bistatic_one(
     entry = _solver_entry(module)
     if monostatic and _takes(entry, "monostatic"):
         extra["monostatic"] = True
-    # auto's IEM in backscatter: its multiple-scattering hv (×3–6 the co-pol cost) is the
-    # per-angle-remembered term of auto_crosspol (equal to the solver's to 1e-13,
-    # tests/test_auto_crosspol.py), so a repeated scene pays it once
-    iem_hv = (
-        picked
-        and name == "iem"
-        and monostatic
-        and rough.dimension == 2
-        and not {"crosspol", "crosspol_order", "rms_slope"} & opts.keys()
-        and _takes(entry, "crosspol")
-    )
-    if iem_hv:
+    iem_hv = picked and monostatic and auto_crosspol.takes_iem_term(name, rough, opts)
+    iem_hv = iem_hv and _takes(entry, "crosspol")
+    if iem_hv:  # the IEM's hv from auto_crosspol's per-angle memory instead
         extra["crosspol"] = False
     result = entry(rough, eps, k, ti, ts, ps, pi_, **extra, **opts)
     shape = result.sigma0.shape[2:]

@@ -57,7 +57,7 @@ import numpy as np
 
 from ..fresnel import is_pec
 
-__all__ = ["backscatter_mask", "supplement", "clear_cache"]
+__all__ = ["backscatter_mask", "supplement", "takes_iem_term", "clear_cache", "IEM_BACKSCATTER"]
 
 _BACK_TOL = 1e-9
 #: The ``name`` under which :func:`supplement` gives the IEM's own backscatter hv (for ``auto``'s
@@ -138,6 +138,19 @@ def _iem_term(rough, eps, k, ti, pi_):
     from .iem.model import nominal_rms_slope
 
     return crosspol.backscatter(rough, eps, k, ti, pi_, slope=nominal_rms_slope(rough), order=8)
+
+
+def takes_iem_term(name: str, rough, options: dict) -> bool:
+    """Whether ``auto``'s ``name`` branch in backscatter runs the IEM with ``crosspol=False``
+    and takes its multiple-scattering hv from here (:data:`IEM_BACKSCATTER`): the IEM on a 2-D
+    surface with the cross-pol options at their defaults (the term here is the solver's own
+    at ``crosspol_order=8`` and the nominal rms slope, to 1e-13: tests/test_auto_crosspol.py),
+    so a repeated scene pays the ×3–6-the-co-pol term once."""
+    return (
+        name == "iem"
+        and rough.dimension == 2
+        and not {"crosspol", "crosspol_order", "rms_slope"} & options.keys()
+    )
 
 
 def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
