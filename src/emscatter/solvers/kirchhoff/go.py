@@ -98,12 +98,12 @@ VALIDITY = {
     "illuminated_min_unshadowed": 0.9,
 }
 
-#: Options of :func:`bistatic` (what ``check_validity`` accepts).
 #: GO's σ⁰ is the whole Kirchhoff intensity (stationary phase), coherent part included: a
 #: hemispherical integral (emissivity, BRDF albedo) must not add ``coherent`` to it (issue 21:
 #: adding it gave 1 − e = 1.17 at 85°). :func:`emscatter.api.emissivity` reads this flag.
 COHERENT_IN_SIGMA0 = True
 
+#: Options of :func:`bistatic` (what ``check_validity`` accepts).
 OPTIONS = ("shadowing", "k_max", "slope_variance", "threads", "coherent")
 
 _SRC_Q = "Ulaby, Moore & Fung 1982 vol. II §12-4, Table 12.2 (stationary phase)"
