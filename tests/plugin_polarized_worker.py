@@ -35,11 +35,78 @@ def go_table(step_deg: float):
         )  # fmt: skip
 
 
+#: The SPM table of the delta-lobe tests: σ = 5 nm, ℓ = 100 nm at 550 nm (kσ = 0.057, rms
+#: slope 0.07: inside SPM), gold-like ε = (0.2 + 3i)², one wavelength.
+SPM_SIGMA, SPM_LENGTH, SPM_LAMBDA = 5e-9, 1e-7, 550e-9
+
+
+def spm_table(step_deg: float, order: int = 2):
+    from emscatter.brdf.mueller import build_mueller_table
+    from emscatter.spectra import GaussianCorrelation
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return build_mueller_table(
+            GaussianCorrelation(sigma=SPM_SIGMA, length=SPM_LENGTH, dimension=2), EPS_AU,
+            [SPM_LAMBDA], method="spm", theta=np.radians(np.arange(0, 90, step_deg)),
+            phi=np.radians(np.arange(0, 180.01, step_deg)), energy="off", order=order,
+        )  # fmt: skip
+
+
+def main_spm(args) -> None:
+    """``{"table": "spm", "variant", "step_deg", "wi", "wo", "delta_wi", "mode"}``: prints
+    ``{"em": [eval per pair], "em_delta": [delta sample weight × pdf per delta_wi],
+    "cond_delta": [Mitsuba's smooth conductor's sample weight per delta_wi], "p_delta": [...]}``
+    (polarized variants: 4×4 Mueller matrices; others: the scalar s0)."""
+    import mitsuba as mi
+
+    from emscatter.render import mitsuba as em_mi
+
+    polarized = "polarized" in args["variant"]
+    key = em_mi.register_table(spm_table(float(args["step_deg"]), int(args.get("order", 2))))
+    em_mi.register()
+    em = mi.load_dict({"type": "emscatter", "table": key})
+    cond = mi.load_dict({"type": "conductor", "eta": 0.2, "k": 3.0})
+    mode = mi.TransportMode.Importance if args.get("mode") == "importance" else (
+        mi.TransportMode.Radiance)  # fmt: skip
+    ctx = mi.BSDFContext(mode)
+
+    def si_of(w):
+        si = mi.SurfaceInteraction3f()
+        si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+        si.n = mi.Vector3f(0, 0, 1)
+        si.wavelengths = [SPM_LAMBDA * 1e9] * 4
+        si.wi = mi.Vector3f(w)
+        return si
+
+    def cast(m):
+        m = np.array(m)
+        return m.reshape(4, 4, -1)[:, :, 0].tolist() if polarized else float(np.ravel(m)[0])
+
+    out = {"em": [], "em_delta": [], "cond_delta": [], "p_delta": []}
+    importance = args.get("mode") == "importance"
+    for wi, wo in zip(args["wi"], args["wo"], strict=True):
+        a, b = (wi, wo) if importance else (wo, wi)
+        out["em"].append(cast(em.eval(ctx, si_of(a), mi.Vector3f(b))))
+    for w in args["delta_wi"]:
+        si = si_of(w)
+        bs, val = em.sample(ctx, si, 0.0, mi.Point2f(0.5, 0.5))
+        assert int(np.ravel(bs.sampled_type)[0]) == int(mi.BSDFFlags.DeltaReflection)
+        out["em_delta"].append(cast(np.array(val) * float(np.ravel(bs.pdf)[0])))
+        out["p_delta"].append(float(np.ravel(bs.pdf)[0]))
+        _, cval = cond.sample(ctx, si, 0.0, mi.Point2f(0.5, 0.5))
+        out["cond_delta"].append(cast(cval))
+    print(json.dumps(out))
+
+
 def main(arg: str) -> None:
     import mitsuba as mi
 
     args = json.loads(arg)
     mi.set_variant(args["variant"])
+    if args.get("table") == "spm":
+        main_spm(args)
+        return
     from emscatter.render import mitsuba as em_mi
 
     polarized = "polarized" in args["variant"]
