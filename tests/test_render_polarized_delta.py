@@ -19,7 +19,6 @@ import pytest
 from emscatter.brdf import frames
 
 sys.path.insert(0, str(Path(__file__).parent))
-from plugin_polarized_worker import spm_table  # noqa: E402
 from test_render_polarized import STOKES_IN, _llvm_polarized  # noqa: E402
 
 HERE = Path(__file__).parent
@@ -42,7 +41,8 @@ def _directions(seed=3, n=40):
 def _worker(variant, order=2, mode="radiance"):
     wi, wo, dwi = _directions()
     args = {"table": "spm", "variant": variant, "step_deg": 2.0, "order": order,
-            "wi": wi.tolist(), "wo": wo.tolist(), "delta_wi": dwi.tolist(), "mode": mode}  # fmt: skip
+            "wi": wi.tolist(), "wo": wo.tolist(), "delta_wi": dwi.tolist(),
+            "mode": mode}  # fmt: skip
     res = subprocess.run(
         [sys.executable, str(HERE / "plugin_polarized_worker.py"), json.dumps(args)],
         capture_output=True, text=True, timeout=600,

@@ -66,10 +66,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import cache
 from ..fresnel import fresnel_cos, is_pec
 from ..solvers.kirchhoff import common as kc
 from ..solvers.kirchhoff.go import slope_pdf_factor
-from .. import cache
 from ..solvers.spm.first_order import _f_factors, coherent_cutoff
 from ..solvers.spm.second_order import _second_order_R
 from ..spectra import check_roughness
