@@ -99,6 +99,71 @@ def main_spm(args) -> None:
     print(json.dumps(out))
 
 
+def aniso_table(n_theta: int, n_phi: int, m_x: float, m_y: float):
+    """GO gold, anisotropic Beckmann slopes (m_x along the tangent x, m_y along y), separable
+    Smith shadowing: Mitsuba's ``roughconductor`` with ``alpha_u = m_x``, ``alpha_v = m_y``."""
+    from emscatter.brdf.mueller import build_mueller_table
+    from emscatter.spectra import GaussianCorrelation
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return build_mueller_table(
+            GaussianCorrelation(sigma=1e-6, length=6e-6, dimension=2), EPS_AU, [550e-9],
+            method="go", resolution=(n_theta, n_phi), anisotropic=True, energy="off",
+            shadowing="separable", slope_variance=(m_x**2 / 2, m_y**2 / 2),
+        )  # fmt: skip
+
+
+def main_aniso(args) -> None:
+    """``{"table": "aniso", "variant", "n_theta", "n_phi", "m_x", "m_y", "wi", "wo",
+    "n_nodes", "seed"}``: prints ``{"em", "rc"}`` at the pairs (radiance mode), ``"em_nodes"``
+    at ``n_nodes`` random table nodes and ``"ref_nodes"`` the table's own Mueller matrices
+    there brought to Mitsuba's frames in numpy (:func:`emscatter.brdf.mueller.to_mitsuba`),
+    each cosθ of the light included (polarized variants: 4×4; others: the scalar s0)."""
+    import mitsuba as mi
+
+    from emscatter.brdf import frames
+    from emscatter.brdf.mueller import to_mitsuba
+    from emscatter.render import mitsuba as em_mi
+
+    polarized = "polarized" in args["variant"]
+    mt = aniso_table(args["n_theta"], args["n_phi"], args["m_x"], args["m_y"])
+    key = em_mi.register_table(mt)
+    em_mi.register()
+    em = mi.load_dict({"type": "emscatter", "table": key})
+    rc = mi.load_dict({"type": "roughconductor", "distribution": "beckmann",
+                       "alpha_u": args["m_x"], "alpha_v": args["m_y"],
+                       "eta": 0.2, "k": 3.0})  # fmt: skip
+    ctx = mi.BSDFContext(mi.TransportMode.Radiance)
+
+    def ev(bsdf, wi, wo):  # wi towards the light, wo towards the viewer
+        si = mi.SurfaceInteraction3f()
+        si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+        si.n = mi.Vector3f(0, 0, 1)
+        si.wavelengths = [550.0] * 4
+        si.wi = mi.Vector3f(wo)
+        m = np.array(bsdf.eval(ctx, si, mi.Vector3f(wi)))
+        return m.reshape(4, 4, -1)[:, :, 0].tolist() if polarized else float(np.ravel(m)[0])
+
+    out = {"em": [], "rc": [], "em_nodes": [], "ref_nodes": []}
+    for wi, wo in zip(args["wi"], args["wo"], strict=True):
+        out["em"].append(ev(em, wi, wo))
+        out["rc"].append(ev(rc, wi, wo))
+    t = mt.table
+    rng = np.random.default_rng(args["seed"])
+    n = args["n_nodes"]
+    idx = [rng.integers(1, t.theta_i.size, n), rng.integers(0, t.phi_i.size, n),
+           rng.integers(1, t.theta_o.size, n), rng.integers(0, t.phi_o.size, n)]  # fmt: skip
+    ang = (t.theta_i[idx[0]], t.phi_i[idx[1]], t.theta_o[idx[2]], t.phi_o[idx[3]])
+    m_nodes = mt.mueller[0][(slice(None), slice(None), *idx)]  # (4, 4, n)
+    ref = to_mitsuba(m_nodes, *ang) * np.cos(ang[0])
+    wi_n, wo_n = frames.directions(ang[0], ang[1]), frames.directions(ang[2], ang[3])
+    for k in range(n):
+        out["em_nodes"].append(ev(em, wi_n[k], wo_n[k]))
+        out["ref_nodes"].append(ref[:, :, k].tolist() if polarized else float(ref[0, 0, k]))
+    print(json.dumps(out))
+
+
 def main(arg: str) -> None:
     import mitsuba as mi
 
@@ -106,6 +171,9 @@ def main(arg: str) -> None:
     mi.set_variant(args["variant"])
     if args.get("table") == "spm":
         main_spm(args)
+        return
+    if args.get("table") == "aniso":
+        main_aniso(args)
         return
     from emscatter.render import mitsuba as em_mi
 

@@ -32,7 +32,10 @@ frames, as Mitsuba's own ``roughconductor`` does (``src/bsdfs/roughconductor.cpp
   with the unpolarized plugin's delta probability; a delta sample's weight is that matrix
   over the probability.
 
-Not supported here (clear errors): anisotropic Mueller tables, plain :class:`BrdfTable`
+* anisotropic Mueller tables (θi, φi, θo, φo): multilinear on the table's own nodes with φi
+  and φo periodic, as the unpolarized plugin (no mirror fold: the azimuths are absolute).
+
+Not supported here (clear errors): plain :class:`BrdfTable`
 objects (no phase between polarizations: build a Mueller table with ``method="go"`` or
 ``"spm"``), a delta lobe without its Mueller matrix (a MuellerTable built by hand with
 ``coherent=None``: pass ``coherent=False`` or rebuild it with ``build_mueller_table``).
@@ -91,13 +94,11 @@ def mueller_channels(mt: MuellerTable, channels: str) -> np.ndarray:
             f"{type(mt).__name__}; a plain BrdfTable keeps no phase between polarizations"
         )
     t = mt.table
-    if not t.isotropic:
-        raise ValueError(
-            "the polarized emscatter plugin takes isotropic Mueller tables (θi, θo, Δφ); this "
-            "one is anisotropic: build it with anisotropic=False, or render unpolarized"
-        )
-    m = np.asarray(mt.mueller, float)  # (n_wl, 4, 4, n_ti, n_to, n_pd)
+    m = np.asarray(mt.mueller, float)  # (n_wl, 4, 4, *grid)
     m = np.moveaxis(m.reshape(m.shape[0], 16, *m.shape[3:]), (0, 1), (-2, -1))
+    if not t.isotropic:  # (n_ti, n_pi, n_to, n_po) → the plugin's (n_pi, n_ti, n_to, n_po + 1)
+        m = np.moveaxis(m, 1, 0)
+        m = np.concatenate([m, m[:, :, :, :1]], axis=3)  # φo periodic: φ₀ repeated at 2π
     out = _channel_mix(t, m, channels).copy()
     out[..., 0] = np.clip(out[..., 0], 0.0, None)
     if not np.all(np.isfinite(out)):
@@ -125,6 +126,26 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
         n2 = dr.square(h.x) + dr.square(h.y)
         return dr.select(n2 > 1e-14, h * dr.rsqrt(dr.maximum(n2, 1e-30)), mi.Vector3f(1, 0, 0))
 
+    def azimuth(w):
+        phi = dr.atan2(w.y, w.x)
+        return dr.select(phi < 0, phi + 2 * math.pi, phi)  # [0, 2π)
+
+    def periodic(x, axis):
+        """``(i0, t)`` of azimuth ``x`` ∈ [0, 2π) on a periodic axis (node ``size`` = node 0
+        at +2π), as the unpolarized plugin: uniform formula or a binary search."""
+        n = axis.size
+        if axis.uniform:  # start 0, step 2π/n (plugin_data makes other axes non-uniform)
+            a = x * (1.0 / axis.step)
+            a0f = dr.floor(a)
+            return dr.minimum(mi.UInt32(a0f), n - 1), dr.clip(a - a0f, 0.0, 1.0)
+        pts = list(axis.points)
+        nodes = mi.Float(pts + [pts[0] + 2 * math.pi])
+        xw = dr.select(x < pts[0], x + 2 * math.pi, x)
+        i1 = dr.binary_search(1, n, lambda i: dr.gather(mi.Float, nodes, i) <= xw)
+        i0 = i1 - 1
+        a0, a1 = dr.gather(mi.Float, nodes, i0), dr.gather(mi.Float, nodes, i1)
+        return i0, dr.clip((xw - a0) / (a1 - a0), 0.0, 1.0)
+
     class EmscatterPolarizedBSDF(base):
         def __init__(self, props):
             base.__init__(self, props)
@@ -138,8 +159,9 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
                     raise ValueError(
                         f"emscatter plugin, table {self._key!r}: the table has a coherent "
                         "(delta) lobe but no Mueller matrix for it (MuellerTable.coherent is "
-                        "None); build it with emscatter.brdf.mueller.build_mueller_table, or "
-                        "pass coherent=False (drops R_coh)"
+                        "None: anisotropic tables, or a table not built by "
+                        "emscatter.brdf.mueller.build_mueller_table); pass coherent=False "
+                        "(drops R_coh) or render unpolarized"
                     )
                 self._cflat = mi.Float(coh.ravel())
 
@@ -187,17 +209,29 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
             )  # fmt: skip
 
         def _coords(self, light, view):
+            """Per grid axis ``(i0, i1, t)`` with ``light`` as the table's incident
+            direction: (θi, θo, Δφ) for isotropic tables, (φi, θi, θo, φo) otherwise (the
+            unpolarized plugin's layout, ``_corners``)."""
             d = self._data
             ti, to = elevation(light), elevation(view)
-            dphi = dr.abs(dr.atan2(view.y, view.x) - dr.atan2(light.y, light.x))
-            dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
 
             def clamped(x, axis):
                 x = position(x, axis)
                 i0 = dr.minimum(mi.UInt32(x), max(axis.size - 2, 0))
                 return i0, dr.minimum(i0 + 1, axis.size - 1), x - mi.Float(i0)
 
-            return [clamped(ti, d.theta_i), clamped(to, d.theta_o), clamped(dphi, d.phi)]
+            if d.isotropic:
+                dphi = dr.abs(dr.atan2(view.y, view.x) - dr.atan2(light.y, light.x))
+                dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
+                return [clamped(ti, d.theta_i), clamped(to, d.theta_o), clamped(dphi, d.phi)]
+            a0, ta = periodic(azimuth(light), d.phi_i)
+            b0, tb = periodic(azimuth(view), d.phi)  # φo: the repeated column at 2π
+            return [
+                (a0, (a0 + 1) % d.phi_i.size, ta),
+                clamped(ti, d.theta_i),
+                clamped(to, d.theta_o),
+                (b0, b0 + 1, tb),
+            ]
 
         def _channel_picks(self, si):
             """Per spectrum slot: ``[(channel, weight), ...]`` (two table wavelengths around
@@ -220,7 +254,8 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
         def _mueller(self, si, light, view, active):
             """The Mueller BRDF (no cosine) in Mitsuba's frames of ``−light`` → ``view``."""
             corners = self._corners(self._coords(light, view))
-            return self._assemble(self._mflat, corners, si, light, view, active, True)
+            mirror = self._data.isotropic  # Δφ ∈ (π, 2π) folded onto the table's [0, π]
+            return self._assemble(self._mflat, corners, si, light, view, active, mirror)
 
         def _light_view(self, ctx, si, wo):
             if ctx.mode == radiance:
