@@ -44,6 +44,7 @@ objects (no phase between polarizations: build a Mueller table with ``method="go
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 
@@ -52,10 +53,15 @@ from ..brdf.mueller import D_MITSUBA, MuellerTable
 
 __all__ = ["mueller_channels", "coherent_channels", "polarized_class"]
 
-#: ``id(mueller_channels(...) result) → (that array, its coherent_channels or None)``: the
-#: plugin class receives only the gathered node array from ``render.mitsuba`` (its cache), and
-#: finds the delta lobe's matrices here (the array is kept alive with them, so ids stay unique).
-_COHERENT_OF: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
+#: ``id(mueller_channels(...) result) → (weak reference to it, its coherent_channels or
+#: None)``: the plugin class receives only the gathered node array from ``render.mitsuba``
+#: (its cache), and finds the delta lobe's matrices here; an entry leaves with its array.
+_COHERENT_OF: dict[int, tuple[weakref.ref, np.ndarray | None]] = {}
+
+
+def _coherent_of(arr: np.ndarray) -> np.ndarray | None:
+    ref, coh = _COHERENT_OF.get(id(arr), (None, None))
+    return coh if ref is not None and ref() is arr else None
 
 
 def _channel_mix(t, m: np.ndarray, channels: str) -> np.ndarray:
@@ -104,7 +110,8 @@ def mueller_channels(mt: MuellerTable, channels: str) -> np.ndarray:
     if not np.all(np.isfinite(out)):
         raise ValueError("the Mueller table holds NaN/inf; nothing to render")
     out = np.ascontiguousarray(out, dtype=np.float32)
-    _COHERENT_OF[id(out)] = (out, coherent_channels(mt, channels))
+    _COHERENT_OF[id(out)] = (weakref.ref(out), coherent_channels(mt, channels))
+    weakref.finalize(out, _COHERENT_OF.pop, id(out), None)
     return out
 
 
@@ -154,7 +161,7 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
             self._mch = n_ch
             self._mlam = lam
             if self._use_delta:
-                coh = _COHERENT_OF.get(id(flat), (None, None))[1]
+                coh = _coherent_of(flat)
                 if coh is None:
                     raise ValueError(
                         f"emscatter plugin, table {self._key!r}: the table has a coherent "
