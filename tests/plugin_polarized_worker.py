@@ -117,9 +117,10 @@ def aniso_table(n_theta: int, n_phi: int, m_x: float, m_y: float):
 def main_aniso(args) -> None:
     """``{"table": "aniso", "variant", "n_theta", "n_phi", "m_x", "m_y", "wi", "wo",
     "n_nodes", "seed"}``: prints ``{"em", "rc"}`` at the pairs (radiance mode), ``"em_nodes"``
-    at ``n_nodes`` random table nodes and ``"ref_nodes"`` the table's own Mueller matrices
-    there brought to Mitsuba's frames in numpy (:func:`emscatter.brdf.mueller.to_mitsuba`),
-    each cosθ of the light included (polarized variants: 4×4; others: the scalar s0)."""
+    at ``n_nodes`` random table nodes in and around the lobe and ``"ref_nodes"`` the table's
+    own Mueller matrices there brought to Mitsuba's frames in numpy
+    (:func:`emscatter.brdf.mueller.to_mitsuba`), each cosθ of the light included (polarized
+    variants: 4×4; others: the scalar s0)."""
     import mitsuba as mi
 
     from emscatter.brdf import frames
@@ -152,8 +153,11 @@ def main_aniso(args) -> None:
     t = mt.table
     rng = np.random.default_rng(args["seed"])
     n = args["n_nodes"]
-    idx = [rng.integers(1, t.theta_i.size, n), rng.integers(0, t.phi_i.size, n),
-           rng.integers(1, t.theta_o.size, n), rng.integers(0, t.phi_o.size, n)]  # fmt: skip
+    i_ti, i_pi = rng.integers(1, t.theta_i.size, n), rng.integers(0, t.phi_i.size, n)
+    # nodes in and around the lobe: θo within a node of θi, φo within two of the mirror
+    i_to = np.clip(i_ti + rng.integers(-1, 2, n), 1, t.theta_o.size - 1)
+    i_po = (i_pi + t.phi_o.size // 2 + rng.integers(-2, 3, n)) % t.phi_o.size
+    idx = [i_ti, i_pi, i_to, i_po]
     ang = (t.theta_i[idx[0]], t.phi_i[idx[1]], t.theta_o[idx[2]], t.phi_o[idx[3]])
     m_nodes = mt.mueller[0][(slice(None), slice(None), *idx)]  # (4, 4, n)
     ref = to_mitsuba(m_nodes, *ang) * np.cos(ang[0])

@@ -59,14 +59,16 @@ def _lobe_error(out):
 @needs_mitsuba
 def test_anisotropic_mueller_plugin():
     """At the table's nodes the plugin returns the table's Mueller matrices in Mitsuba's
-    frames (numpy ``to_mitsuba``) to float32 (1e-4 of s0; measured 8e-5 on 7.5° nodes).
+    frames (numpy ``to_mitsuba``) to float32: 1e-4 of max(s0, 0.1 % of the peak) at 30 nodes
+    in and around the lobe (measured 2e-5).
     Against ``roughconductor`` (alpha_u = 0.2, alpha_v = 0.4) the Stokes error in the lobe is
     the table's interpolation error, converging as h²: 12 × 48 nodes (7.5°) median 3.9 %,
     p90 11 %; 22 × 88 (4.1°) median 1.1 %, p90 3.3 % (ratio 3.6 ≈ (7.5/4.1)²). s0 equals
     the unpolarized plugin's value to 5e-6 (float32)."""
     coarse = _worker(POL, 12)
     en, rn = coarse["em_nodes"], coarse["ref_nodes"]
-    node_err = np.abs(en - rn).max(axis=(1, 2)) / rn[:, 0, 0]
+    floor = 1e-3 * rn[:, 0, 0].max()  # far tail (1e-8 … 1e-62: float32 rounding of w)
+    node_err = np.abs(en - rn).max(axis=(1, 2)) / np.maximum(rn[:, 0, 0], floor)
     assert node_err.max() < 1e-4, node_err
     # the matrices are not trivially diagonal: the frames are really tested
     assert np.abs(rn[:, 2, 3]).max() > 0.05 * rn[:, 0, 0].max()
