@@ -168,6 +168,41 @@ def main_aniso(args) -> None:
     print(json.dumps(out))
 
 
+def main_render(args) -> None:
+    """``{"table": "render", "variant", "order", "spp"}``: a plane under a constant
+    environment seen obliquely (``stokes`` integrator around ``path``) with the SPM table's
+    plugin and with Mitsuba's smooth ``conductor``; prints ``{"em": image, "cond": image}``
+    (H × W × channels: the colour and the Stokes AOVs)."""
+    import mitsuba as mi
+
+    from emscatter.render import mitsuba as em_mi
+
+    key = em_mi.register_table(spm_table(6.0, int(args.get("order", 2))))
+    em_mi.register()
+
+    def scene(bsdf):
+        return mi.load_dict({
+            "type": "scene",
+            "integrator": {"type": "stokes", "nested": {"type": "path", "max_depth": 3}},
+            "sensor": {
+                "type": "perspective", "fov": 20,
+                "to_world": mi.ScalarTransform4f().look_at(
+                    origin=[0, -3, 1.6], target=[0, 0, 0], up=[0, 0, 1]),
+                "film": {"type": "hdrfilm", "width": 12, "height": 12, "rfilter": {"type": "box"}},
+                "sampler": {"type": "independent", "sample_count": int(args["spp"])},
+            },
+            "env": {"type": "constant"},
+            "plane": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(10),
+                      "bsdf": bsdf},
+        })  # fmt: skip
+
+    out = {}
+    for name, bsdf in (("em", {"type": "emscatter", "table": key}),
+                       ("cond", {"type": "conductor", "eta": 0.2, "k": 3.0})):  # fmt: skip
+        out[name] = np.array(mi.render(scene(bsdf), seed=1)).tolist()
+    print(json.dumps(out))
+
+
 def main(arg: str) -> None:
     import mitsuba as mi
 
@@ -178,6 +213,9 @@ def main(arg: str) -> None:
         return
     if args.get("table") == "aniso":
         main_aniso(args)
+        return
+    if args.get("table") == "render":
+        main_render(args)
         return
     from emscatter.render import mitsuba as em_mi
 

@@ -106,3 +106,31 @@ def test_spm_table_s0_equals_unpolarized_plugin():
     np.testing.assert_allclose(pol["em_delta"][:, 0, 0], unpol["em_delta"], rtol=1e-6,
                                atol=1e-6)  # fmt: skip
     np.testing.assert_allclose(pol["p_delta"], unpol["p_delta"], rtol=1e-6)
+
+
+@needs_mitsuba
+def test_rendered_stokes_images_with_delta_lobe():
+    """A plane under a constant environment seen at ~62° (12 × 12 pixels, 64 spp, ``stokes``
+    integrator around ``path``), SPM table (order 2) against Mitsuba's smooth ``conductor``:
+    the delta lobe carries the image (the incoherent SPM lobe adds ≈ 1 %, sampled, so
+    noisy). Measured |ΔS_k| / s0 per pixel and channel: s0 median 0.16 % (max 3.5 %: glossy
+    noise), s1 median 0.29 % (max 0.43 %), s2 (±0.9 % of s0 across the image, the frames'
+    rotation with the pixel) max 0.09 %, s3 max 0.03 %."""
+    args = {"table": "render", "variant": POL, "order": 2, "spp": 64}
+    res = subprocess.run(
+        [sys.executable, str(HERE / "plugin_polarized_worker.py"), json.dumps(args)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = json.loads(res.stdout.splitlines()[-1])
+    em, co = np.array(out["em"]), np.array(out["cond"])
+    assert em.shape == co.shape and em.shape[-1] == 15  # colour + S0..S3 (3 channels each)
+    s0 = co[..., 3:6]
+    err = [np.abs(em[..., 3 + 3 * k : 6 + 3 * k] - co[..., 3 + 3 * k : 6 + 3 * k]) / s0
+           for k in range(4)]  # fmt: skip
+    print("rendered Stokes, median |ΔS|/s0:", [f"{np.median(e):.3g}" for e in err])
+    assert all(np.median(e) < 0.005 for e in err)
+    assert max(e.max() for e in err[1:]) < 0.01
+    s2_em, s2_co = em[..., 9:12].ravel(), co[..., 9:12].ravel()
+    assert np.ptp(s2_co) > 0.005 and np.corrcoef(s2_em, s2_co)[0, 1] > 0.95
+    assert co[..., 6:9].min() > 0.02  # s1: Fresnel's s/p difference, same sign in both
