@@ -103,7 +103,7 @@ def _small_mueller(**kw):
 
 def test_mueller_channels_layout_and_refusals():
     """The gathered array: M00 per channel is the table (spectral) and its sRGB/luminance
-    mixture (linear in every element); plain tables and anisotropic ones are refused."""
+    mixture (linear in every element); plain tables are refused."""
     from emscatter.brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
 
     mt = _small_mueller()
@@ -126,5 +126,10 @@ def test_mueller_channels_layout_and_refusals():
                             [550e-9], method="go", resolution=(8, 9))  # fmt: skip
     with pytest.raises(TypeError, match="MuellerTable.*method='go' or 'spm'.*BrdfTable"):
         mueller_channels(plain, "spectral")
-    with pytest.raises(ValueError, match="isotropic Mueller tables.*anisotropic=False"):
-        mueller_channels(_small_mueller(anisotropic=True), "spectral")
+    # anisotropic: the plugin's (φi, θi, θo, φo + 1) layout, φo periodic
+    aniso = _small_mueller(anisotropic=True)
+    arr = mueller_channels(aniso, "spectral")
+    assert arr.shape == (9, 8, 8, 10, 3, 16)
+    np.testing.assert_allclose(arr[..., :9, :, 0], np.moveaxis(aniso.table.values, (0, 2), (-1, 0)),
+                               rtol=1e-6, atol=1e-30)  # fmt: skip
+    np.testing.assert_array_equal(arr[:, :, :, 9], arr[:, :, :, 0])

@@ -243,7 +243,9 @@ def write_pbsdf(mt: MuellerTable, path, *, phi_d=None, theta_d=None, theta_h=Non
     """Write a Mueller table as a ``.pbsdf`` file for ``measured_polarized`` (module
     docstring), atomically; returns the path. Load it in a ``*_spectral_polarized`` variant
     with ``{"type": "measured_polarized", "filename": str(path), "alpha_sample": α}``
-    (α ≈ the lobe's GGX roughness, for sampling only)."""
+    (α ≈ the lobe's GGX roughness, for sampling only). The incoherent part only: the
+    coherent delta lobe of SPM tables (``mt.coherent``) has no place in this format (render
+    it with the emscatter plugin, which keeps it)."""
     f = pbsdf_mueller(mt, phi_d=phi_d, theta_d=theta_d, theta_h=theta_h,
                       wavelengths_nm=wavelengths_nm)  # fmt: skip
     if not np.all(np.isfinite(f["M"])):

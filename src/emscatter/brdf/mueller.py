@@ -66,10 +66,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import cache
 from ..fresnel import fresnel_cos, is_pec
 from ..solvers.kirchhoff import common as kc
 from ..solvers.kirchhoff.go import slope_pdf_factor
-from ..solvers.spm.first_order import _f_factors
+from ..solvers.spm.first_order import _f_factors, coherent_cutoff
+from ..solvers.spm.second_order import _second_order_R
 from ..spectra import check_roughness
 from . import frames
 from .build import build_table, material_eps
@@ -82,6 +84,8 @@ __all__ = [
     "build_mueller_table",
     "jones_to_mueller",
     "mueller_at",
+    "coherent_amplitudes",
+    "coherent_mueller",
     "go_jones",
     "spm_jones",
     "to_mitsuba",
@@ -159,6 +163,12 @@ def _em_angles(theta_i, phi_i, theta_o, phi_o):
 def go_jones(eps, theta_i, phi_i, theta_o, phi_o) -> np.ndarray:
     """The GO facet Jones matrix ``J[pol_s, pol_i]`` ``(2, 2, ...)`` (complex, emscatter's
     h/v bases, no intensity factor) at renderer angles [rad] (module docstring)."""
+    return _facet_jones(lambda cos_l: fresnel_cos(eps, cos_l), theta_i, phi_i, theta_o, phi_o)
+
+
+def _facet_jones(fresnel, theta_i, phi_i, theta_o, phi_o) -> np.ndarray:
+    """``J_pq = R_h (p̂_s·t̂)(q̂_i·t̂) + R_v (p̂_s·d̂_s)(q̂_i·d̂_i)`` with ``(R_h, R_v) =
+    fresnel(cosθl)`` of the facet bisecting the pair (module docstring)."""
     ti, pi_, ts, ps = _em_angles(theta_i, phi_i, theta_o, phi_o)
     ki, hi, vi = _hv(ti, pi_, -1.0)
     ks, hs, vs = _hv(ts, ps, 1.0)
@@ -169,7 +179,7 @@ def go_jones(eps, theta_i, phi_i, theta_o, phi_o) -> np.ndarray:
     di, ds = np.cross(t, ki, axis=0), np.cross(t, ks, axis=0)
     q = ks - ki
     cos_l = np.minimum(0.5 * np.sqrt(_dot(q, q)), 1.0)
-    rh, rv = fresnel_cos(eps, cos_l)
+    rh, rv = fresnel(cos_l)
     out_b, in_b = (hs, vs), (hi, vi)
     j = np.empty((2, 2, *cos_l.shape), dtype=complex)
     for s in range(2):
@@ -189,6 +199,63 @@ def spm_jones(eps, theta_i, phi_i, theta_o, phi_o) -> np.ndarray:
         e, np.cos(ti), np.sin(ti), np.cos(ts), np.sin(ts), np.cos(d), np.sin(d)
     )
     return np.stack([np.stack([fhh, fhv]), np.stack([fvh, fvv])]).astype(complex)
+
+
+def coherent_amplitudes(surface, material, wavelength, theta_i, powers, *, method, order=2):
+    """Complex coherent (mean-field) reflection amplitudes ``(a_h, a_v)`` ``(2, n)`` of the
+    rough interface at incidence angles ``theta_i`` [rad] (renderer = emscatter θi), for
+    ``powers`` ``(2, n)`` the coherent power reflectivities (h, v) the table holds
+    (``coherent_polarized``): ``|a_p|² = powers_p`` and ``arg a_p = arg R_p`` with
+
+    * ``R_p = R_p⁽⁰⁾ + σ² R_p⁽²⁾`` for the second-order SPM (``method="spm"``, ``order=2``;
+      :mod:`emscatter.solvers.spm.second_order`, the structure of Tsang, Kong, Ding & Ao 2001
+      vol. III ch. 4): the mean field's phase to the order of its power;
+    * the flat-interface Fresnel ``R_p`` otherwise (SPM ``order`` 0/1, and any Kirchhoff-type
+      attenuation ``exp(−2(kσ cosθ)²)``, which is real, positive and the same for h and v).
+
+    An isotropic surface's mean field keeps h and v apart (no cross-polarized mean field),
+    so the coherent Jones matrix is ``diag(a_h, a_v)`` in the s/p = h/v frames."""
+    rough = check_roughness(surface, "surface")
+    lam = float(wavelength)
+    k = 2 * math.pi / lam
+    eps = material_eps(material, lam)
+    ti = np.asarray(theta_i, float).reshape(-1)
+    if method == "spm" and order == 2:
+        r = _spm_mean_field(rough, eps, k, ti)
+    else:
+        r = np.stack(fresnel_cos(eps, np.cos(ti))).astype(complex)
+    mag = np.abs(r)
+    phase = np.where(mag > 0, r / np.where(mag > 0, mag, 1.0), 1.0)
+    p = np.clip(np.asarray(powers, float).reshape(2, -1), 0.0, None)
+    return np.sqrt(p) * phase
+
+
+def _spm_mean_field(rough, eps, k, ti) -> np.ndarray:
+    """``R⁽⁰⁾ + σ² R⁽²⁾`` ``(2, n)`` (h, v), through the solver's disk cache (same key as
+    :func:`emscatter.solvers.spm.first_order._coherent`, so a table build already paid)."""
+    cut = coherent_cutoff(rough, k, None)
+    e = eps if is_pec(eps) else complex(eps)
+    uniq, inv = np.unique(np.stack([ti, np.zeros_like(ti)], axis=1), axis=0, return_inverse=True)
+    key = {"surface": rough, "eps": e, "k": k, "angles": uniq, "nodes": (16, 16), "k_max": cut}
+    r0, r2 = cache.cached(
+        "spm2-coherent",
+        key,
+        lambda: _second_order_R(rough, e, k, uniq[:, 0], 16, 16, phi_i=uniq[:, 1], k_max=cut),
+    )
+    return (r0 + rough.sigma**2 * r2)[:, inv.ravel()]
+
+
+def coherent_mueller(amplitudes, theta_i) -> np.ndarray:
+    """Mueller matrices ``(4, 4, n)`` of the coherent (delta) lobe in emscatter's h/v frames
+    at the mirror pair (renderer ``(θi, 0) → (θi, π)``), from the complex amplitudes
+    ``(a_h, a_v)`` (:func:`coherent_amplitudes`): the facet Jones matrix of the flat mirror
+    (:func:`go_jones`'s projection with ``n̂ = ẑ``) mapped by :func:`jones_to_mueller`; in
+    Mitsuba's frames it is ``mi.mueller.specular_reflection`` times the attenuation (tests).
+    Unitless (a reflectance, not per sr)."""
+    a = np.asarray(amplitudes, complex).reshape(2, -1)
+    ti = np.asarray(theta_i, float).reshape(-1)
+    jones = _facet_jones(lambda cos_l: (a[0], a[1]), ti, 0.0, ti, math.pi)
+    return jones_to_mueller(jones)
 
 
 def _go_intensity(rough, eps, k, ti, pi_, ts, ps, shadowing, slope_variance, k_max):
@@ -271,10 +338,16 @@ class MuellerTable:
 
     ``mueller``: ``(n_wl, 4, 4, *grid)`` [1/sr] in emscatter's h/v frames (module
     docstring); the energy remedy's reciprocal scale ``s(ωi) s(ωo)`` of the table is applied
-    to it as to ``values``, so ``mueller[:, 0, 0] == table.values``."""
+    to it as to ``values``, so ``mueller[:, 0, 0] == table.values``.
+
+    ``coherent``: ``(n_wl, 4, 4, n_ti)`` [-] the delta lobe's Mueller matrix at the mirror
+    pair of each θi node (:func:`coherent_mueller`, emscatter's h/v frames), with
+    ``coherent[:, 0, 0] == table.coherent`` and ``M₀₀ ± M₀₁`` the table's
+    ``coherent_polarized``; None when the table has no delta lobe (GO) or is anisotropic."""
 
     table: BrdfTable
     mueller: np.ndarray
+    coherent: np.ndarray | None = None
 
     def node_angles(self) -> tuple[np.ndarray, ...]:
         """Renderer angles ``(θi, φi, θo, φo)`` [rad] of every node, each of the grid shape
@@ -339,7 +412,25 @@ def build_mueller_table(
             m = m * fac
         out[j] = m
     out.setflags(write=False)
-    return MuellerTable(table, out)
+    return MuellerTable(table, out, _coherent_part(table, surface, material, method, options))
+
+
+def _coherent_part(table, surface, material, method, options):
+    """:attr:`MuellerTable.coherent` of a built table (None: no delta lobe, or anisotropic)."""
+    cp = np.asarray(table.coherent_polarized, float)  # (2, n_wl, n_ti[, n_pi])
+    if not table.isotropic or not np.any(cp > 0):
+        return None
+    per_wl = table.metadata.get("per_wavelength", [])
+    out = np.empty((table.wavelengths.size, 4, 4, table.theta_i.size))
+    for j, lam in enumerate(table.wavelengths):
+        name = per_wl[j]["solver"] if j < len(per_wl) else method
+        amp = coherent_amplitudes(
+            surface, material, float(lam), table.theta_i, cp[:, j], method=name,
+            order=options.get("order", 2),
+        )  # fmt: skip
+        out[j] = coherent_mueller(amp, table.theta_i)
+    out.setflags(write=False)
+    return out
 
 
 # ------------------------------------------------------------------ Mitsuba's frames

@@ -24,22 +24,69 @@ frames, as Mitsuba's own ``roughconductor`` does (``src/bsdfs/roughconductor.cpp
 * ``pdf`` and ``sample`` are the unpolarized plugin's (importance sampling of ``M₀₀ cosθ``);
   a sample's weight is the Mueller matrix over its pdf.
 
-Not supported here (clear errors): anisotropic Mueller tables, tables with a coherent (delta)
-lobe while ``coherent`` is true (the delta lobe's Fresnel phase is not in the table; pass
-``coherent=False`` or render in an unpolarized variant), plain :class:`BrdfTable` objects (no
-phase between polarizations: build a Mueller table with ``method="go"`` or ``"spm"``).
+* the coherent (delta) lobe (SPM tables; ``coherent`` true, the default): its Mueller matrix
+  :attr:`~emscatter.brdf.mueller.MuellerTable.coherent` (the table's h/v coherent powers with
+  the mean field's phase, :func:`~emscatter.brdf.mueller.coherent_amplitudes`), interpolated
+  linearly in θi, brought into Mitsuba's frames as the glossy part; Mitsuba's ``conductor``
+  uses the same frames (``s`` axis ``n × k̂``, ``src/bsdfs/conductor.cpp``). It is sampled
+  with the unpolarized plugin's delta probability; a delta sample's weight is that matrix
+  over the probability.
+
+* anisotropic Mueller tables (θi, φi, θo, φo): multilinear on the table's own nodes with φi
+  and φo periodic, as the unpolarized plugin (no mirror fold: the azimuths are absolute).
+
+Not supported here (clear errors): plain :class:`BrdfTable`
+objects (no phase between polarizations: build a Mueller table with ``method="go"`` or
+``"spm"``), a delta lobe without its Mueller matrix (a MuellerTable built by hand with
+``coherent=None``: pass ``coherent=False`` or rebuild it with ``build_mueller_table``).
 """
 
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 
 from ..brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
 from ..brdf.mueller import D_MITSUBA, MuellerTable
 
-__all__ = ["mueller_channels", "polarized_class"]
+__all__ = ["mueller_channels", "coherent_channels", "polarized_class"]
+
+#: ``id(mueller_channels(...) result) → (weak reference to it, its coherent_channels or
+#: None)``: the plugin class receives only the gathered node array from ``render.mitsuba``
+#: (its cache), and finds the delta lobe's matrices here; an entry leaves with its array.
+_COHERENT_OF: dict[int, tuple[weakref.ref, np.ndarray | None]] = {}
+
+
+def _coherent_of(arr: np.ndarray) -> np.ndarray | None:
+    ref, coh = _COHERENT_OF.get(id(arr), (None, None))
+    return coh if ref is not None and ref() is arr else None
+
+
+def _channel_mix(t, m: np.ndarray, channels: str) -> np.ndarray:
+    """``m`` ``(..., n_wl, E)`` → plugin channels ``(..., C, E)``."""
+    if channels == "spectral":
+        return m
+    w = spectrum_to_rgb_weights(t.wavelengths)  # (3, n_wl)
+    if channels == "mono":
+        w = RGB_LUMINANCE[None, :] @ w
+    return np.einsum("cw,...we->...ce", w, m)
+
+
+def coherent_channels(mt: MuellerTable, channels: str) -> np.ndarray | None:
+    """The delta lobe's Mueller matrices as the plugin gathers them: float32 ``(n_ti, C, 16)``
+    [-] in emscatter's h/v frames at the mirror pair of each θi node; None without a delta
+    lobe. ``M₀₀`` is the unpolarized plugin's ``R_coh`` (same channels, clipped to [0, 1])."""
+    if mt.coherent is None:
+        return None
+    c = np.asarray(mt.coherent, float)  # (n_wl, 4, 4, n_ti)
+    c = np.moveaxis(c.reshape(c.shape[0], 16, -1), (0, 1), (-2, -1))  # (n_ti, n_wl, 16)
+    out = _channel_mix(mt.table, c, channels).copy()
+    out[..., 0] = np.clip(out[..., 0], 0.0, 1.0)
+    if not np.all(np.isfinite(out)):
+        raise ValueError("the Mueller table's coherent part holds NaN/inf; nothing to render")
+    return np.ascontiguousarray(out, dtype=np.float32)
 
 
 def mueller_channels(mt: MuellerTable, channels: str) -> np.ndarray:
@@ -53,25 +100,19 @@ def mueller_channels(mt: MuellerTable, channels: str) -> np.ndarray:
             f"{type(mt).__name__}; a plain BrdfTable keeps no phase between polarizations"
         )
     t = mt.table
-    if not t.isotropic:
-        raise ValueError(
-            "the polarized emscatter plugin takes isotropic Mueller tables (θi, θo, Δφ); this "
-            "one is anisotropic: build it with anisotropic=False, or render unpolarized"
-        )
-    m = np.asarray(mt.mueller, float)  # (n_wl, 4, 4, n_ti, n_to, n_pd)
+    m = np.asarray(mt.mueller, float)  # (n_wl, 4, 4, *grid)
     m = np.moveaxis(m.reshape(m.shape[0], 16, *m.shape[3:]), (0, 1), (-2, -1))
-    if channels == "spectral":
-        out = m
-    else:
-        w = spectrum_to_rgb_weights(t.wavelengths)  # (3, n_wl)
-        if channels == "mono":
-            w = RGB_LUMINANCE[None, :] @ w
-        out = np.einsum("cw,...we->...ce", w, m)
-    out = out.copy()
+    if not t.isotropic:  # (n_ti, n_pi, n_to, n_po) → the plugin's (n_pi, n_ti, n_to, n_po + 1)
+        m = np.moveaxis(m, 1, 0)
+        m = np.concatenate([m, m[:, :, :, :1]], axis=3)  # φo periodic: φ₀ repeated at 2π
+    out = _channel_mix(t, m, channels).copy()
     out[..., 0] = np.clip(out[..., 0], 0.0, None)
     if not np.all(np.isfinite(out)):
         raise ValueError("the Mueller table holds NaN/inf; nothing to render")
-    return np.ascontiguousarray(out, dtype=np.float32)
+    out = np.ascontiguousarray(out, dtype=np.float32)
+    _COHERENT_OF[id(out)] = (weakref.ref(out), coherent_channels(mt, channels))
+    weakref.finalize(out, _COHERENT_OF.pop, id(out), None)
+    return out
 
 
 def polarized_class(mi, base, position, elevation, prepared_mueller):
@@ -80,6 +121,7 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
     import drjit as dr
 
     glossy = mi.BSDFFlags.GlossyReflection
+    delta = mi.BSDFFlags.DeltaReflection
     radiance = mi.TransportMode.Radiance
     n_spec = len(mi.UnpolarizedSpectrum(0.0))
     d_sign = np.diag(D_MITSUBA)
@@ -91,33 +133,112 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
         n2 = dr.square(h.x) + dr.square(h.y)
         return dr.select(n2 > 1e-14, h * dr.rsqrt(dr.maximum(n2, 1e-30)), mi.Vector3f(1, 0, 0))
 
+    def azimuth(w):
+        phi = dr.atan2(w.y, w.x)
+        return dr.select(phi < 0, phi + 2 * math.pi, phi)  # [0, 2π)
+
+    def periodic(x, axis):
+        """``(i0, t)`` of azimuth ``x`` ∈ [0, 2π) on a periodic axis (node ``size`` = node 0
+        at +2π), as the unpolarized plugin: uniform formula or a binary search."""
+        n = axis.size
+        if axis.uniform:  # start 0, step 2π/n (plugin_data makes other axes non-uniform)
+            a = x * (1.0 / axis.step)
+            a0f = dr.floor(a)
+            return dr.minimum(mi.UInt32(a0f), n - 1), dr.clip(a - a0f, 0.0, 1.0)
+        pts = list(axis.points)
+        nodes = mi.Float(pts + [pts[0] + 2 * math.pi])
+        xw = dr.select(x < pts[0], x + 2 * math.pi, x)
+        i1 = dr.binary_search(1, n, lambda i: dr.gather(mi.Float, nodes, i) <= xw)
+        i0 = i1 - 1
+        a0, a1 = dr.gather(mi.Float, nodes, i0), dr.gather(mi.Float, nodes, i1)
+        return i0, dr.clip((xw - a0) / (a1 - a0), 0.0, 1.0)
+
     class EmscatterPolarizedBSDF(base):
         def __init__(self, props):
             base.__init__(self, props)
             flat, n_ch, lam = prepared_mueller(str(self._key))
-            if self._use_delta:
-                raise ValueError(
-                    f"emscatter plugin, table {self._key!r}: the table has a coherent (delta) "
-                    "lobe, which the polarized variants do not render (its Fresnel phase is not "
-                    "in the table); pass coherent=False (drops R_coh) or use an unpolarized "
-                    "variant"
-                )
             self._mflat = mi.Float(flat.ravel())
             self._mch = n_ch
             self._mlam = lam
+            if self._use_delta:
+                coh = _coherent_of(flat)
+                if coh is None:
+                    raise ValueError(
+                        f"emscatter plugin, table {self._key!r}: the table has a coherent "
+                        "(delta) lobe but no Mueller matrix for it (MuellerTable.coherent is "
+                        "None: anisotropic tables, or a table not built by "
+                        "emscatter.brdf.mueller.build_mueller_table); pass coherent=False "
+                        "(drops R_coh) or render unpolarized"
+                    )
+                self._cflat = mi.Float(coh.ravel())
+
+        def _coherent_mueller(self, si, light, view, active):
+            """The delta lobe's Mueller matrix (a reflectance) in Mitsuba's frames of
+            ``−light`` → ``view`` (the mirror pair), linear in θi between the nodes."""
+            ax = self._data.theta_i
+            x = position(elevation(light), ax)
+            i0 = dr.minimum(mi.UInt32(x), max(ax.size - 2, 0))
+            i1 = dr.minimum(i0 + 1, ax.size - 1)
+            t = x - mi.Float(i0)
+            corners = [(i0, 1.0 - t), (i1, t)]
+            return self._assemble(self._cflat, corners, si, light, view, active, False)
+
+        def _assemble(self, flat, corners, si, light, view, active, mirror):
+            """Gather the 16 elements at ``corners`` (node index, weight) and the channel
+            picks, to Mitsuba's handedness and sign of V, rotated onto Mitsuba's bases."""
+            picks = self._channel_picks(si)
+            stride = self._mch * 16
+            m = dr.zeros(mi.Spectrum)
+            mirrored = (light.x * view.y - light.y * view.x) < 0  # Δφ = φV − φL ∈ (π, 2π)
+            for e in range(16):
+                r, c = divmod(e, 4)
+                slots = []
+                for pick in picks:
+                    acc = mi.Float(0.0)
+                    for idx, w in corners:
+                        for ch, wc in pick:
+                            g = dr.gather(mi.Float, flat, idx * stride + ch * 16 + e, active)
+                            acc += (w * wc) * g
+                    slots.append(acc)
+                val = (
+                    mi.UnpolarizedSpectrum(*slots)
+                    if n_spec > 1
+                    else mi.UnpolarizedSpectrum(slots[0])
+                )
+                sign = d_sign[r] * d_sign[c]  # to Mitsuba's handedness and sign of V
+                if mirror and mirror_sign[r] * mirror_sign[c] < 0:
+                    val = dr.select(mirrored, -val, val)
+                m[r, c] = val * float(sign)
+            k_in = -light
+            return mi.mueller.rotate_mueller_basis(
+                m, k_in, h_axis(k_in), mi.mueller.stokes_basis(k_in),
+                view, h_axis(view), mi.mueller.stokes_basis(view),
+            )  # fmt: skip
 
         def _coords(self, light, view):
+            """Per grid axis ``(i0, i1, t)`` with ``light`` as the table's incident
+            direction: (θi, θo, Δφ) for isotropic tables, (φi, θi, θo, φo) otherwise (the
+            unpolarized plugin's layout, ``_corners``)."""
             d = self._data
             ti, to = elevation(light), elevation(view)
-            dphi = dr.abs(dr.atan2(view.y, view.x) - dr.atan2(light.y, light.x))
-            dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
 
             def clamped(x, axis):
                 x = position(x, axis)
                 i0 = dr.minimum(mi.UInt32(x), max(axis.size - 2, 0))
                 return i0, dr.minimum(i0 + 1, axis.size - 1), x - mi.Float(i0)
 
-            return [clamped(ti, d.theta_i), clamped(to, d.theta_o), clamped(dphi, d.phi)]
+            if d.isotropic:
+                dphi = dr.abs(dr.atan2(view.y, view.x) - dr.atan2(light.y, light.x))
+                dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
+                return [clamped(ti, d.theta_i), clamped(to, d.theta_o), clamped(dphi, d.phi)]
+            a0, ta = periodic(azimuth(light), d.phi_i)
+            b0, tb = periodic(azimuth(view), d.phi)  # φo: the repeated column at 2π
+            return [
+                (a0, (a0 + 1) % d.phi_i.size, ta),
+                clamped(ti, d.theta_i),
+                clamped(to, d.theta_o),
+                (b0, b0 + 1, tb),
+            ]
 
         def _channel_picks(self, si):
             """Per spectrum slot: ``[(channel, weight), ...]`` (two table wavelengths around
@@ -140,35 +261,8 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
         def _mueller(self, si, light, view, active):
             """The Mueller BRDF (no cosine) in Mitsuba's frames of ``−light`` → ``view``."""
             corners = self._corners(self._coords(light, view))
-            picks = self._channel_picks(si)
-            stride = self._mch * 16
-            m = dr.zeros(mi.Spectrum)
-            mirrored = (light.x * view.y - light.y * view.x) < 0  # Δφ = φV − φL ∈ (π, 2π)
-            for e in range(16):
-                r, c = divmod(e, 4)
-                slots = []
-                for pick in picks:
-                    acc = mi.Float(0.0)
-                    for idx, w in corners:
-                        for ch, wc in pick:
-                            g = dr.gather(mi.Float, self._mflat, idx * stride + ch * 16 + e, active)
-                            acc += (w * wc) * g
-                    slots.append(acc)
-                val = (
-                    mi.UnpolarizedSpectrum(*slots)
-                    if n_spec > 1
-                    else mi.UnpolarizedSpectrum(slots[0])
-                )
-                sign = d_sign[r] * d_sign[c]  # to Mitsuba's handedness and sign of V
-                flip = mirror_sign[r] * mirror_sign[c]
-                if flip < 0:
-                    val = dr.select(mirrored, -val, val)
-                m[r, c] = val * float(sign)
-            k_in = -light
-            return mi.mueller.rotate_mueller_basis(
-                m, k_in, h_axis(k_in), mi.mueller.stokes_basis(k_in),
-                view, h_axis(view), mi.mueller.stokes_basis(view),
-            )  # fmt: skip
+            mirror = self._data.isotropic  # Δφ ∈ (π, 2π) folded onto the table's [0, π]
+            return self._assemble(self._mflat, corners, si, light, view, active, mirror)
 
         def _light_view(self, ctx, si, wo):
             if ctx.mode == radiance:
@@ -188,22 +282,34 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
-            active = active & (mi.Frame3f.cos_theta(si.wi) > 0)
+            wi = si.wi
+            active = active & (mi.Frame3f.cos_theta(wi) > 0)
             bs = dr.zeros(mi.BSDFSample3f)
-            if not ctx.is_enabled(glossy, 0):
+            has_g = ctx.is_enabled(glossy, 0)
+            has_d = self._use_delta and ctx.is_enabled(delta, 1)
+            if not (has_g or has_d):
                 return bs, dr.zeros(mi.Spectrum)
-            wo, pdf = self._sample_glossy(si, sample1, sample2, active)
-            ok = active & (mi.Frame3f.cos_theta(wo) > 0) & (pdf > 0)
+            p_d = self._delta_probability(ctx, si, active)  # 0 without a delta lobe
+            pick_d = active & (sample1 < p_d)
+            pick_g = active & ~pick_d
+            xi = dr.clip((sample1 - p_d) / dr.maximum(1.0 - p_d, 1e-30), 0.0, 1.0)
+            wo_g, pdf_g = self._sample_glossy(si, xi, sample2, pick_g)
+            ok_g = pick_g & (mi.Frame3f.cos_theta(wo_g) > 0) & (pdf_g > 0)
+            wo_d = mi.Vector3f(-wi.x, -wi.y, wi.z)
+            wo = dr.select(pick_d, wo_d, wo_g)
             light, view = self._light_view(ctx, si, wo)
-            val = self._mueller(si, light, view, ok) * (
-                mi.Frame3f.cos_theta(wo) / dr.maximum(pdf, 1e-30)
+            val = self._mueller(si, light, view, ok_g) * (
+                mi.Frame3f.cos_theta(wo_g) / dr.maximum((1.0 - p_d) * pdf_g, 1e-30)
             )
+            if self._use_delta:  # delta: the mirror direction, weight M_coh / P(delta)
+                m_d = self._coherent_mueller(si, light, view, pick_d)
+                val = dr.select(pick_d, m_d * (1.0 / dr.maximum(p_d, 1e-12)), val)
             bs.wo = wo
-            bs.pdf = pdf
+            bs.pdf = dr.select(pick_d, p_d, (1.0 - p_d) * pdf_g)
             bs.eta = 1.0
-            bs.sampled_type = mi.UInt32(+glossy)
-            bs.sampled_component = mi.UInt32(0)
-            return bs, dr.select(ok, val, dr.zeros(mi.Spectrum))
+            bs.sampled_type = dr.select(pick_d, mi.UInt32(+delta), mi.UInt32(+glossy))
+            bs.sampled_component = dr.select(pick_d, mi.UInt32(1), mi.UInt32(0))
+            return bs, dr.select(pick_d | ok_g, val, dr.zeros(mi.Spectrum))
 
         def to_string(self):
             return base.to_string(self).replace("EmscatterBSDF[", "EmscatterPolarizedBSDF[")
