@@ -196,13 +196,15 @@ def build_btdf_table(
         raise ValueError(f"dtype must be 'float64' or 'float32', got {dtype!r}")
     dt = np.dtype(dtype)
     wl = _check_wavelengths(wavelengths)
+    n_theta = _check_count("n_theta", n_theta, 2)
+    n_tt = 2 * n_theta if n_theta_t is None else _check_count("n_theta_t", n_theta_t, 2)
     ti = (
         default_theta(n_theta)
         if theta_i is None
         else grid.check_axis("theta_i", theta_i, 0, HALF_PI, high_open=True)
     )
     tt = (
-        default_theta(n_theta)
+        default_theta(n_tt)
         if theta_t is None
         else grid.check_axis("theta_t", theta_t, 0, HALF_PI, high_open=True)
     )
