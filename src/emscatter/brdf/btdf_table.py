@@ -220,6 +220,7 @@ def build_btdf_table(
             "or dtype='float32'"
         )
     eps = np.empty(wl.size)
+    slopes = None
     values = np.empty((wl.size, ti.size, tt.size, pd.size), dtype=dt)
     rows = max(1, _CHUNK // (tt.size * pd.size))
     for j, lam in enumerate(wl):
@@ -234,6 +235,7 @@ def build_btdf_table(
             # renderer Δφ → emscatter: φi = π (k̂_i = −wi with φ(wi) = 0), φt = Δφ
             res = gt.bistatic_transmission(rough, eps[j], k, a, b, c, math.pi, **options)
             values[j, lo : lo + rows] = res.unpolarized() / (4 * math.pi * np.cos(a) * np.cos(b))
+            slopes = [float(np.mean(x)) for x in res.info["slope_variance"]]
     values.setflags(write=False)
     meta = {
         "kind": "btdf",
@@ -242,6 +244,7 @@ def build_btdf_table(
         "shadowing": gt.check_transmission_shadowing(options.get("shadowing", True)),
         "material": material if isinstance(material, (int, float, str)) else repr(material),
         "units": {"values": "1/sr", "angles": "rad", "wavelengths": "m"},
+        "slope_variance": slopes,  # per direction (s_x, s_y), last wavelength; Beckmann α² = 2s
     }
     return BtdfTable(
         wavelengths=wl, theta_i=ti, theta_t=tt, phi_d=pd, values=values, eps=eps, metadata=meta
