@@ -238,3 +238,44 @@ def test_cap_energy_po_glass_near_grazing():
     # rows with room keep their transmission
     ok = (before["R"] + before["T"] < 0.99)[0]
     assert np.allclose(after["T"][0, ok], before["T"][0, ok], rtol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def mueller_btdf():
+    return build_btdf_table(SURF, EPS, [LAM], n_theta=30, n_theta_t=60, n_phi=61, polarized=True)
+
+
+@pytest.mark.parametrize("frame", ["emscatter", "mitsuba"])
+def test_mueller_table_equals_direct_at_nodes_both_sides(mueller_btdf, frame):
+    from emscatter.brdf.btdf import mueller_btdf_at
+
+    bt = mueller_btdf
+    assert np.array_equal(bt.mueller[:, 0, 0], bt.values)  # s0 is the unpolarized table
+    # off the poles (θ = 0 has no h/v basis), any φi, Δφ on either side of the plane: the
+    # mirrored half is P M P (P = diag(1, 1, −1, −1)), exact to rounding
+    ti, tt, pd = np.meshgrid(bt.theta_i[1::4], bt.theta_t[1::5], bt.phi_d[::6], indexing="ij")
+    for sign in (1.0, -1.0):
+        wi = directions(ti, 0.7 + 0 * ti)
+        wo = directions(math.pi - tt, 0.7 + sign * pd)
+        ref = mueller_btdf_at(SURF, EPS, LAM, wi, wo, frame=frame)
+        got = bt.evaluate_mueller(wi, wo, LAM, frame=frame)
+        assert np.abs(got - ref).max() < 1e-12 * np.abs(ref).max(), sign
+
+
+def test_mueller_table_interpolates_and_round_trips(mueller_btdf, tmp_path):
+    from emscatter.brdf.btdf import mueller_btdf_at
+
+    bt = mueller_btdf
+    wi, wo = _pairs(3000, seed=9)
+    ref = mueller_btdf_at(SURF, EPS, LAM, wi, wo)
+    got = bt.evaluate_mueller(wi, wo, LAM)
+    assert np.allclose(got[0, 0], bt.evaluate(wi, wo, LAM), rtol=1e-12, atol=0)
+    lobe = ref[0, 0] > 0.05 * ref[0, 0].max()
+    err = np.abs(got - ref)[..., lobe].max(axis=(0, 1)) / ref[0, 0][lobe]
+    assert np.median(err) < 0.02, np.median(err)  # 3° / 1.5° nodes: interpolation error
+    back = read_btdf_npz(write_btdf_npz(bt, tmp_path / "m.npz"))
+    assert np.array_equal(back.mueller, bt.mueller)
+    with pytest.raises(ValueError, match="no Mueller part"):
+        build_btdf_table(SURF, EPS, [LAM], n_theta=4, n_phi=5).evaluate_mueller(wi, wo, LAM)
+    with pytest.raises(ValueError, match=r"mueller\[:, 0, 0\] must equal values"):
+        bt.replace(mueller=np.asarray(bt.mueller) * 2)

@@ -40,9 +40,11 @@ import numpy as np
 from ..solvers.kirchhoff.common import check_roughness, slope_variances
 from ..solvers.kirchhoff.transmission import go as gt
 from . import grid
+from .btdf import emscatter_to_mitsuba
 from .build import _check_count, _check_wavelengths, default_phi_d, default_theta, material_eps
 from .energy import apply_energy_remedy
 from .frames import angles, fold_dphi
+from .mueller import jones_to_mueller
 from .sizing import format_bytes, memory_limit
 from .table import BrdfTable, _as_float_array
 
@@ -85,6 +87,7 @@ class BtdfTable:
     phi_d: np.ndarray
     values: np.ndarray
     eps: np.ndarray
+    mueller: np.ndarray | None = None
     metadata: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -110,6 +113,20 @@ class BtdfTable:
             raise ValueError(f"eps: {err}") from None
         eps.setflags(write=False)
         set_(self, "eps", eps)
+        if self.mueller is not None:
+            m = np.array(self.mueller, dtype=np.asarray(self.mueller).dtype.type)
+            m = m.astype(np.float32 if m.dtype == np.float32 else float)
+            if m.shape != (wl.size, 4, 4, *shape[1:]):
+                raise ValueError(
+                    f"mueller must have shape {(wl.size, 4, 4, *shape[1:])}, got {m.shape}"
+                )
+            if not np.all(np.isfinite(m)):
+                raise ValueError("mueller holds NaN or inf")
+            scale = max(float(np.max(self.values)), 1e-300)
+            if np.max(np.abs(m[:, 0, 0] - self.values)) > 1e-6 * scale:
+                raise ValueError("mueller[:, 0, 0] must equal values (the unpolarized BTDF)")
+            m.setflags(write=False)
+            set_(self, "mueller", m)
         if not isinstance(self.metadata, dict):
             raise TypeError(f"metadata must be a dict, got {type(self.metadata).__name__}")
 
@@ -154,6 +171,46 @@ class BtdfTable:
         to, po = angles(wo, "wo")
         return self.evaluate_angles(ti, math.pi - to, po - pi_, wavelength)
 
+    def evaluate_mueller(self, wi, wo, wavelength=None, *, frame: str = "mitsuba") -> np.ndarray:
+        """Mueller BTDF ``(4, 4, ...)`` [1/sr] at renderer directions (as :meth:`evaluate`;
+        ``wavelength``: None → every table wavelength on a leading axis, a scalar → none), in
+        Mitsuba's Stokes frames (``frame="mitsuba"``, what a ``*_polarized`` BSDF returns
+        divided by ``cosθ`` of the light) or emscatter's h/v bases (``"emscatter"``), as
+        :func:`.btdf.mueller_btdf_at`. Isotropy: the table holds ``Δφ ∈ [0, π]``; the mirrored
+        half-plane ``Δφ < 0`` is ``P M P`` with ``P = diag(1, 1, −1, −1)`` (a mirror reverses
+        the handedness of U and V in the h/v bases). Needs ``mueller`` (``polarized=True``)."""
+        if self.mueller is None:
+            raise ValueError("this BTDF table has no Mueller part (build it with polarized=True)")
+        if frame not in ("mitsuba", "emscatter"):
+            raise ValueError(f"frame must be 'mitsuba' or 'emscatter', got {frame!r}")
+        ti, pi_ = angles(wi, "wi")
+        to, po = angles(wo, "wo")
+        ti, pi_, to, po = np.broadcast_arrays(ti, pi_, to, po)
+        shape = ti.shape
+        ti, pi_, to, po = (a.reshape(-1) for a in (ti, pi_, to, po))
+        tt = math.pi - to
+        d = np.angle(np.exp(1j * (po - pi_)))  # signed Δφ in (−π, π]
+        scalar, cols, mat = BrdfTable._wavelength_weights(self, wavelength, "raise")
+        locs = [
+            grid.locate_clamped(self.theta_i, ti),
+            grid.locate_clamped(self.theta_t, tt),
+            grid.locate_clamped(self.phi_d, np.abs(d)),
+        ]
+        mm = self.mueller[cols]  # (n, 4, 4, grid)
+        flat = mm.reshape(mm.shape[0] * 16, *mm.shape[3:])
+        vals = grid.multilinear(flat, locs).reshape(mm.shape[0], 4, 4, -1)
+        vals = np.einsum("wc,cijn->wijn", mat, vals)
+        p = np.array([1.0, 1.0, -1.0, -1.0])
+        flip = np.where(d < 0, 1.0, 0.0)
+        sign = 1.0 - 2.0 * flip * (1 - np.outer(p, p)[:, :, None]) / 2
+        vals = vals * sign[None]
+        ok = (ti >= 0) & (ti < HALF_PI) & (tt >= 0) & (tt < HALF_PI)
+        vals[..., ~ok] = 0.0
+        if frame == "mitsuba":
+            vals = np.stack([emscatter_to_mitsuba(v, ti, pi_ + math.pi, tt, po) for v in vals])
+        vals = vals.reshape(*vals.shape[:3], *shape)
+        return vals[0] if scalar else vals
+
     def outgoing_weights(self) -> np.ndarray:
         """``W`` (``(n_tt, n_pd)``) with ``Σ W f[i] = ∫ f_t,interp cosθt dωt`` exactly."""
         return grid.theta_weights(self.theta_t)[:, None] * grid.phi_d_weights(self.phi_d)[None, :]
@@ -183,6 +240,7 @@ def build_btdf_table(
     theta_t=None,
     phi_d=None,
     dtype="float64",
+    polarized: bool = False,
     memory_limit_bytes: int | None = None,
     **options,
 ) -> BtdfTable:
@@ -246,7 +304,10 @@ def build_btdf_table(
         else grid.check_axis("theta_t", theta_t, 0, HALF_PI, high_open=True)
     )
     pd = default_phi_d(n_phi) if phi_d is None else grid.check_axis("phi_d", phi_d, 0, math.pi)
-    need = wl.size * ti.size * tt.size * pd.size * dt.itemsize + 40 * 8 * _CHUNK
+    if not isinstance(polarized, bool):
+        raise ValueError(f"polarized must be True or False, got {polarized!r}")
+    need = (17 if polarized else 1) * wl.size * ti.size * tt.size * pd.size * dt.itemsize
+    need += (80 if polarized else 40) * 8 * _CHUNK
     limit, where = (
         (memory_limit_bytes, "memory_limit_bytes") if memory_limit_bytes else memory_limit()
     )
@@ -259,6 +320,7 @@ def build_btdf_table(
     eps = np.empty(wl.size)
     slopes = None
     values = np.empty((wl.size, ti.size, tt.size, pd.size), dtype=dt)
+    mueller = np.empty((wl.size, 4, 4, ti.size, tt.size, pd.size), dtype=dt) if polarized else None
     rows = max(1, _CHUNK // (tt.size * pd.size))
     for j, lam in enumerate(wl):
         e = material_eps(material, float(lam))
@@ -273,6 +335,11 @@ def build_btdf_table(
             res = gt.bistatic_transmission(rough, eps[j], k, a, b, c, math.pi, **options)
             values[j, lo : lo + rows] = res.unpolarized() / (4 * math.pi * np.cos(a) * np.cos(b))
             slopes = [float(np.mean(x)) for x in res.info["slope_variance"]]
+            if polarized:  # the facet's Jones matrix as a Mueller matrix (.btdf)
+                jones = gt.transmission_jones(eps[j], a, b, c, math.pi)
+                mm = jones_to_mueller(jones) * (values[j, lo : lo + rows] / _m00(jones))
+                mueller[j, :, :, lo : lo + rows] = mm
+                mueller[j, 0, 0, lo : lo + rows] = values[j, lo : lo + rows]
     values.setflags(write=False)
     meta = {
         "kind": "btdf",
@@ -284,8 +351,15 @@ def build_btdf_table(
         "slope_variance": slopes,  # per direction (s_x, s_y), last wavelength; Beckmann α² = 2s
     }
     return BtdfTable(
-        wavelengths=wl, theta_i=ti, theta_t=tt, phi_d=pd, values=values, eps=eps, metadata=meta
-    )
+        wavelengths=wl, theta_i=ti, theta_t=tt, phi_d=pd, values=values, eps=eps,
+        mueller=mueller, metadata=meta,
+    )  # fmt: skip
+
+
+def _m00(jones) -> np.ndarray:
+    """``½ Σ |J_pq|²`` (the Mueller ``M₀₀`` of a Jones matrix), 1 where it vanishes."""
+    m = 0.5 * np.sum(np.abs(jones) ** 2, axis=(0, 1))
+    return np.where(m > 0, m, 1.0)
 
 
 def default_resolution(m: float, eps: float, n_theta: int = 90) -> tuple[int, int]:

@@ -17,7 +17,8 @@ they are read with the physical checks only.
 
 The transmission part of a BSDF (:class:`~.btdf_table.BtdfTable`) has its own file kind,
 ``format`` = ``"emscatter-btdf"`` (members ``wavelengths``, ``theta_i``, ``theta_t``,
-``phi_d``, ``values``, ``eps``, ``metadata_json``, the same checksum and checks):
+``phi_d``, ``values``, ``eps``, optionally ``mueller``, ``metadata_json``, the same checksum
+and checks):
 :func:`write_btdf_npz` / :func:`read_btdf_npz`; each reader refuses the other kind by name.
 """
 
@@ -38,7 +39,7 @@ __all__ = ["write_npz", "read_npz", "write_btdf_npz", "read_btdf_npz", "NPZ_FORM
 
 NPZ_FORMAT = "emscatter-brdf"
 BTDF_FORMAT = "emscatter-btdf"
-_BTDF_ARRAYS = ("wavelengths", "theta_i", "theta_t", "phi_d", "values", "eps")
+_BTDF_ARRAYS = ("wavelengths", "theta_i", "theta_t", "phi_d", "values", "eps", "mueller")
 _ARRAYS = ("wavelengths", "theta_i", "theta_o", "values", "phi_d", "phi_i", "phi_o",
            "coherent", "coherent_polarized", "polarized")  # fmt: skip
 _CHECKSUM = "checksum"
@@ -72,7 +73,7 @@ def write_btdf_npz(table, path: str | os.PathLike, *, compress: bool = True) -> 
     path = Path(path)
     if path.suffix != ".npz":
         raise ValueError(f"path must end in .npz, got {str(path)!r}")
-    arrays = {k: getattr(table, k) for k in _BTDF_ARRAYS}
+    arrays = {k: getattr(table, k) for k in _BTDF_ARRAYS if getattr(table, k) is not None}
     return _write(path, BTDF_FORMAT, arrays, table.metadata, compress)
 
 
@@ -147,7 +148,7 @@ def _read(path, kind: str, names: tuple) -> tuple[str, dict, dict]:
             "was altered or corrupted after it was written)"
         )
     required = {"format_version", "metadata_json", "wavelengths", "theta_i", "values"}
-    required |= {"theta_o"} if kind == NPZ_FORMAT else set(_BTDF_ARRAYS)
+    required |= {"theta_o"} if kind == NPZ_FORMAT else set(_BTDF_ARRAYS) - {"mueller"}
     missing = required - set(members)
     if missing:
         raise ValueError(
