@@ -33,7 +33,7 @@ from . import frames
 from .build import material_eps
 from .mueller import D_MITSUBA, _hv, _rotate_stokes_basis, jones_to_mueller, stokes_basis
 
-__all__ = ["btdf_at", "mueller_btdf_at"]
+__all__ = ["btdf_at", "mueller_btdf_at", "emscatter_to_mitsuba"]
 
 _OPTIONS = ("shadowing", "slope_variance", "k_max")
 
@@ -97,6 +97,14 @@ def mueller_btdf_at(
     m = jones_to_mueller(jones) * (inten / (4 * math.pi * np.cos(ti) * np.cos(tt)))
     if frame == "emscatter":
         return m
+    return emscatter_to_mitsuba(m, ti, pi_, tt, pt)
+
+
+def emscatter_to_mitsuba(m, ti, pi_, tt, pt) -> np.ndarray:
+    """A transmission Mueller matrix ``(4, 4, ...)`` from emscatter's h/v bases into
+    Mitsuba's Stokes frames, at emscatter angles ``θi, φi`` (incident ``k̂_i``) and ``θt, φt``
+    (transmitted ``k̂_t``) [rad], broadcast (as :func:`mueller_btdf_at`)."""
+    ti, pi_, tt, pt = np.broadcast_arrays(ti, pi_, tt, pt)
     ki, hi, _ = _hv(ti, pi_, -1.0)
     kt, ht, _ = _hv(tt, pt, -1.0)
     r_in = _rotate_stokes_basis(ki, hi, stokes_basis(ki))

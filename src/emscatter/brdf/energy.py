@@ -27,6 +27,13 @@ Sinkhorn scaling) until it settles, so every row that is reduced ends at albedo 
 other keeps ``s = 1``; a final decrease-only pass guarantees ``A_i ≤ 1`` to rounding. The coherent
 delta lobe is left as the solver gave it (it is ≤ 1 by construction). Where and by how much
 the remedy acted is recorded in ``metadata["energy"]``.
+
+Transmission and absorption. For a dielectric the reflection may not take the whole budget:
+``apply_energy_remedy(table, transmission=T, absorption=A)`` caps the reflected albedo per
+incidence node at ``limit − T − A`` (``R + T + A ≤ 1``), with ``T`` the transmitted fraction
+(a :class:`~.btdf_table.BtdfTable`'s albedo, or the smooth Fresnel transmissivity) and ``A``
+the absorbed one, instead of ``R ≤ 1`` alone (PO glass near grazing otherwise reflects up to 1
+where the smooth interface reflects 0.88 and transmits the rest).
 """
 
 from __future__ import annotations
@@ -52,9 +59,15 @@ def reciprocal_energy_scale(kernel: np.ndarray, coherent: np.ndarray, limit: flo
     """
     k = np.asarray(kernel, dtype=float)
     c = np.asarray(coherent, dtype=float)
-    if np.any(c > limit + 2 * _MARGIN):
-        raise ValueError(f"coherent reflectivity exceeds {limit} on its own: {c.max()!r}")
-    budget = np.maximum(limit - c, 0.0)  # coherent ≈ limit: no room left for the incoherent
+    over = c > np.asarray(limit, dtype=float) + 2 * _MARGIN
+    if np.any(over):
+        raise ValueError(
+            f"coherent reflectivity exceeds the energy limit on its own: {c[over][0]!r} > "
+            f"{np.broadcast_to(limit, c.shape)[over][0]!r} at incidence node "
+            f"{int(np.flatnonzero(over)[0])}"
+        )
+    # coherent ≈ limit: no room left for the incoherent
+    budget = np.maximum(np.asarray(limit, dtype=float) - c, 0.0)
     s = np.ones(k.shape[0])
     # 1) two-sided fixed point s_i ← min(1, s_i √(b_i / A_i)): rows that are reduced end at the
     #    limit, rows that are not keep s = 1 (a symmetric Sinkhorn scaling with a cap)
@@ -79,15 +92,46 @@ def reciprocal_energy_scale(kernel: np.ndarray, coherent: np.ndarray, limit: flo
     )
 
 
-def apply_energy_remedy(table, *, limit: float = 1.0):
+def _per_node(name, value, shape):
+    """``value`` (None → 0) as an array of ``shape`` (n_wl, n_ti[, n_pi]) in [0, 1], checked."""
+    if value is None:
+        return np.zeros(shape)
+    a = np.asarray(value, dtype=float)
+    try:
+        a = np.broadcast_to(a, shape)
+    except ValueError:
+        raise ValueError(
+            f"{name} must broadcast to (n_wl, n_theta_i[, n_phi_i]) = {shape}, got {a.shape}"
+        ) from None
+    if not np.all(np.isfinite(a)) or np.any(a < 0) or np.any(a > 1):
+        bad = a[~(np.isfinite(a) & (a >= 0) & (a <= 1))].ravel()[0]
+        raise ValueError(f"{name} must be fractions of the incident power in [0, 1], got {bad!r}")
+    return a
+
+
+def apply_energy_remedy(table, *, limit: float = 1.0, transmission=None, absorption=None):
     """The table with the remedy applied where needed and ``metadata["energy"]`` filled:
     ``max_albedo_before`` / ``max_albedo_after`` per wavelength, ``theta_i_deg_exceeding``
-    (nodes where the albedo exceeded ``limit``), ``min_scale`` and the full ``scale`` per
-    wavelength and direction node, ``remedy_applied``."""
+    (nodes where the albedo exceeded its limit), ``min_scale`` and the full ``scale`` per
+    wavelength and direction node, ``remedy_applied``.
+
+    ``transmission``, ``absorption``: fractions ``T``, ``A`` [-] of the incident power per
+    wavelength and incidence node (anything broadcasting to ``(n_wl, n_ti)``, anisotropic
+    ``(n_wl, n_ti, n_pi)``; None → 0): the reflected albedo is capped at ``limit − T − A``
+    per node, so that ``R + T + A ≤ limit`` (module docstring)."""
     if not table.symmetric_grid:
         raise ValueError("the reciprocal energy remedy needs equal incident/outgoing axes")
     w = table.outgoing_weights()
     n_wl = table.wavelengths.size
+    inc_shape = table.coherent.shape
+    t_frac = _per_node("transmission", transmission, inc_shape)
+    a_frac = _per_node("absorption", absorption, inc_shape)
+    if np.any(t_frac + a_frac > limit):
+        raise ValueError(
+            f"transmission + absorption exceed the energy limit {limit}: up to "
+            f"{float((t_frac + a_frac).max())!r} (nothing left for the reflection)"
+        )
+    budgets = limit - t_frac - a_frac
     values = np.array(table.values)
     pol = None if table.polarized is None else np.array(table.polarized)
     nd = w.size  # anisotropic: direction nodes θ × φ
@@ -102,9 +146,10 @@ def apply_energy_remedy(table, *, limit: float = 1.0):
             f = values[j].reshape(nd, nd)
             kern = f * flat_w[None, :]
             c = table.coherent[j].reshape(-1)
+        row_limit = budgets[j].reshape(-1)
         alb = kern.sum(axis=1) + c
         before.append(float(alb.max()))
-        exceed = alb > limit
+        exceed = alb > row_limit
         if table.isotropic:
             exceeding.append(np.degrees(table.theta_i[exceed]).round(4).tolist())
         else:
@@ -114,7 +159,7 @@ def apply_energy_remedy(table, *, limit: float = 1.0):
                 .round(4)
                 .tolist()
             )
-        s, _ = reciprocal_energy_scale(kern, c, limit - _MARGIN)
+        s, _ = reciprocal_energy_scale(kern, c, np.maximum(row_limit - _MARGIN, 0.0))
         if np.any(s < 1):
             applied = True
             if table.isotropic:
@@ -132,6 +177,8 @@ def apply_energy_remedy(table, *, limit: float = 1.0):
         "remedy": REMEDY,
         "remedy_applied": applied,
         "limit": limit,
+        "transmission_counted": transmission is not None,
+        "absorption_counted": absorption is not None,
         "max_albedo_before": before,
         "max_albedo_after": after,
         "theta_i_deg_exceeding": exceeding,

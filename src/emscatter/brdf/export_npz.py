@@ -14,6 +14,12 @@ rejected with a ``ValueError`` naming the file and what is wrong; so is one whos
 the table's physical checks (finite, ``f_r ≥ 0``, coherent reflectivity in ``[0, 1]``, axes
 in range; :class:`~.table.BrdfTable`). Files written before the checksum existed have none:
 they are read with the physical checks only.
+
+The transmission part of a BSDF (:class:`~.btdf_table.BtdfTable`) has its own file kind,
+``format`` = ``"emscatter-btdf"`` (members ``wavelengths``, ``theta_i``, ``theta_t``,
+``phi_d``, ``values``, ``eps``, optionally ``mueller``, ``metadata_json``, the same checksum
+and checks):
+:func:`write_btdf_npz` / :func:`read_btdf_npz`; each reader refuses the other kind by name.
 """
 
 from __future__ import annotations
@@ -26,11 +32,14 @@ from pathlib import Path
 import numpy as np
 
 from ..io import _jsonable, atomic_path
+from .btdf_table import BtdfTable
 from .table import FORMAT_VERSION, BrdfTable
 
-__all__ = ["write_npz", "read_npz", "NPZ_FORMAT"]
+__all__ = ["write_npz", "read_npz", "write_btdf_npz", "read_btdf_npz", "NPZ_FORMAT", "BTDF_FORMAT"]
 
 NPZ_FORMAT = "emscatter-brdf"
+BTDF_FORMAT = "emscatter-btdf"
+_BTDF_ARRAYS = ("wavelengths", "theta_i", "theta_t", "phi_d", "values", "eps", "mueller")
 _ARRAYS = ("wavelengths", "theta_i", "theta_o", "values", "phi_d", "phi_i", "phi_o",
            "coherent", "coherent_polarized", "polarized")  # fmt: skip
 _CHECKSUM = "checksum"
@@ -54,10 +63,25 @@ def write_npz(table: BrdfTable, path: str | os.PathLike, *, compress: bool = Tru
     if path.suffix != ".npz":
         raise ValueError(f"path must end in .npz, got {str(path)!r}")
     arrays = {k: getattr(table, k) for k in _ARRAYS if getattr(table, k) is not None}
-    meta = json.dumps(table.metadata, default=_jsonable, allow_nan=False)
+    return _write(path, NPZ_FORMAT, arrays, table.metadata, compress)
+
+
+def write_btdf_npz(table, path: str | os.PathLike, *, compress: bool = True) -> Path:
+    """Write a :class:`~.btdf_table.BtdfTable` to ``path`` (``.npz``) atomically."""
+    if not isinstance(table, BtdfTable):
+        raise TypeError(f"table must be a BtdfTable, got {type(table).__name__}")
+    path = Path(path)
+    if path.suffix != ".npz":
+        raise ValueError(f"path must end in .npz, got {str(path)!r}")
+    arrays = {k: getattr(table, k) for k in _BTDF_ARRAYS if getattr(table, k) is not None}
+    return _write(path, BTDF_FORMAT, arrays, table.metadata, compress)
+
+
+def _write(path: Path, fmt: str, arrays: dict, metadata: dict, compress: bool) -> Path:
+    meta = json.dumps(metadata, default=_jsonable, allow_nan=False)
     save = np.savez_compressed if compress else np.savez
     members = {
-        "format": np.array(NPZ_FORMAT),
+        "format": np.array(fmt),
         "format_version": np.array(FORMAT_VERSION),
         "metadata_json": np.array(meta),
         **{k: np.asarray(v) for k, v in arrays.items()},
@@ -70,6 +94,25 @@ def write_npz(table: BrdfTable, path: str | os.PathLike, *, compress: bool = Tru
 def read_npz(path: str | os.PathLike) -> BrdfTable:
     """Read a table written by :func:`write_npz`; a ``ValueError`` naming the file and what is
     wrong for a foreign, truncated or damaged file (module docstring)."""
+    name, metadata, fields = _read(path, NPZ_FORMAT, _ARRAYS)
+    try:
+        return BrdfTable(metadata=metadata, **fields)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{name} is damaged: {exc}") from None
+
+
+def read_btdf_npz(path: str | os.PathLike):
+    """Read a :class:`~.btdf_table.BtdfTable` written by :func:`write_btdf_npz` (errors as
+    :func:`read_npz`)."""
+    name, metadata, fields = _read(path, BTDF_FORMAT, _BTDF_ARRAYS)
+    try:
+        return BtdfTable(metadata=metadata, **fields)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{name} is damaged: {exc}") from None
+
+
+def _read(path, kind: str, names: tuple) -> tuple[str, dict, dict]:
+    """``(quoted name, metadata, arrays)`` of a checked file of format ``kind``."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such BRDF file: {str(path)!r}")
@@ -89,16 +132,24 @@ def read_npz(path: str | os.PathLike) -> BrdfTable:
             except Exception as exc:  # noqa: BLE001 — zlib, CRC, zip flags, npy header...
                 raise ValueError(f"{name} is damaged: {type(exc).__name__}: {exc}") from None
     fmt = members.get("format")
-    if fmt is None or fmt.dtype.kind != "U" or str(fmt) != NPZ_FORMAT:
-        raise ValueError(f"{name} is not an emscatter BRDF table (no format={NPZ_FORMAT!r} entry)")
+    what = "BTDF" if kind == BTDF_FORMAT else "BRDF"
+    if fmt is None or fmt.dtype.kind != "U" or str(fmt) != kind:
+        other = ""
+        if fmt is not None and fmt.dtype.kind == "U" and str(fmt) in (NPZ_FORMAT, BTDF_FORMAT):
+            reader = "read_btdf_npz" if str(fmt) == BTDF_FORMAT else "read_npz"
+            other = f"; it holds format={str(fmt)!r}: read it with {reader}"
+        raise ValueError(
+            f"{name} is not an emscatter {what} table (no format={kind!r} entry{other})"
+        )
     stored = members.pop(_CHECKSUM, None)
     if stored is not None and str(stored) != _checksum(members):
         raise ValueError(
             f"{name} is damaged: its SHA-256 checksum does not match its contents (the file "
             "was altered or corrupted after it was written)"
         )
-    missing = {"format_version", "wavelengths", "theta_i", "theta_o", "values",
-               "metadata_json"} - set(members)  # fmt: skip
+    required = {"format_version", "metadata_json", "wavelengths", "theta_i", "values"}
+    required |= {"theta_o"} if kind == NPZ_FORMAT else set(_BTDF_ARRAYS) - {"mueller"}
+    missing = required - set(members)
     if missing:
         raise ValueError(
             f"{name} is damaged or not an emscatter table: it lacks the entries {sorted(missing)}"
@@ -116,8 +167,4 @@ def read_npz(path: str | os.PathLike) -> BrdfTable:
         metadata = json.loads(str(members["metadata_json"]))
     except ValueError as exc:
         raise ValueError(f"{name} is damaged: its metadata is not JSON ({exc})") from None
-    fields = {k: members[k] for k in _ARRAYS if k in members}
-    try:
-        return BrdfTable(metadata=metadata, **fields)
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"{name} is damaged: {exc}") from None
+    return name, metadata, {k: members[k] for k in names if k in members}

@@ -1,0 +1,347 @@
+"""A rough dielectric interface from emscatter tables as a Mitsuba 3 BSDF: reflection on both
+sides and transmission through it (plugin ``"emscatter_dielectric"``).
+
+Usage, after ``mi.set_variant(...)`` with an RGB or mono LLVM variant (``llvm_ad_rgb``
+tested)::
+
+    from emscatter.render import dielectric as em_d
+    bsdf = mi.load_dict(em_d.bsdf_dict(reflection=brdf, transmission=btdf, inner=brdf_in))
+
+``reflection``: the :class:`~emscatter.brdf.table.BrdfTable` of the outside (``ε``),
+``transmission``: the :class:`~emscatter.brdf.btdf_table.BtdfTable` of light from outside,
+``inner`` (optional): the BRDF of the inside (``1/ε``: internal reflection, total internal
+reflection included; without it nothing is reflected inside). The reflection lobes are the
+``"emscatter"`` plugin (:mod:`.mitsuba`) of each table; this plugin adds the transmission lobe
+and picks between them. A separate plugin rather than a third lobe in ``"emscatter"``: the
+reflection plugin stays one-sided like Mitsuba's ``measured``, and a dielectric needs three
+tables that belong together.
+
+Conventions — those of Mitsuba's ``roughdielectric`` (``src/bsdfs/roughdielectric.cpp``):
+``si.wi`` towards the viewer, ``wo`` towards the light, ``eval`` returns ``f · |cosθ_wo|``. The
+table holds the radiance BTDF ``f_t(l → v)`` for light ``l`` above and viewer ``v`` below
+(Walter et al. 2007, eq. 21, the ``η²`` radiance compression included). By the reciprocity
+of the BTDF, ``f(l → v)/η_v² = f(v → l)/η_l²`` (Veach 1997, §5.2), so in radiance mode
+
+* viewer inside, light outside: ``f_table(l, v)``;
+* viewer outside, light inside: ``f_table(v, l) / ε`` (``roughdielectric``'s ``inv_eta²``);
+
+in importance mode (adjoint transport) without the ``1/ε``, and the inside case carries
+``1/ε`` instead. Components: 0 glossy reflection (outside), 1 glossy transmission, 2 glossy
+reflection inside (when ``inner`` is given); flags front and back side, non-symmetric.
+
+Sampling: reflection vs transmission by their albedos at the viewer's θ (outside: ``R`` of the
+reflection table, ``T`` of the BTDF table, both exact integrals of the interpolants; inside:
+``R_in`` of ``inner`` and ``1 − R_in``), the reflection lobes by the ``"emscatter"`` plugin's
+sampler, the transmission by Beckmann microfacet normals refracted (Walter et al. 2007,
+eqs. 17, 28, 40: ``p(wo) = D(m) cosθm |wo·m| η_o² / (η_i v·m + η_o wo·m)²``) with the table's
+slope variance (``α² = 2s``); ``pdf`` is that density exactly, times the lobe probability.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from ..brdf.btdf_table import BtdfTable
+from ..brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
+from ..brdf.table import BrdfTable
+from . import mitsuba as em_mi
+from .plugin_data import Axis
+
+__all__ = ["PLUGIN_NAME", "bsdf_dict", "register", "register_dielectric"]
+
+PLUGIN_NAME = "emscatter_dielectric"
+_SETS: dict[str, dict] = {}
+_CLASSES: dict[str, type] = {}
+_COUNTER = itertools.count()
+
+
+def register_dielectric(reflection, transmission, inner=None, key: str | None = None) -> str:
+    """Register the tables of one interface (module docstring); returns the key for
+    ``{"type": "emscatter_dielectric", "tables": key}``."""
+    if not isinstance(reflection, BrdfTable) or not reflection.isotropic:
+        raise TypeError(
+            f"reflection must be an isotropic BrdfTable, got {type(reflection).__name__}"
+        )
+    if not isinstance(transmission, BtdfTable):
+        raise TypeError(f"transmission must be a BtdfTable, got {type(transmission).__name__}")
+    if inner is not None and (not isinstance(inner, BrdfTable) or not inner.isotropic):
+        raise TypeError(f"inner must be None or an isotropic BrdfTable, got {type(inner).__name__}")
+    for name, t in (("reflection", reflection), ("inner", inner)):
+        if t is not None and not np.allclose(t.wavelengths, transmission.wavelengths, rtol=1e-9):
+            raise ValueError(
+                f"{name} and transmission tables must share their wavelengths, got "
+                f"{t.wavelengths.tolist()} and {transmission.wavelengths.tolist()} m"
+            )
+    for name, ax in zip(("theta_i", "theta_t", "phi_d"), transmission.grid_axes, strict=True):
+        if not Axis.of(ax).uniform:
+            raise ValueError(f"the plugin needs uniform BTDF axes; {name} is not uniform")
+    slope = transmission.metadata.get("slope_variance")
+    if slope is None:
+        raise ValueError(
+            "the BTDF table has no metadata['slope_variance'] (build_btdf_table sets it)"
+        )
+    key = f"emscatter-dielectric-{next(_COUNTER)}" if key is None else str(key)
+    _SETS[key] = {
+        "reflection": em_mi.register_table(reflection),
+        "inner": None if inner is None else em_mi.register_table(inner),
+        "transmission": transmission,
+        "r_albedo": reflection.albedo().total,
+        "r_in_albedo": None if inner is None else inner.albedo().total,
+        "theta_r": reflection.theta_i,
+        "theta_in": None if inner is None else inner.theta_i,
+    }
+    return key
+
+
+def register(name: str = PLUGIN_NAME) -> None:
+    """Register the plugin (and ``"emscatter"``) for the current Mitsuba variant."""
+    mi = em_mi._mitsuba()
+    em_mi.register()
+    variant = mi.variant()
+    if "polarized" in variant or em_mi.channels_of_variant(variant) == "spectral":
+        raise ValueError(
+            f"the emscatter_dielectric plugin supports RGB and mono variants, got {variant!r}"
+        )
+    if variant not in _CLASSES:
+        _CLASSES[variant] = _bsdf_class(mi)
+        mi.register_bsdf(name, lambda props: _CLASSES[variant](props))
+
+
+def bsdf_dict(reflection, transmission, inner=None) -> dict:
+    """A ``mi.load_dict`` entry (registers the plugin and the tables)."""
+    register()
+    return {"type": PLUGIN_NAME, "tables": register_dielectric(reflection, transmission, inner)}
+
+
+def _channels(wavelengths, channels: str) -> np.ndarray:
+    rgb = spectrum_to_rgb_weights(wavelengths)
+    return RGB_LUMINANCE[None, :] @ rgb if channels == "mono" else rgb
+
+
+def _bsdf_class(mi):
+    import drjit as dr
+
+    channels = em_mi.channels_of_variant(mi.variant())
+    f = mi.BSDFFlags
+    sides = f.FrontSide | f.BackSide | f.NonSymmetric
+    refl, trans = f.GlossyReflection | sides, f.GlossyTransmission | sides
+
+    def tex(cls, a):
+        return cls(
+            mi.TensorXf(np.ascontiguousarray(a, dtype=np.float32)),
+            use_accel=False,
+            filter_mode=dr.FilterMode.Linear,
+            wrap_mode=dr.WrapMode.Clamp,
+        )
+
+    def coord(x, axis: Axis):
+        pos = dr.clip((x - axis.start) * (1.0 / axis.step), 0.0, axis.size - 1.0)
+        return (pos + 0.5) * (1.0 / axis.size)
+
+    def theta(z):
+        return dr.acos(dr.clip(dr.abs(z), 0.0, 1.0))
+
+    def flip(w):
+        return mi.Vector3f(w.x, w.y, -w.z)
+
+    class DielectricBSDF(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            key = str(props.get("tables", ""))
+            if key not in _SETS:
+                raise ValueError(
+                    f"emscatter_dielectric plugin: 'tables' must be a key from "
+                    f"register_dielectric, got {key!r}"
+                )
+            s = _SETS[key]
+            bt: BtdfTable = s["transmission"]
+            mat = _channels(bt.wavelengths, channels)
+            self._c = mat.shape[0]
+            vals = np.clip(np.moveaxis(np.asarray(bt.values, float), 0, -1) @ mat.T, 0.0, None)
+            self._tex = tex(mi.Texture3f, np.transpose(vals, (0, 1, 2, 3)))
+            self._ax = [Axis.of(a) for a in bt.grid_axes]
+            self._eps = float(np.mean(bt.eps))
+            self._eta = math.sqrt(self._eps)
+            sx, sy = bt.metadata["slope_variance"]
+            self._alpha = math.sqrt(sx + sy)  # Beckmann α² = 2s (isotropic: s = (sx + sy)/2)
+            lum = RGB_LUMINANCE @ spectrum_to_rgb_weights(bt.wavelengths)
+            t_alb = lum @ bt.albedo()
+            r_alb = np.interp(bt.theta_i, s["theta_r"], lum @ s["r_albedo"])
+            p_t = t_alb / np.maximum(t_alb + r_alb, 1e-12)
+            self._pt_out = tex(mi.Texture1f, p_t[:, None])
+            self._ax_pt = Axis.of(bt.theta_i)
+            self._refl = mi.load_dict({"type": "emscatter", "table": s["reflection"]})
+            self._inner = None
+            if s["inner"] is not None:
+                self._inner = mi.load_dict({"type": "emscatter", "table": s["inner"]})
+                r_in = np.clip(lum @ s["r_in_albedo"], 0.0, 1.0)
+                self._pt_in = tex(mi.Texture1f, np.clip(1.0 - r_in, 0.02, 1.0)[:, None])
+                self._ax_in = Axis.of(s["theta_in"])
+            comps = [refl, trans] + ([refl] if self._inner is not None else [])
+            self.m_components = comps
+            self.m_flags = refl | trans
+
+        def _spec(self, chans):
+            if channels == "rgb":
+                return mi.Spectrum(chans[0], chans[1], chans[2])
+            return mi.Spectrum(chans[0])
+
+        def _ft(self, a, b, active):
+            """Table BTDF f_t(a → b), ``a`` above, ``b`` below (no cosine)."""
+            ti, tt = theta(a.z), theta(b.z)
+            dphi = dr.abs(dr.atan2(b.y, b.x) - dr.atan2(a.y, a.x))
+            dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
+            ax = self._ax
+            pos = mi.Point3f(coord(dphi, ax[2]), coord(tt, ax[1]), coord(ti, ax[0]))
+            return self._spec(self._tex.eval(pos, active))
+
+        def _p_t(self, v, active):
+            """Probability of sampling transmission for the viewer ``v``."""
+            out = v.z > 0
+            p_out = self._pt_out.eval(mi.Point1f(coord(theta(v.z), self._ax_pt)), active)[0]
+            if self._inner is None:
+                return dr.select(out, p_out, 1.0)
+            p_in = self._pt_in.eval(mi.Point1f(coord(theta(v.z), self._ax_in)), active)[0]
+            return dr.select(out, p_out, p_in)
+
+        def _inner_si(self, si):
+            s2 = mi.SurfaceInteraction3f(si)
+            s2.wi = flip(si.wi)
+            return s2
+
+        def _eval_t(self, ctx, si, wo, active):
+            v = si.wi
+            out = v.z > 0
+            a = dr.select(out, v, wo)  # the direction above
+            b = dr.select(out, wo, v)
+            val = self._ft(a, b, active) * dr.abs(wo.z)
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            scale = dr.select(
+                out, 1.0 / self._eps if radiance else 1.0, 1.0 if radiance else 1.0 / self._eps
+            )
+            return val * scale
+
+        def eval(self, ctx, si, wo, active=True):
+            v = si.wi
+            active = active & (v.z != 0) & (wo.z != 0)
+            reflect = v.z * wo.z > 0
+            res = mi.Spectrum(0.0)
+            if ctx.is_enabled(f.GlossyReflection, 0):
+                m = active & reflect & (v.z > 0)
+                res = dr.select(m, self._refl.eval(ctx, si, wo, m), res)
+            if ctx.is_enabled(f.GlossyTransmission, 1):
+                m = active & ~reflect
+                res = dr.select(m, self._eval_t(ctx, si, wo, m), res)
+            if self._inner is not None and ctx.is_enabled(f.GlossyReflection, 2):
+                m = active & reflect & (v.z < 0)
+                res = dr.select(m, self._inner.eval(ctx, self._inner_si(si), flip(wo), m), res)
+            return res
+
+        def _pdf_t(self, v, wo, active):
+            """Walter et al. 2007 eq. 17 × the Beckmann normal density (module docstring)."""
+            out = v.z > 0
+            n_i = dr.select(out, 1.0, self._eta)
+            n_o = dr.select(out, self._eta, 1.0)
+            m = dr.normalize(-(n_i * v + n_o * wo))
+            m = dr.mulsign(m, m.z)
+            vm, om = dr.dot(v, m), dr.dot(wo, m)
+            ok = active & (vm * om < 0) & (m.z > 1e-7)
+            c2 = dr.square(m.z)
+            a2 = self._alpha**2
+            d = dr.exp(-(1.0 - c2) / (c2 * a2)) / (math.pi * a2 * dr.square(c2))
+            jac = dr.square(n_o) * dr.abs(om) / dr.maximum(dr.square(n_i * vm + n_o * om), 1e-30)
+            return dr.select(ok, d * m.z * jac, 0.0)
+
+        def pdf(self, ctx, si, wo, active=True):
+            v = si.wi
+            active = active & (v.z != 0) & (wo.z != 0)
+            reflect = v.z * wo.z > 0
+            p_t = self._p_t(v, active)
+            has_r0 = ctx.is_enabled(f.GlossyReflection, 0)
+            has_t = ctx.is_enabled(f.GlossyTransmission, 1)
+            p_t = p_t if (has_r0 and has_t) else (1.0 if has_t else 0.0)
+            res = mi.Float(0.0)
+            if has_r0:
+                m = active & reflect & (v.z > 0)
+                res = dr.select(m, (1.0 - p_t) * self._refl.pdf(ctx, si, wo, m), res)
+            if has_t:
+                m = active & ~reflect
+                res = dr.select(m, p_t * self._pdf_t(v, wo, m), res)
+            if self._inner is not None and ctx.is_enabled(f.GlossyReflection, 2):
+                m = active & reflect & (v.z < 0)
+                p_in = self._inner.pdf(ctx, self._inner_si(si), flip(wo), m)
+                res = dr.select(m, (1.0 - p_t) * p_in, res)
+            return res
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+        def _sample_t(self, v, u):
+            """A refracted direction through a Beckmann normal (Walter et al. 2007 eq. 28)."""
+            a2 = self._alpha**2
+            tan2 = -a2 * dr.log(dr.maximum(1.0 - u.x, 1e-30))
+            c = dr.rsqrt(1.0 + tan2)
+            s = dr.sqrt(dr.maximum(1.0 - c * c, 0.0))
+            sp, cp = dr.sincos(2 * math.pi * u.y)
+            m = mi.Vector3f(cp * s, sp * s, c)
+            out = v.z > 0
+            eta = dr.select(out, self._eta, 1.0 / self._eta)  # n_o / n_i
+            vm = dr.dot(v, m)
+            k = 1.0 - (1.0 - vm * vm) / (eta * eta)
+            ok = (k > 0) & (vm * v.z > 0)
+            wo = m * (vm / eta - dr.mulsign(dr.sqrt(dr.maximum(k, 0.0)), vm)) - v / eta
+            return dr.normalize(wo), ok, eta
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            v = si.wi
+            active = active & (v.z != 0)
+            has_r0 = ctx.is_enabled(f.GlossyReflection, 0)
+            has_t = ctx.is_enabled(f.GlossyTransmission, 1)
+            p_t = self._p_t(v, active)
+            p_t = p_t if (has_r0 and has_t) else (1.0 if has_t else 0.0)
+            pick_t = active & (sample1 < p_t)
+            pick_r = active & ~pick_t
+            xi = dr.clip((sample1 - p_t) / dr.maximum(1.0 - p_t, 1e-30), 0.0, 1.0)
+            bs, w = self._refl.sample(ctx, si, xi, sample2, pick_r & (v.z > 0))
+            bs_r, w_r = bs, w / dr.maximum(1.0 - p_t, 1e-30)
+            bs_r.pdf = bs.pdf * (1.0 - p_t)
+            if self._inner is not None:
+                s2 = self._inner_si(si)
+                bi, wi_ = self._inner.sample(ctx, s2, xi, sample2, pick_r & (v.z < 0))
+                bi.wo = flip(bi.wo)
+                inside = v.z < 0
+                bs_r.wo = dr.select(inside, bi.wo, bs_r.wo)
+                bs_r.pdf = dr.select(inside, bi.pdf * (1.0 - p_t), bs_r.pdf)
+                w_r = dr.select(inside, wi_ / dr.maximum(1.0 - p_t, 1e-30), w_r)
+                bs_r.sampled_component = dr.select(inside, mi.UInt32(2), mi.UInt32(0))
+            wo_t, ok_t, eta = self._sample_t(v, sample2)
+            ok_t = pick_t & ok_t & (wo_t.z * v.z < 0)
+            pdf_t = p_t * self._pdf_t(v, wo_t, ok_t)
+            ok_t = ok_t & (pdf_t > 0)
+            w_t = self._eval_t(ctx, si, wo_t, ok_t) / dr.maximum(pdf_t, 1e-30)
+            out = dr.zeros(mi.BSDFSample3f)
+            out.wo = dr.select(pick_t, wo_t, bs_r.wo)
+            out.pdf = dr.select(pick_t, pdf_t, bs_r.pdf)
+            out.eta = dr.select(pick_t, eta, 1.0)
+            out.sampled_type = dr.select(
+                pick_t, mi.UInt32(+f.GlossyTransmission), mi.UInt32(+f.GlossyReflection)
+            )
+            out.sampled_component = dr.select(pick_t, mi.UInt32(1), bs_r.sampled_component)
+            weight = dr.select(pick_t, w_t, w_r)
+            valid_r = pick_r & (bs_r.pdf > 0) & (bs_r.wo.z * v.z > 0)
+            valid = dr.select(pick_t, ok_t, valid_r)
+            if self._inner is None:
+                valid = valid & (pick_t | (v.z > 0))
+            out.pdf = dr.select(valid, out.pdf, 0.0)
+            return out, dr.select(valid, weight, mi.Spectrum(0.0))
+
+        def traverse(self, callback):
+            pass
+
+        def to_string(self):
+            return f"EmscatterDielectricBSDF[η = {self._eta:.6g}, α = {self._alpha:.4g}]"
+
+    return DielectricBSDF
