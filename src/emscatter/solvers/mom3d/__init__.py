@@ -14,6 +14,7 @@ module                     what it holds
 :mod:`.dielectric_model`   one dielectric realization: reflected/transmitted power, Fresnel beam
 :mod:`.incident`           the tapered wave as a Gaussian plane-wave spectrum, its exact power
 :mod:`.farfield`           far-field amplitudes, polarization vectors, hemisphere quadrature
+:mod:`.gridsum`            fast far-field sums on the grid (Taylor in height, gridding NUFFT)
 =========================  ===============================================================
 
 Not registered as a solver yet; call
