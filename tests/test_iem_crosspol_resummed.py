@@ -45,7 +45,8 @@ def test_saturates_below_spm2_for_exponential():
     ratios = []
     for ks in (0.3, 0.8, 1.3):
         rough = em.ExponentialCorrelation(ks / K, 8.0 / K)
-        ratios.append(backscatter_resummed(rough, 15 + 2j, K, TH) / backscatter_hv(rough, 15 + 2j, K, TH))
+        a = backscatter_resummed(rough, 15 + 2j, K, TH)
+        ratios.append(a / backscatter_hv(rough, 15 + 2j, K, TH))
     ratios = np.array(ratios)
     assert np.all(ratios < 1.0)
     assert np.all(np.diff(ratios, axis=0) < 0)
