@@ -143,10 +143,14 @@ def check_in_range(
 _FLOATS = (float, np.float64)
 
 
-def check_angle(name: str, value, *, low: float = 0.0, high: float = math.pi / 2) -> np.ndarray:
+def check_angle(
+    name: str, value, *, low: float = 0.0, high: float = math.pi / 2, copy: bool = True
+) -> np.ndarray:
     """Angles in radians, finite, within ``[low, high]`` (default ``[0, π/2]``).
 
-    Messages give the allowed range and the offending value in radians and in degrees."""
+    Messages give the allowed range and the offending value in radians and in degrees.
+    ``copy=False``: a float64 array that passes is returned itself, not copied (for a caller
+    that holds its own copy already, e.g. the public API's checked angles; issue 22)."""
     if type(value) in _FLOATS:  # the common scalar: one comparison (NaN and inf fail it)
         if low <= value <= high:
             return np.array(value, dtype=float)
@@ -156,7 +160,7 @@ def check_angle(name: str, value, *, low: float = 0.0, high: float = math.pi / 2
                 return value.copy()
         # real floats: min and max in range ⇒ finite and in range (NaN fails the comparison)
         elif low <= value.min() and value.max() <= high:
-            return value.astype(float)
+            return value.astype(float) if copy else value
     return _check_angle_slow(name, value, low, high)
 
 

@@ -259,9 +259,12 @@ def geometry(
     g.theta_s = g.theta_i if ts is ti else _broadcast(ts, shape)  # backscatter: one view
     g.phi_s, g.phi_i = _broadcast(ps, shape), _broadcast(pi_, shape)
     g._eps = PEC if is_pec(eps) else None  # (broadcast on first use)
-    g.compact = (ti, ts, ps - pi_, pi_, ps, PEC if is_pec(eps) else eps)
-    g._flats = [None] * 6
     g.phi_i_zero = bool(pi_.ndim == 0 and float(pi_) == 0.0)
+    # φi = +0.0 (the usual call): φs − φi is φs bit for bit (x − 0.0 = x, also for −0.0), so
+    # no n-element difference is made; φi = −0.0 would turn −0.0 into +0.0, it subtracts.
+    same = g.phi_i_zero and math.copysign(1.0, float(pi_)) > 0
+    g.compact = (ti, ts, ps if same else ps - pi_, pi_, ps, PEC if is_pec(eps) else eps)
+    g._flats = [None] * 6
     g.dimension = dimension
     return g
 

@@ -332,16 +332,19 @@ def _coherent(rough, eps_c, k, ti, shape, n_radial, n_azimuth, phi_i=0.0, k_max=
     return out.reshape(2, *shape), clipped
 
 
-def sigma0_broadcast(rough, eps, k, ti, ts, phi_s, phi_i=0.0, *, fresnel=False):
+def sigma0_broadcast(rough, eps, k, ti, ts, phi_s, phi_i=0.0, *, fresnel=False, own_phi=False):
     """First-order σ⁰ for checked inputs (``rough`` a Roughness, ``k`` > 0 [rad/m], ``eps``
     "pec" or complex (array broadcasting with the angles), ``ti``/``ts`` [rad] in [0, π/2]):
     returns ``(sigma0 (2, 2, *shape), (ti, ts, phi_s, phi_i, eps) broadcast, fresnel)`` where
     ``fresnel`` is ``|R|²`` (2, *shape) at θi when asked, else None. The compiled kernel runs
-    where it covers the case (:mod:`.compiled`), else the numpy reference in blocks."""
+    where it covers the case (:mod:`.compiled`), else the numpy reference in blocks.
+    ``own_phi``: ``phi_s``, ``phi_i`` are the caller's own float arrays (the public API's
+    checked copies): range-checked here, not copied a second time."""
     eps_c = PEC if is_pec(eps) else np.asarray(eps, dtype=complex)
     big = 1e6
-    ps = check_angle("phi_s", phi_s, low=-big, high=big)
-    pi_ = check_angle("phi_i", phi_i, low=-big, high=big)
+    copy = not own_phi
+    ps = check_angle("phi_s", phi_s, low=-big, high=big, copy=copy)
+    pi_ = check_angle("phi_i", phi_i, low=-big, high=big, copy=copy)
     arrays = {"theta_i": ti, "theta_s": ts, "phi_s": ps, "phi_i": pi_}
     scalar_eps = is_pec(eps_c) or eps_c.ndim == 0
     if not scalar_eps:
@@ -353,7 +356,9 @@ def sigma0_broadcast(rough, eps, k, ti, ts, phi_s, phi_i=0.0, *, fresnel=False):
     n = int(np.prod(shape))
     sig = np.empty((2, 2, n))
     fi, fs = ti_b.ravel(), ts_b.ravel()
-    dphi = (ps_b - pi_b).ravel()
+    # φi = +0.0 (the usual call): φs − φi is φs bit for bit (x − 0.0 = x, −0.0 included)
+    zero = pi_.ndim == 0 and float(pi_) == 0.0 and math.copysign(1.0, float(pi_)) > 0
+    dphi = ps_b.ravel() if zero else (ps_b - pi_b).ravel()
     fe = eps_c if scalar_eps else eps_b.ravel()
     coh = np.empty((2, n)) if fresnel else None
     compiled = scalar_eps and spm_compiled.spm1_sigma0(rough, eps_c, k, fi, fs, dphi, sig)

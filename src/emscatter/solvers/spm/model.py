@@ -97,8 +97,9 @@ def bistatic(
 
 
 def _bistatic_checked(
-    rough, eps, k, ti, ts, phi_s, phi_i=0.0, *, order=2, coherent=True, k_max=None, validity=False
-) -> Scattering:
+    rough, eps, k, ti, ts, phi_s, phi_i=0.0, *, order=2, coherent=True, k_max=None, validity=False,
+    own_phi=False,
+) -> Scattering:  # fmt: skip
     """:func:`bistatic` for inputs checked as it checks them (``bistatic.checked``, the public
     API's entry): ``rough`` a Roughness, ``k`` a float > 0, ``eps`` "pec" or complex, ``ti``
     and ``ts`` float arrays in [0, π/2]. ``info["validity"]`` is None unless ``validity``
@@ -108,7 +109,7 @@ def _bistatic_checked(
     band_check = getattr(rough, "warn_band", None)  # a measured map: does it resolve 2k?
     band = band_check(k, stacklevel=4) if band_check is not None else None
     sig, (ti_b, ts_b, ps_b, pi_b, eps_b), coh = sigma0_broadcast(
-        rough, eps, k, ti, ts, phi_s, phi_i, fresnel=order < 2
+        rough, eps, k, ti, ts, phi_s, phi_i, fresnel=order < 2, own_phi=own_phi
     )
     shape = ti_b.shape
     if not coherent:
@@ -143,4 +144,10 @@ def _bistatic_checked(
     )
 
 
-bistatic.checked = _bistatic_checked  # the API's entry for inputs it has checked
+def _api_checked(*args, **options) -> Scattering:
+    """The public API's entry (``bistatic.checked``): :func:`_bistatic_checked` with the
+    API's own checked φ copies, range-checked but not copied again (``own_phi``)."""
+    return _bistatic_checked(*args, **options, own_phi=True)
+
+
+bistatic.checked = _api_checked  # the API's entry for inputs it has checked
