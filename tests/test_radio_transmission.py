@@ -152,3 +152,27 @@ def test_bad_input_names_the_parameter(kwargs, match):
     with pytest.raises(ValueError, match=match):
         diffuse_transmission(ROUGH, args.pop("eps"), args.pop("frequency"),
                              args.pop("thickness"), **args)  # fmt: skip
+
+
+def test_transmitted_lobe_integrates_to_t_diff_and_is_reciprocal_per_azimuth():
+    n = 16
+    x, w = np.polynomial.legendre.leggauss(n)
+    mu = 0.5 * (x + 1)
+    b = diffuse_transmission(ROUGH, 4.0 + 0.2j, F, 0.05, theta=np.arccos(mu), n_mu=n, n_phi=48,
+                             n_modes=32, conserve=False)  # fmt: skip
+    xp, wp = np.polynomial.legendre.leggauss(48)
+    phi, w_phi = math.pi * (xp + 1), math.pi * wp  # (0, 2π)
+    lobe = b.transmitted_lobe(phi)  # (pol, θi, μo, φ) [1/sr]
+    total = np.einsum("pijf,j,f->pi", lobe, b.mu_weights, w_phi)
+    np.testing.assert_allclose(total, b.t_diff, rtol=1e-8, atol=1e-14)
+    assert lobe.min() > -1e-6 * lobe.max()  # the mode sum does not ring negative
+    # forward: through a symmetric slab the lobe peaks at φ = 0 near θo = θi
+    i = np.argmin(np.abs(mu - np.cos(np.radians(30))))
+    peak = np.unravel_index(np.argmax(lobe[0, i]), lobe[0, i].shape)
+    assert abs(np.degrees(np.arccos(mu[peak[0]]) - np.arccos(mu[i]))) < 8
+    assert np.cos(phi[peak[1]]) > 0.99
+    # reciprocity per azimuth: the BTDF lobe / cosθo, coherent share divided out
+    keep = 1 - b.r_coh - b.t_coh
+    f = (lobe / keep[..., None, None]).mean(0) / mu[None, :, None]
+    big = f > 1e-3 * f.max()
+    np.testing.assert_allclose(f[big], f.transpose(1, 0, 2)[big], rtol=1e-8)

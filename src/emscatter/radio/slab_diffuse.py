@@ -87,7 +87,22 @@ class DiffuseTransmission:
     reasons: list = field(default_factory=list)
     face_deficit: np.ndarray | None = None  # (2, n) external-face 1 − R − T before scaling
     t_lobe: np.ndarray | None = None  # (2, n, n_mu) T_diff per air cosine node (sum = t_diff)
-    mu_nodes: np.ndarray | None = None
+    mu_nodes: np.ndarray | None = None  # air-side cosine nodes of t_lobe
+    mu_weights: np.ndarray | None = None
+    t_modes: np.ndarray | None = None  # (2, n, n_mu, M + 1) azimuthal modes of t_lobe
+
+    def transmitted_lobe(self, phi) -> np.ndarray:
+        """Diffusely transmitted power per unit solid angle [1/sr], ``(2, n, n_mu, n_phi)``
+        over ``(pol_i, θi, μ node, φ)``, at azimuths ``phi`` [rad] from the plane of incidence
+        (``φ = 0``: forward): ``Σ_m (2 − δ_m0) T_m cos(mφ) / (2π w_j)``; its integral over
+        the back hemisphere is ``t_diff`` (needs ``n_modes > 0``)."""
+        if self.t_modes is None:
+            raise ValueError("no azimuthal modes: call diffuse_transmission(..., n_modes=M > 0)")
+        ph = np.atleast_1d(np.asarray(phi, dtype=float))
+        m = np.arange(self.t_modes.shape[-1])
+        basis = np.where(m == 0, 1.0, 2.0)[:, None] * np.cos(m[:, None] * ph[None, :])
+        lobe = self.t_modes @ basis / (2.0 * math.pi)
+        return lobe / self.mu_weights[None, None, :, None]
 
     @property
     def total(self) -> np.ndarray:
@@ -100,14 +115,16 @@ def _gauss01(n: int):
     return 0.5 * (x + 1.0), 0.5 * w
 
 
-def face_kernels(rough, eps_rel: float, k: float, cos_in, mu, w_mu, n_phi: int):
-    """Azimuth-integrated GO kernels of one face for incidence cosines ``cos_in``.
+def face_kernels(rough, eps_rel: float, k: float, cos_in, mu, w_mu, n_phi: int, n_modes=0):
+    """GO kernels of one face for incidence cosines ``cos_in``, per azimuthal Fourier mode.
 
-    Returns ``(K_r, K_t)`` of shape ``(2, n_in, n_mu)`` [-]: the power per unit incident
-    power of polarization ``p`` scattered into the reflected (transmitted) cosine node ``j``,
-    summed over the scattered polarizations:
-    ``K[p, i, j] = w_j ∫₀^{2π} Σ_q σ⁰_qp(θi, θj, φ) / (4π cosθi) dφ`` (Walter et al. 2007 eq.
-    21 for transmission; emscatter GO for reflection). ``eps_rel`` is real (> 0, ≠ 1).
+    Returns ``(K_r, K_t)`` of shape ``(n_modes + 1, 2, n_in, n_mu)`` [-]: mode ``m`` of the
+    power per unit incident power of polarization ``p`` scattered into the reflected
+    (transmitted) cosine node ``j``, summed over the scattered polarizations:
+    ``K_m[p, i, j] = w_j ∫₀^{2π} Σ_q σ⁰_qp(θi, θj, φ) cos(mφ) / (4π cosθi) dφ`` (Walter et al.
+    2007 eq. 21 for transmission; emscatter GO for reflection); ``m = 0`` is the power into
+    node ``j``. Kernels of isotropic faces depend on ``φ`` only through the azimuth difference,
+    so a chain of faces multiplies its modes (the convolution theorem). ``eps_rel`` is real.
     """
     from ..solvers.kirchhoff import go
     from ..solvers.kirchhoff.transmission.go import bistatic_transmission
@@ -115,6 +132,7 @@ def face_kernels(rough, eps_rel: float, k: float, cos_in, mu, w_mu, n_phi: int):
     xp, wp = np.polynomial.legendre.leggauss(n_phi)
     phi = 0.5 * math.pi * (xp + 1.0)  # (0, π): isotropic lobes are mirror-symmetric in φ
     wphi = 0.5 * math.pi * wp  # ×2 for (π, 2π) below
+    cosm = np.cos(np.arange(n_modes + 1)[:, None] * phi[None, :]) * wphi  # (M + 1, n_phi)
     ti = np.arccos(np.clip(cos_in, 0.0, 1.0))[:, None, None]
     tj = np.arccos(mu)[None, :, None]
     ph = phi[None, None, :]
@@ -125,8 +143,8 @@ def face_kernels(rough, eps_rel: float, k: float, cos_in, mu, w_mu, n_phi: int):
         else:
             s = bistatic_transmission(rough, eps_rel, k, ti, tj, ph)
         sig = s.sigma0.sum(axis=0)  # (p, i, j, φ): summed over scattered polarizations
-        ker = 2.0 * np.tensordot(sig, wphi, axes=([-1], [0]))
-        ker = ker / (4.0 * math.pi * np.cos(ti[..., 0])[None]) * w_mu[None, None, :]
+        ker = 2.0 * np.einsum("pijf,mf->mpij", sig, cosm)
+        ker = ker / (4.0 * math.pi * np.cos(ti[..., 0])) * w_mu
         out.append(ker)
     return out[0], out[1]
 
@@ -154,6 +172,7 @@ def diffuse_transmission(
     n_phi: int = 48,
     conserve: bool = True,
     out_of_range: str = "raise",
+    n_modes: int = 0,
 ) -> DiffuseTransmission:
     """Power budget of a rough slab per incidence (module docstring).
 
@@ -168,6 +187,8 @@ def diffuse_transmission(
     n_mu, n_phi : Gauss–Legendre nodes in cosθ (each hemisphere) and in φ ∈ (0, π).
     conserve : scale each face's diffuse rows to ``R + T = 1`` (``L = 0``).
     out_of_range : ``"raise"`` (default), ``"warn"`` or ``"ignore"`` outside GO's validity.
+    n_modes : azimuthal Fourier modes of the transmitted lobe to keep (0: the azimuth-integrated
+        budget only; ``< n_phi``), for :meth:`DiffuseTransmission.transmitted_lobe`.
     """
     e = _check_eps(eps)
     f = float(frequency)
@@ -180,6 +201,8 @@ def diffuse_transmission(
     for name, n in (("n_mu", n_mu), ("n_phi", n_phi)):
         if not isinstance(n, (int, np.integer)) or n < 4:
             raise ValueError(f"{name} must be an integer ≥ 4, got {n!r}")
+    if not isinstance(n_modes, (int, np.integer)) or not 0 <= n_modes < n_phi:
+        raise ValueError(f"n_modes must be an integer in [0, n_phi = {n_phi}), got {n_modes!r}")
     th = np.radians(np.arange(0.0, 81.0, 5.0)) if theta is None else np.atleast_1d(theta)
     th = np.asarray(th, dtype=float)
     if th.ndim != 1 or not np.all(np.isfinite(th)) or np.any((th < 0) | (th >= math.pi / 2)):
@@ -217,10 +240,11 @@ def diffuse_transmission(
     mu, wmu = _gauss01(n_mu)
     er = e.real
     # front face from air: polarization-resolved, at the incidence angles
-    kr0, kt0 = face_kernels(rough, er, k, c, mu, wmu, n_phi)
+    kr0m, kt0m = face_kernels(rough, er, k, c, mu, wmu, n_phi, n_modes)
     # a face from inside: unpolarized (mean over incident polarizations), on the nodes
-    kr1, kt1 = face_kernels(rough, 1.0 / er, k, mu, mu, wmu, n_phi)
-    kr1, kt1 = kr1.mean(axis=0), kt1.mean(axis=0)
+    kr1m, kt1m = face_kernels(rough, 1.0 / er, k, mu, mu, wmu, n_phi, n_modes)
+    kr1m, kt1m = kr1m.mean(axis=1), kt1m.mean(axis=1)
+    kr0, kt0, kr1, kt1 = kr0m[0], kt0m[0], kr1m[0], kt1m[0]
     def0 = 1.0 - kr0.sum(-1) - kt0.sum(-1)  # (2, n)
     def1 = 1.0 - kr1.sum(-1) - kt1.sum(-1)  # (n_mu,)
     if conserve:
@@ -228,6 +252,7 @@ def diffuse_transmission(
         kr0, kt0 = kr0 * s0[..., None], kt0 * s0[..., None]
         s1 = 1.0 / (1.0 - def1)
         kr1, kt1 = kr1 * s1[:, None], kt1 * s1[:, None]
+        kt0m, kr1m, kt1m = kt0m * s0[..., None], kr1m * s1[:, None], kt1m * s1[:, None]
     loss0 = np.zeros_like(def0) if conserve else def0
     loss1 = np.zeros_like(def1) if conserve else def1
     k2z = k * np.sqrt(e - er * (1.0 - mu * mu) + 0j)
@@ -245,10 +270,16 @@ def diffuse_transmission(
     # (negligible where GO holds: their share is reported in r_coh, t_coh)
     keep = np.clip(1.0 - r_coh - t_coh, 0.0, 1.0)
     t_lobe = t_lobe * keep[..., None]
+    modes = None
+    if n_modes:  # the same chain per azimuthal mode (the power fluxes above are mode 0)
+        pm = att[None, :, None] * kr1m
+        tm = att[None, :, None] * kt1m
+        inv2m = np.linalg.inv(eye[None] - pm @ pm)  # (M + 1, n_mu, n_mu)
+        modes = np.einsum("mpij,mjk->pikm", kt0m, inv2m @ tm) * keep[..., None, None]
     r_diff = (kr0.sum(-1) + r_int.sum(-1)) * keep
     out = DiffuseTransmission(
         th, f, e, d, r_coh, r_diff, t_coh, t_lobe.sum(-1), absorbed * keep, lost * keep,
-        False, bool(rep["valid"]), list(rep["reasons"]), def0, t_lobe, mu,
+        False, bool(rep["valid"]), list(rep["reasons"]), def0, t_lobe, mu, wmu, modes,
     )  # fmt: skip
     if not np.all(np.isfinite(out.total)):
         raise ValueError("diffuse slab transmission produced NaN/inf (please report the inputs)")
