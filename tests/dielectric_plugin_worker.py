@@ -24,6 +24,7 @@ ALPHA = 0.3
 
 
 def tables(n_theta: int, wavelengths=(550e-9,)):
+    wl = list(wavelengths)
     from emscatter.brdf import build_table
     from emscatter.brdf.btdf_table import build_btdf_table
     from emscatter.spectra import GaussianCorrelation
@@ -34,11 +35,9 @@ def tables(n_theta: int, wavelengths=(550e-9,)):
     res = (n_theta, 2 * n_theta + 1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        out = build_table(surf, EPS, list(wavelengths), method="go", resolution=res, energy="off", **opts)
-        inner = build_table(
-            surf, 1 / EPS, list(wavelengths), method="go", resolution=res, energy="off", **opts
-        )
-    bt = build_btdf_table(surf, EPS, list(wavelengths), n_theta=n_theta, n_phi=2 * n_theta + 1, **opts)
+        out = build_table(surf, EPS, wl, method="go", resolution=res, energy="off", **opts)
+        inner = build_table(surf, 1 / EPS, wl, method="go", resolution=res, energy="off", **opts)
+    bt = build_btdf_table(surf, EPS, wl, n_theta=n_theta, n_phi=2 * n_theta + 1, **opts)
     return out, bt, inner
 
 

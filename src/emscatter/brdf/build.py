@@ -212,7 +212,7 @@ def build_table(
         (diagnostics — such a table may hand a renderer energy it does not have).
     transmission : what the reflection leaves room for, ``R ≤ 1 − T``: ``"auto"`` (default) the
         GO transmitted fraction ``T(θi)`` of dielectric wavelengths (``Re ε > 0``, loss tangent
-        ≤ 1e-2; :mod:`.transmittance`, ~0.2 s per wavelength; conductors: ``T = 0``, no cost),
+        ≤ 1e-2; :mod:`.transmittance`, ~0.4 s per wavelength; conductors: ``T = 0``, no cost),
         ``"off"`` (``R ≤ 1``), a :class:`~.btdf_table.BtdfTable` (its albedo) or ``T`` per node;
         recorded in ``metadata["energy"]`` (``T``, ``transmission``).
     out_of_range : the solvers' validity policy (``"warn"``, ``"raise"``, ``"ignore"``).
