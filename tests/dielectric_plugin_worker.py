@@ -2,7 +2,9 @@
 variants are per process): ``python tests/dielectric_plugin_worker.py JSON`` with
 ``{"variant", "n_theta", "v": [[x, y, z], ...] (towards the viewer, Mitsuba's si.wi),
 "l": [...] (towards the light, Mitsuba's wo), "mode": "radiance" | "importance",
-"samples": int (optional: sample/pdf check), "render": int (optional: sphere image side)}``
+"samples": int (optional: sample/pdf check), "render": int (optional: sphere image side),
+"wavelengths_nm": [...] (optional, default [550]: the tables' wavelengths; spectral variants
+get random sampled wavelengths in [400, 700] nm and return every channel)}``
 builds GO tables of glass (ε = 2.25, Beckmann α = 0.3, separable Smith: Mitsuba's
 ``roughdielectric`` within GO), loads them in the ``emscatter_dielectric`` plugin and prints
 ``{"em": [...], "rd": [...]}`` (``bsdf.eval``, channel 0) and the optional checks as JSON on
@@ -21,7 +23,8 @@ EPS = 2.25
 ALPHA = 0.3
 
 
-def tables(n_theta: int):
+def tables(n_theta: int, wavelengths=(550e-9,)):
+    wl = list(wavelengths)
     from emscatter.brdf import build_table
     from emscatter.brdf.btdf_table import build_btdf_table
     from emscatter.spectra import GaussianCorrelation
@@ -32,11 +35,9 @@ def tables(n_theta: int):
     res = (n_theta, 2 * n_theta + 1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        out = build_table(surf, EPS, [550e-9], method="go", resolution=res, energy="off", **opts)
-        inner = build_table(
-            surf, 1 / EPS, [550e-9], method="go", resolution=res, energy="off", **opts
-        )
-    bt = build_btdf_table(surf, EPS, [550e-9], n_theta=n_theta, n_phi=2 * n_theta + 1, **opts)
+        out = build_table(surf, EPS, wl, method="go", resolution=res, energy="off", **opts)
+        inner = build_table(surf, 1 / EPS, wl, method="go", resolution=res, energy="off", **opts)
+    bt = build_btdf_table(surf, EPS, wl, n_theta=n_theta, n_phi=2 * n_theta + 1, **opts)
     return out, bt, inner
 
 
@@ -48,7 +49,9 @@ def main(arg: str) -> None:
     mi.set_variant(args["variant"])
     from emscatter.render import dielectric as em_d
 
-    out, bt, inner = tables(int(args["n_theta"]))
+    wls = [x * 1e-9 for x in args.get("wavelengths_nm", [550])]
+    out, bt, inner = tables(int(args["n_theta"]), wls)
+    spectral = "spectral" in args["variant"]
     bsdfs = {
         "em": mi.load_dict(em_d.bsdf_dict(out, bt, inner)),
         "rd": mi.load_dict({"type": "roughdielectric", "distribution": "beckmann",
@@ -65,8 +68,17 @@ def main(arg: str) -> None:
     si.wi = mi.Vector3f(*(mi.Float(c) for c in v.T))
     wo = mi.Vector3f(*(mi.Float(c) for c in lt.T))
     res = {}
+    if spectral:
+        rng = np.random.default_rng(7)
+        lam = rng.uniform(400, 700, (4, v.shape[0]))
+        si.wavelengths = mi.Spectrum(*(mi.Float(x) for x in lam))
+        res["lambda_nm"] = lam.tolist()
     for name, b in bsdfs.items():
-        res[name] = np.array(b.eval(ctx, si, wo)[0], dtype=float).tolist()
+        val = b.eval(ctx, si, wo)
+        if spectral:
+            res[name] = [np.array(val[j], dtype=float).tolist() for j in range(4)]
+        else:
+            res[name] = np.array(val[0], dtype=float).tolist()
     n = int(args.get("samples", 0))
     if n:  # sample → pdf consistency and the mean weight (the albedo) per viewer direction
         b = bsdfs["em"]

@@ -39,10 +39,10 @@ from ..scattering import Scattering
 from ..solvers import select
 from ..spectra import check_roughness
 from . import chunks, frames, grid, sizing
-from .energy import apply_energy_remedy
 from .progress import build_progress
 from .progress import tick as _tick
 from .table import FORMAT_VERSION, BrdfTable
+from .transmittance import remedy_with_transmission
 
 __all__ = ["build_table", "default_theta", "default_phi_d", "default_phi", "material_eps"]
 
@@ -175,6 +175,7 @@ def build_table(
     anisotropic: bool | None = None,
     polarized: bool = False,
     energy: str = "rescale",
+    transmission="auto",
     out_of_range: str = "warn",
     tol: float | None = None,
     tol_floor: float = 1e-2,
@@ -209,6 +210,11 @@ def build_table(
     energy : ``"rescale"`` (default) applies the reciprocal energy remedy
         (:mod:`.energy`) where the albedo exceeds 1; ``"off"`` only records the albedo
         (diagnostics — such a table may hand a renderer energy it does not have).
+    transmission : what the reflection leaves room for, ``R ≤ 1 − T``: ``"auto"`` (default) the
+        GO transmitted fraction ``T(θi)`` of dielectric wavelengths (``Re ε > 0``, loss tangent
+        ≤ 1e-2; :mod:`.transmittance`, ~0.4 s per wavelength; conductors: ``T = 0``, no cost),
+        ``"off"`` (``R ≤ 1``), a :class:`~.btdf_table.BtdfTable` (its albedo) or ``T`` per node;
+        recorded in ``metadata["energy"]`` (``T``, ``transmission``).
     out_of_range : the solvers' validity policy (``"warn"``, ``"raise"``, ``"ignore"``).
     dtype : storage of ``values`` (and ``polarized``): ``"float64"`` or ``"float32"`` (half
         the memory; ~6e-8 relative rounding, far below any interpolation error).
@@ -227,6 +233,10 @@ def build_table(
     wl = _check_wavelengths(wavelengths)
     if energy not in ("rescale", "off"):
         raise ValueError(f"energy must be 'rescale' or 'off', got {energy!r}")
+    if isinstance(transmission, str) and transmission not in ("auto", "off"):
+        raise ValueError(
+            f"transmission must be 'auto', 'off', a BtdfTable or T per node, got {transmission!r}"
+        )
     if out_of_range == "nan":
         raise ValueError(
             "out_of_range='nan' cannot build a table (a table holds no NaN); use 'warn' "
@@ -253,7 +263,7 @@ def build_table(
             phi,
             anisotropic,
             polarized,
-            energy,
+            (energy, transmission),
             out_of_range,
             tol,
             tol_floor,
@@ -322,10 +332,12 @@ def _build(
     dtype="float64",
     memory_limit=None,
 ):
-    """The table and ``[(wavelength [m], solver, validity report), ...]`` of its fill calls;
+    """The table and ``[(wavelength [m], solver, validity report), ...]`` of its fill calls
+    (``energy``: the mode or ``(mode, transmission)``);
     the solvers run with ``out_of_range="ignore"`` when the policy is ``"warn"`` (the table
     warns once per cause instead, :func:`validity_messages`)."""
     policy = "ignore" if out_of_range == "warn" else out_of_range
+    energy, transmission = energy if isinstance(energy, tuple) else (energy, "off")
     if resolution is not None and not (
         isinstance(resolution, tuple | list) and len(resolution) == 2
     ):
@@ -458,7 +470,9 @@ def _build(
         **grid_kw,
     )
     if energy == "rescale":
-        return apply_energy_remedy(table), reports
+        phi_n = phi_ax if aniso else None
+        args = (rough, setups, theta_ax, phi_n, options, transmission)
+        return remedy_with_transmission(table, *args), reports
     return _record_albedo(table, "off"), reports
 
 

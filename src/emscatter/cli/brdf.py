@@ -122,9 +122,67 @@ def check_inputs(a) -> tuple[str, object, object]:
             material_eps(a.material, float(lam))
         except (ValueError, TypeError) as exc:
             raise ValueError(f"--material {a.material!s} at {fmt(lam * 1e9)} nm: {exc}") from None
-    if default_wavelengths and fmt_name != "pbsdf":
+    if default_wavelengths and fmt_name != "pbsdf" and not a.transmission:
         _warn_colour(a.material, wl)
+    if a.transmission:
+        _check_transmission(a, fmt_name, rough, wl)
     return fmt_name, rough, wl
+
+
+def transmission_paths(output) -> tuple:
+    """``(OUT_btdf.npz, OUT_inner.npz)`` beside ``OUT.npz``."""
+    from pathlib import Path
+
+    out = Path(output)
+    return out.with_name(f"{out.stem}_btdf.npz"), out.with_name(f"{out.stem}_inner.npz")
+
+
+def _check_transmission(a, fmt_name, rough, wl) -> None:
+    from ..brdf.build import material_eps
+    from ..solvers.kirchhoff.transmission.go import check_transmission_eps
+
+    if fmt_name != "npz":
+        raise ValueError(
+            f"--transmission writes .npz tables (OUT_btdf.npz beside OUT.npz), got {fmt_name} "
+            f"output {str(a.output)!r}"
+        )
+    if a.anisotropic or not rough.is_isotropic:
+        raise ValueError("--transmission needs an isotropic surface (BTDF tables are θi, θt, Δφ)")
+    if a.tol is not None:
+        raise ValueError("--transmission takes a fixed grid (--n-theta/--n-phi), not --tol")
+    for lam in wl:
+        try:
+            check_transmission_eps(material_eps(a.material, float(lam)))
+        except ValueError as exc:
+            raise ValueError(
+                f"--transmission needs a lossless dielectric: --material {a.material!s} at "
+                f"{fmt(lam * 1e9)} nm: {exc}"
+            ) from None
+
+
+def _run_transmission(a, rough, wl, resolution, table_kw):
+    """The BRDF, the BTDF and the inside BRDF of a rough dielectric, the reflection capped
+    at ``1 − T`` of the BTDF (:func:`~emscatter.brdf.btdf_table.cap_energy`)."""
+    from ..brdf import build_table
+    from ..brdf.btdf_table import build_btdf_table, cap_energy
+    from ..brdf.build import material_eps
+
+    n_theta = 90 if resolution is None else resolution[0]
+    bt = build_btdf_table(
+        rough, a.material, wl, n_theta=n_theta, polarized=a.polarized,
+        dtype=table_kw["dtype"],
+    )  # fmt: skip
+    kw = dict(table_kw, energy="off")
+    table = build_table(rough, a.material, wl, **kw)
+    mat = a.material
+
+    def inside(lam):
+        return 1.0 / complex(material_eps(mat, float(lam))).real
+
+    inner = build_table(rough, inside, wl, **dict(table_kw))
+    if a.energy == "rescale":
+        table, bt = cap_energy(table, bt)
+    return table, bt, inner
 
 
 def _warn_colour(material, wl) -> None:
@@ -235,6 +293,13 @@ def register(subparsers) -> None:
     )
     p.add_argument("--polarized", action="store_true", help="also store f_r per polarization pair")
     p.add_argument(
+        "--transmission",
+        action="store_true",
+        help="a rough dielectric (real ε > 0, ≠ 1): also write its GO BTDF as OUT_btdf.npz and "
+        "the inside reflection (1/ε) as OUT_inner.npz (.npz output, isotropic; the reflection "
+        "capped at 1 − T of that BTDF); render them with emscatter render OUT.npz --btdf …",
+    )
+    p.add_argument(
         "--float32",
         action="store_true",
         help="store the table in float32 (half the memory; every exporter and the plugin take it)",
@@ -293,29 +358,37 @@ def run(a) -> int:
         resolution = (n_theta, max(180, 2 * n_theta) if a.n_phi is None else a.n_phi)
     if fmt_name == "pbsdf":
         return _run_pbsdf(a, rough, wl, resolution)
+    table_kw = dict(
+        method=a.method,
+        resolution=resolution,
+        tol=a.tol,
+        anisotropic=True if a.anisotropic else None,
+        polarized=a.polarized,
+        energy=a.energy,
+        out_of_range=a.out_of_range,
+        dtype="float32" if a.float32 else "float64",
+        progress=False if a.quiet else None,
+    )
     try:
-        table = build_table(
-            rough,
-            a.material,
-            wl,
-            method=a.method,
-            resolution=resolution,
-            tol=a.tol,
-            anisotropic=True if a.anisotropic else None,
-            polarized=a.polarized,
-            energy=a.energy,
-            out_of_range=a.out_of_range,
-            dtype="float32" if a.float32 else "float64",
-            progress=False if a.quiet else None,
-        )
+        if a.transmission:
+            table, bt, inner = _run_transmission(a, rough, wl, resolution, table_kw)
+        else:
+            table = build_table(rough, a.material, wl, **table_kw)
     except MemoryError as exc:  # the estimate, before any work: a user error, not a crash
         raise ValueError(exc.cli() if hasattr(exc, "cli") else str(exc)) from None
+    if a.transmission:
+        from ..brdf.export_npz import write_btdf_npz, write_npz
+
+        bt_path, in_path = transmission_paths(a.output)
+        print(f"wrote {write_btdf_npz(bt, bt_path)} (btdf): {bt.describe()}")
+        print(f"wrote {write_npz(inner, in_path)} (npz, inside 1/ε): {inner.describe()}")
     path = export(table, a.output, fmt_name, rgl_channels=a.rgl_channels)
     energy = table.metadata.get("energy", {})
     print(f"wrote {path} ({fmt_name}): {table.describe()}")
     if energy.get("remedy_applied"):
         worst = max(energy["max_albedo_before"])
-        print(f"energy remedy applied: albedo up to {fmt(worst)} brought to ≤ 1 (see metadata)")
+        limit = "1 − T (the transmitted fraction)" if energy.get("transmission_counted") else "1"
+        print(f"energy remedy applied: albedo up to {fmt(worst)} capped at ≤ {limit} (metadata)")
     if a.fit:
         _fit(table, a.fit, a.fit_json)
     return 0

@@ -10,7 +10,13 @@ to the BSDF as ``<ref id="emscatter"/>`` (its film sets the image size). The wor
 (exists, ``.npz``/``.bsdf``, an emscatter BRDF table), the outputs, the variant, ``--spp`` and
 the size. Errors are one line with exit status 2.
 
+A rough dielectric (``emscatter brdf glass.npz --material 2.25 --transmission``): SOURCE the
+outside reflection, ``--btdf`` its BTDF table and ``--inner`` the inside reflection, rendered
+through the ``emscatter_dielectric`` plugin (:mod:`emscatter.render.dielectric`; ``llvm_*``
+RGB and spectral variants).
+
     emscatter render gold.npz --out gold.png --width 256 --spp 64 --variant llvm_ad_spectral
+    emscatter render glass.npz --btdf glass_btdf.npz --inner glass_inner.npz --out glass.png
 """
 
 from __future__ import annotations
@@ -85,6 +91,20 @@ def register(subparsers) -> None:
     p.add_argument(
         "--no-coherent", action="store_true", help="leave out the plugin's coherent (delta) lobe"
     )
+    p.add_argument(
+        "--btdf",
+        type=Path,
+        default=None,
+        help="a BTDF table (.npz, emscatter brdf --transmission): render SOURCE as a rough "
+        "dielectric through the emscatter_dielectric plugin",
+    )
+    p.add_argument(
+        "--inner",
+        type=Path,
+        default=None,
+        help="with --btdf: the inside reflection table (OUT_inner.npz); without it nothing is "
+        "reflected inside",
+    )
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.set_defaults(func=run)
 
@@ -107,6 +127,34 @@ def _check_source(path: Path) -> Path:
         if not head.startswith(b"tensor_file"):
             raise ValueError(f"SOURCE {str(path)!r} is not an RGL tensor file (.bsdf)")
     return path
+
+
+def _check_dielectric(a, source: Path) -> tuple[Path, Path | None]:
+    """``(--btdf, --inner)`` once checked: .npz files of the right kinds, an .npz SOURCE, the
+    plugin (not ``measured``: it has no transmission)."""
+    from ..brdf.export_npz import read_btdf_npz, read_npz
+
+    if source.suffix.lower() != ".npz":
+        raise ValueError(f"--btdf needs an emscatter BRDF table (.npz) SOURCE, got {str(source)!r}")
+    if a.via == "measured" or (a.via is None and a.variant.startswith("scalar")):
+        raise ValueError(
+            "--btdf renders through the emscatter_dielectric plugin (llvm_* variants; Mitsuba's "
+            f"measured has no transmission), got --via {a.via} in {a.variant!r}"
+        )
+    out = []
+    for opt, path, reader in (("--btdf", a.btdf, read_btdf_npz), ("--inner", a.inner, read_npz)):
+        if path is None:
+            out.append(None)
+            continue
+        path = path.expanduser()
+        if path.suffix.lower() != ".npz" or not path.is_file():
+            raise ValueError(f"{opt} must name an existing .npz table, got {str(path)!r}")
+        try:
+            reader(path)
+        except ValueError as exc:
+            raise ValueError(f"{opt} {str(path)!r}: {exc}") from None
+        out.append(path)
+    return out[0], out[1]
 
 
 def run(a) -> int:
@@ -132,6 +180,10 @@ def run(a) -> int:
         ("--via", "--no-coherent"),
         "only to an emscatter table (.npz) SOURCE",
     )
+    reject_unless(a, a.btdf is not None, ("--inner",), "only with --btdf (a dielectric)")
+    btdf = inner = None
+    if a.btdf is not None:
+        btdf, inner = _check_dielectric(a, source)
     check_distinct({"--out": a.out, "--exr": a.exr})
     check_variant(a.variant)
     job = RenderJob(
@@ -148,6 +200,8 @@ def run(a) -> int:
         exposure=a.exposure,
         seed=a.seed,
         coherent=not a.no_coherent,
+        btdf=btdf,
+        inner=inner,
     )
     via_for(job)
     summary = render_job(job)

@@ -1,8 +1,8 @@
 """A rough dielectric interface from emscatter tables as a Mitsuba 3 BSDF: reflection on both
 sides and transmission through it (plugin ``"emscatter_dielectric"``).
 
-Usage, after ``mi.set_variant(...)`` with an RGB or mono LLVM variant (``llvm_ad_rgb``
-tested)::
+Usage, after ``mi.set_variant(...)`` with an RGB, mono or spectral LLVM variant
+(``llvm_ad_rgb`` and ``llvm_ad_spectral`` tested; not the polarized ones)::
 
     from emscatter.render import dielectric as em_d
     bsdf = mi.load_dict(em_d.bsdf_dict(reflection=brdf, transmission=btdf, inner=brdf_in))
@@ -35,6 +35,13 @@ reflection table, ``T`` of the BTDF table, both exact integrals of the interpola
 sampler, the transmission by Beckmann microfacet normals refracted (Walter et al. 2007,
 eqs. 17, 28, 40: ``p(wo) = D(m) cosθm |wo·m| η_o² / (η_i v·m + η_o wo·m)²``) with the table's
 slope variance (``α² = 2s``); ``pdf`` is that density exactly, times the lobe probability.
+
+Spectral variants: the BTDF is kept per table wavelength (one texture channel each) and
+interpolated linearly to the sampled wavelengths, flat beyond the table's range — the
+``"emscatter"`` plugin's spectral rule (:mod:`.mitsuba`), which the two reflection lobes use.
+The refraction frame and the ``1/ε`` radiance factor take the mean ``ε`` of the table's
+wavelengths (as in RGB): a dispersive glass is exact at its mean index only; the lobe
+probabilities weigh the wavelengths by their luminance.
 """
 
 from __future__ import annotations
@@ -101,9 +108,10 @@ def register(name: str = PLUGIN_NAME) -> None:
     mi = em_mi._mitsuba()
     em_mi.register()
     variant = mi.variant()
-    if "polarized" in variant or em_mi.channels_of_variant(variant) == "spectral":
+    if "polarized" in variant:
         raise ValueError(
-            f"the emscatter_dielectric plugin supports RGB and mono variants, got {variant!r}"
+            "the emscatter_dielectric plugin supports RGB, mono and spectral variants (not "
+            f"the polarized ones), got {variant!r}"
         )
     if variant not in _CLASSES:
         _CLASSES[variant] = _bsdf_class(mi)
@@ -117,6 +125,8 @@ def bsdf_dict(reflection, transmission, inner=None) -> dict:
 
 
 def _channels(wavelengths, channels: str) -> np.ndarray:
+    if channels == "spectral":  # one channel per table wavelength
+        return np.eye(np.size(wavelengths))
     rgb = spectrum_to_rgb_weights(wavelengths)
     return RGB_LUMINANCE[None, :] @ rgb if channels == "mono" else rgb
 
@@ -160,6 +170,8 @@ def _bsdf_class(mi):
             bt: BtdfTable = s["transmission"]
             mat = _channels(bt.wavelengths, channels)
             self._c = mat.shape[0]
+            lam = [float(x) * 1e9 for x in bt.wavelengths]
+            self._lam, self._inv = lam, [1.0 / (b - a) for a, b in itertools.pairwise(lam)]
             vals = np.clip(np.moveaxis(np.asarray(bt.values, float), 0, -1) @ mat.T, 0.0, None)
             self._tex = tex(mi.Texture3f, np.transpose(vals, (0, 1, 2, 3)))
             self._ax = [Axis.of(a) for a in bt.grid_axes]
@@ -184,19 +196,30 @@ def _bsdf_class(mi):
             self.m_components = comps
             self.m_flags = refl | trans
 
-        def _spec(self, chans):
+        def _spec(self, chans, si):
             if channels == "rgb":
                 return mi.Spectrum(chans[0], chans[1], chans[2])
-            return mi.Spectrum(chans[0])
+            if channels != "spectral":
+                return mi.Spectrum(chans[0])
+            lam, inv, wl = self._lam, self._inv, si.wavelengths
+            if len(lam) == 1:
+                return mi.Spectrum(chans[0])
+            acc = mi.Spectrum(0.0)
+            for k in range(len(lam)):  # hat functions in λ (wavelengths, not angles)
+                up = (wl - lam[k - 1]) * inv[k - 1] if k > 0 else None
+                down = (lam[k + 1] - wl) * inv[k] if k < len(lam) - 1 else None
+                w = up if down is None else (down if up is None else dr.minimum(up, down))
+                acc += dr.clip(w, 0.0, 1.0) * chans[k]
+            return acc
 
-        def _ft(self, a, b, active):
+        def _ft(self, a, b, active, si):
             """Table BTDF f_t(a → b), ``a`` above, ``b`` below (no cosine)."""
             ti, tt = theta(a.z), theta(b.z)
             dphi = dr.abs(dr.atan2(b.y, b.x) - dr.atan2(a.y, a.x))
             dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
             ax = self._ax
             pos = mi.Point3f(coord(dphi, ax[2]), coord(tt, ax[1]), coord(ti, ax[0]))
-            return self._spec(self._tex.eval(pos, active))
+            return self._spec(self._tex.eval(pos, active), si)
 
         def _p_t(self, v, active):
             """Probability of sampling transmission for the viewer ``v``."""
@@ -217,7 +240,7 @@ def _bsdf_class(mi):
             out = v.z > 0
             a = dr.select(out, v, wo)  # the direction above
             b = dr.select(out, wo, v)
-            val = self._ft(a, b, active) * dr.abs(wo.z)
+            val = self._ft(a, b, active, si) * dr.abs(wo.z)
             radiance = ctx.mode == mi.TransportMode.Radiance
             scale = dr.select(
                 out, 1.0 / self._eps if radiance else 1.0, 1.0 if radiance else 1.0 / self._eps

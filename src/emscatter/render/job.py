@@ -60,6 +60,8 @@ class RenderJob:
     exposure: float = 1.5
     seed: int = 0
     coherent: bool = True  # the plugin's delta lobe
+    btdf: Path | None = None  # a BTDF table: SOURCE is a dielectric's outside reflection
+    inner: Path | None = None  # with btdf: the inside reflection table
     info: dict = field(default_factory=dict)
 
 
@@ -126,6 +128,8 @@ def bsdf_for(job: RenderJob, workdir: Path) -> tuple[dict, dict]:
     if src.suffix.lower() == ".bsdf":
         return {"type": "measured", "filename": str(src)}, {"kind": "measured", "file": src.name}
     table = _read_table(src)
+    if job.btdf is not None:
+        return _dielectric_bsdf(job, table)
     if via_for(job) == "plugin":
         bsdf = em_mi.bsdf_dict(table, coherent=job.coherent)
         return bsdf, {"kind": "plugin", "table": table.describe()}
@@ -140,7 +144,32 @@ def bsdf_for(job: RenderJob, workdir: Path) -> tuple[dict, dict]:
     }
 
 
+def _dielectric_bsdf(job: RenderJob, table) -> tuple[dict, dict]:
+    """The ``emscatter_dielectric`` plugin (:mod:`.dielectric`) of SOURCE, ``--btdf`` and
+    ``--inner``; mismatched tables (wavelengths, an anisotropic BRDF) are a ``ValueError``."""
+    from ..brdf.export_npz import read_btdf_npz
+    from . import dielectric as em_d
+
+    if via_for(job) != "plugin":
+        raise ValueError("a dielectric (--btdf) renders through the plugin only, not measured")
+    bt = read_btdf_npz(job.btdf)
+    inner = None if job.inner is None else _read_table(job.inner)
+    try:
+        bsdf = em_d.bsdf_dict(table, bt, inner)
+    except TypeError as exc:  # a table of the wrong kind: bad input, one line
+        raise ValueError(f"dielectric tables: {exc}") from None
+    described = {"kind": "dielectric plugin", "table": table.describe(), "btdf": bt.describe()}
+    if inner is not None:
+        described["inner"] = inner.describe()
+    return bsdf, described
+
+
 def _xml_bsdf(bsdf: dict) -> str:
+    if bsdf["type"] == "emscatter_dielectric":
+        return (
+            f'<bsdf type="{bsdf["type"]}" id="emscatter"><string name="tables" '
+            f'value="{bsdf["tables"]}"/></bsdf>'
+        )
     if bsdf["type"] == "measured":
         return (
             f'<bsdf type="measured" id="emscatter"><string name="filename" '

@@ -199,15 +199,16 @@ def _porous_key(key: str, props) -> str:
 
 
 def _prepared_mueller(key: str, channels: str):
-    """``(flat Mueller array, n_channels, wavelengths [nm] or None)`` for the polarized class."""
-    from .polarized import mueller_channels
+    """``(flat Mueller array, n_channels, wavelengths [nm] or None, coherent channels or
+    None)`` for the polarized class (the delta lobe's matrices passed with the glossy ones)."""
+    from .polarized import coherent_channels, mueller_channels
 
     cache_key = (key, channels, "mueller")
     if cache_key not in _PREPARED:
         t = _TABLES[key]
         arr = mueller_channels(t, channels)
         lam = None if channels != "spectral" else [float(x) * 1e9 for x in t.table.wavelengths]
-        _PREPARED[cache_key] = (arr, arr.shape[-2], lam)
+        _PREPARED[cache_key] = (arr, arr.shape[-2], lam, coherent_channels(t, channels))
     return _PREPARED[cache_key]
 
 

@@ -44,7 +44,6 @@ objects (no phase between polarizations: build a Mueller table with ``method="go
 from __future__ import annotations
 
 import math
-import weakref
 
 import numpy as np
 
@@ -52,16 +51,6 @@ from ..brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
 from ..brdf.mueller import D_MITSUBA, MuellerTable
 
 __all__ = ["mueller_channels", "coherent_channels", "polarized_class"]
-
-#: ``id(mueller_channels(...) result) → (weak reference to it, its coherent_channels or
-#: None)``: the plugin class receives only the gathered node array from ``render.mitsuba``
-#: (its cache), and finds the delta lobe's matrices here; an entry leaves with its array.
-_COHERENT_OF: dict[int, tuple[weakref.ref, np.ndarray | None]] = {}
-
-
-def _coherent_of(arr: np.ndarray) -> np.ndarray | None:
-    ref, coh = _COHERENT_OF.get(id(arr), (None, None))
-    return coh if ref is not None and ref() is arr else None
 
 
 def _channel_mix(t, m: np.ndarray, channels: str) -> np.ndarray:
@@ -109,15 +98,14 @@ def mueller_channels(mt: MuellerTable, channels: str) -> np.ndarray:
     out[..., 0] = np.clip(out[..., 0], 0.0, None)
     if not np.all(np.isfinite(out)):
         raise ValueError("the Mueller table holds NaN/inf; nothing to render")
-    out = np.ascontiguousarray(out, dtype=np.float32)
-    _COHERENT_OF[id(out)] = (weakref.ref(out), coherent_channels(mt, channels))
-    weakref.finalize(out, _COHERENT_OF.pop, id(out), None)
-    return out
+    return np.ascontiguousarray(out, dtype=np.float32)
 
 
 def polarized_class(mi, base, position, elevation, prepared_mueller):
     """The polarized BSDF class: ``base`` (the unpolarized plugin class of this variant, which
-    keeps the table's s0 for sampling) with Mueller ``eval`` and ``sample``."""
+    keeps the table's s0 for sampling) with Mueller ``eval`` and ``sample``.
+    ``prepared_mueller(key)`` → ``(flat Mueller array, n_channels, wavelengths [nm] or None,
+    coherent channels or None)`` (:func:`mueller_channels`, :func:`coherent_channels`)."""
     import drjit as dr
 
     glossy = mi.BSDFFlags.GlossyReflection
@@ -156,12 +144,11 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
     class EmscatterPolarizedBSDF(base):
         def __init__(self, props):
             base.__init__(self, props)
-            flat, n_ch, lam = prepared_mueller(str(self._key))
+            flat, n_ch, lam, coh = prepared_mueller(str(self._key))
             self._mflat = mi.Float(flat.ravel())
             self._mch = n_ch
             self._mlam = lam
             if self._use_delta:
-                coh = _coherent_of(flat)
                 if coh is None:
                     raise ValueError(
                         f"emscatter plugin, table {self._key!r}: the table has a coherent "
