@@ -38,7 +38,9 @@ __all__ = ["btdf_at", "mueller_btdf_at", "emscatter_to_mitsuba"]
 _OPTIONS = ("shadowing", "slope_variance", "k_max")
 
 
-def _setup(surface, material, wavelength, wi, wo, options):
+def checked_surface(surface, options, what: str = "a BTDF"):
+    """The roughness of a GO BTDF (a 2-D surface) with ``options`` among :data:`_OPTIONS`
+    (clear errors naming what is wrong)."""
     unknown = set(options) - set(_OPTIONS)
     if unknown:
         raise ValueError(
@@ -46,7 +48,12 @@ def _setup(surface, material, wavelength, wi, wo, options):
         )
     rough = check_roughness(surface, "surface")
     if rough.dimension != 2:
-        raise ValueError("a BTDF needs a 2-D surface (dimension=2), got a 1-D profile")
+        raise ValueError(f"{what} needs a 2-D surface (dimension=2), got a 1-D profile")
+    return rough
+
+
+def _setup(surface, material, wavelength, wi, wo, options):
+    rough = checked_surface(surface, options)
     lam = float(wavelength)
     if not (math.isfinite(lam) and lam > 0):
         raise ValueError(f"wavelength must be a positive finite number [m], got {wavelength!r}")

@@ -37,10 +37,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..solvers.kirchhoff.common import check_roughness, slope_variances
+from ..solvers.kirchhoff.common import slope_variances
 from ..solvers.kirchhoff.transmission import go as gt
 from . import grid
-from .btdf import emscatter_to_mitsuba
+from .btdf import checked_surface, emscatter_to_mitsuba
 from .build import _check_count, _check_wavelengths, default_phi_d, default_theta, material_eps
 from .energy import apply_energy_remedy
 from .frames import angles, fold_dphi
@@ -64,7 +64,6 @@ MAX_AUTO_PHI = 721
 
 HALF_PI = 0.5 * math.pi
 _CHUNK = 1 << 20  # direction pairs per solver call
-_OPTIONS = ("shadowing", "slope_variance", "k_max")
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,12 +91,7 @@ class BtdfTable:
 
     def __post_init__(self):
         set_ = object.__setattr__
-        wl = np.array(self.wavelengths, dtype=float).reshape(-1)
-        if wl.size == 0 or not np.all(np.isfinite(wl)) or np.any(wl <= 0):
-            raise ValueError(f"wavelengths must be positive finite [m], got {wl!r}")
-        if np.any(np.diff(wl) <= 0):
-            raise ValueError(f"wavelengths must be strictly increasing [m], got {wl!r}")
-        wl.setflags(write=False)
+        wl = grid.check_table_wavelengths(self.wavelengths)
         set_(self, "wavelengths", wl)
         set_(self, "theta_i", grid.check_axis("theta_i", self.theta_i, 0, HALF_PI, high_open=True))
         set_(self, "theta_t", grid.check_axis("theta_t", self.theta_t, 0, HALF_PI, high_open=True))
@@ -262,14 +256,7 @@ def build_btdf_table(
     :func:`.sizing.memory_limit`). ``options``: ``shadowing`` (True/"correlated", "separable"
     = Mitsuba's ``roughdielectric``, False), ``slope_variance``, ``k_max``.
     """
-    unknown = set(options) - set(_OPTIONS)
-    if unknown:
-        raise ValueError(
-            f"unknown option(s) {sorted(unknown)} for the GO BTDF; allowed: {list(_OPTIONS)}"
-        )
-    rough = check_roughness(surface, "surface")
-    if rough.dimension != 2:
-        raise ValueError("a BTDF table needs a 2-D surface (dimension=2), got a 1-D profile")
+    rough = checked_surface(surface, options, "a BTDF table")
     if not rough.is_isotropic:
         raise ValueError("BTDF tables are isotropic (θi, θt, Δφ): got an anisotropic surface")
     if dtype not in ("float64", "float32", np.float64, np.float32):

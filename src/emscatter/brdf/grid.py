@@ -38,6 +38,17 @@ def gauss_legendre(n: int, a: float = -1.0, b: float = 1.0) -> tuple[np.ndarray,
     return 0.5 * (b - a) * x + 0.5 * (b + a), 0.5 * (b - a) * w
 
 
+def check_table_wavelengths(wavelengths) -> np.ndarray:
+    """A table's wavelength axis [m]: 1-D, positive, finite, strictly increasing; read-only copy."""
+    wl = np.array(wavelengths, dtype=float).reshape(-1)
+    if wl.size == 0 or not np.all(np.isfinite(wl)) or np.any(wl <= 0):
+        raise ValueError(f"wavelengths must be positive finite [m], got {wl!r}")
+    if np.any(np.diff(wl) <= 0):
+        raise ValueError(f"wavelengths must be strictly increasing [m], got {wl!r}")
+    wl.setflags(write=False)
+    return wl
+
+
 def check_axis(name: str, axis, low: float, high: float, *, high_open: bool = False) -> np.ndarray:
     """A 1-D strictly increasing float array within ``[low, high]`` (``high`` excluded when
     ``high_open``), read-only copy."""

@@ -123,12 +123,7 @@ class BrdfTable:
 
     def __post_init__(self):
         set_ = object.__setattr__
-        wl = np.array(self.wavelengths, dtype=float).reshape(-1)
-        if wl.size == 0 or not np.all(np.isfinite(wl)) or np.any(wl <= 0):
-            raise ValueError(f"wavelengths must be positive finite [m], got {wl!r}")
-        if np.any(np.diff(wl) <= 0):
-            raise ValueError(f"wavelengths must be strictly increasing [m], got {wl!r}")
-        wl.setflags(write=False)
+        wl = grid.check_table_wavelengths(self.wavelengths)
         set_(self, "wavelengths", wl)
         set_(self, "theta_i", grid.check_axis("theta_i", self.theta_i, 0, HALF_PI, high_open=True))
         set_(self, "theta_o", grid.check_axis("theta_o", self.theta_o, 0, HALF_PI, high_open=True))
