@@ -110,7 +110,10 @@ _SRC_Q = "Ulaby, Moore & Fung 1982 vol. II §12-4, Table 12.2 (stationary phase)
 _SRC_SH = "Smith 1967; Thorsos 1988 JASA 83 78; Bourlier, Berginc & Saillard 2002"
 
 _CHUNK = 1 << 15
-_MEASURED_PDF = "measured (histogram); shadowing: Smith Λ of the Gaussian, measured variances"
+_MEASURED_PDF = (
+    "measured (kernel density, slope tail {}); shadowing: Smith Λ of the Gaussian, measured "
+    "variances"
+)
 
 
 def check_validity(
@@ -325,7 +328,11 @@ def _bistatic(
         "total_mean_square_slope": sx + sy,
         "slope_cutoff": slope_cutoff(rough, k, k_max, slope_variance),
         "shadowing": mode,
-        "slope_pdf": "gaussian" if pdf is None else _MEASURED_PDF,
+        "slope_pdf": "gaussian"
+        if pdf is None
+        else _MEASURED_PDF.format(
+            ((getattr(rough, "info", None) or {}).get("slope_tail") or {}).get("shape", "none")
+        ),
         "validity": check_validity(rough, k, slope_variance=(sx, sy) if dim == 2 else sx)
         if validity
         else None,

@@ -28,7 +28,10 @@
   a variance-preserving Gaussian kernel whose width follows from the number of *independent*
   slope samples ``N/Σρ_ζ²`` (a map holds as many as correlation cells, not pixels: the raw
   histogram of a 512² brushed map, ≈ 700 of them, had noisy bins and a hard zero beyond its
-  largest slope, 8.6 % L1 between its GO table and the Gaussian one; the kernel halves it).
+  largest slope, 8.6 % L1 between its GO table and the Gaussian one; the kernel halves it);
+  beyond the well-sampled slopes (``N_TAIL`` independent samples further out) a recorded tail
+  (``slope_tail``: ``"gaussian"`` by default, ``"exponential"``, ``"none"``;
+  :mod:`emscatter.surfaces.measured.slope_tail`), normalized, keeping the mean-square slopes.
 
 :meth:`MeasuredRoughness.band_check` says how much of the band a wavenumber needs lies
 outside the map: first-order SPM needs ``|K| = |k_s⊥ − k_i⊥|`` up to ``2k`` (backscatter at
@@ -55,12 +58,14 @@ from emscatter.surfaces.measured.estimators import (
     slope_acf_sum,
 )
 from emscatter.surfaces.measured.nfold import nfold_table
+from emscatter.surfaces.measured.slope_tail import SLOPE_TAILS, evaluate, fit_tail
 
 __all__ = [
     "MeasuredRoughness",
     "measured_roughness",
     "BandWarning",
     "TAILS",
+    "SLOPE_TAILS",
     "MIN_PATCH",
     "MIN_SEGMENTS",
     "MIN_MAP_SAMPLES",
@@ -221,6 +226,7 @@ class MeasuredRoughness(Roughness):
     source: str = "array"
     info: dict = field(default_factory=dict)
     acf: np.ndarray = None
+    slope_tail: dict = None
     name: str = field(default="measured", init=False, repr=False)
 
     # ---------------------------------------------------------------- Roughness hooks
@@ -397,17 +403,27 @@ class MeasuredRoughness(Roughness):
         return (float(np.trapezoid((cx * cx * hs).sum(1), kr)),
                 float(np.trapezoid((cy * cy * hs).sum(1), kr)))  # fmt: skip
 
-    def slope_pdf(self, zx, zy=None) -> np.ndarray:
-        """The measured slope density ``p(ζx, ζy)`` [-] (1-D: ``p₁(ζx)``), histogram →
-        density, bilinear between bin centres, 0 beyond the measured slopes."""
-        zx = np.asarray(zx, dtype=float)
+    def _slope_kernel(self, zx, zy=None) -> np.ndarray:
+        """The kernel estimate on its grid, bilinear between bin centres, 0 beyond it."""
         if self.dimension == 1:
             (x0, sx), _ = self.slope_grid
             v = _bilinear(self.slope_density, x0, sx, zx)
         else:
             (x0, sx), (y0, sy) = self.slope_grid
-            v = _bilinear(self.slope_density, x0, sx, zx, y0, sy, np.asarray(zy, dtype=float))
+            zx, zy = np.broadcast_arrays(zx, zy)
+            v = _bilinear(self.slope_density, x0, sx, zx, y0, sy, zy)
         return np.nan_to_num(v, nan=0.0)
+
+    def slope_pdf(self, zx, zy=None) -> np.ndarray:
+        """The measured slope density ``p(ζx, ζy)`` [-] (1-D: ``p₁(ζx)``): the kernel estimate
+        (histogram → density, bilinear between bin centres) and, beyond the well-sampled
+        slopes, the recorded tail (``slope_tail``, :mod:`.slope_tail`; ``"none"``: 0 beyond
+        the histogram grid)."""
+        zx = np.asarray(zx, dtype=float)
+        zy = None if self.dimension == 1 else np.asarray(zy, dtype=float)
+        if not self.slope_tail:
+            return self._slope_kernel(zx, zy)
+        return evaluate(self._slope_kernel, self.slope_tail, zx, zy)
 
     # ---------------------------------------------------------------- band
     def band_check(self, k: float, k_needed: float | None = None) -> dict:
@@ -446,14 +462,26 @@ class MeasuredRoughness(Roughness):
         if self.dimension == 1:
             return self
         p1 = self.psd[: self.info["patch"][0]].sum(axis=0) * self.dk[0]
-        dens = self.slope_density.sum(axis=0) * self.slope_grid[1][1]
+        (x0, sx), (y0, sy) = self.slope_grid
+        dens, gx = self.slope_density.sum(axis=0) * sy, (x0, sx)
+        if self.slope_tail:  # the marginal of the tailed density, on a grid that holds it
+            rec = self.slope_tail
+            hx, hy = (rec["extent_rms"] * r for r in rec["rms_slopes"])
+            nx, ny = (max(int(math.ceil(h / st)), abs(int(o / st))) for h, st, o in
+                      ((hx, sx, x0), (min(hy, 60 * rec["rms_slopes"][1]), sy, y0)))  # fmt: skip
+            xs, ys = np.arange(-nx, nx + 1) * sx, np.arange(-ny, ny + 1) * sy
+            dens = self.slope_pdf(xs[None, :], ys[:, None]).sum(axis=0) * sy
+            gx = (float(xs[0]), sx)
         info = {**self.info, "spacing": (self.info["spacing"][1],),
                 "patch": (self.info["patch"][1],)}  # fmt: skip
         if "patch_lengths" in info:
             info["patch_lengths"] = info["patch_lengths"][:1]
+        if self.slope_tail:
+            info["slope_tail"] = {**info["slope_tail"], "profile": "the marginal of the map's "
+                                  "tailed density (tail included on its grid)"}  # fmt: skip
         return MeasuredRoughness(
             sigma=self.sigma, length=self.length, dimension=1, psd=p1, k0=(self.k0[1],),
-            dk=(self.dk[1],), slope_density=dens, slope_grid=(self.slope_grid[0], None),
+            dk=(self.dk[1],), slope_density=dens, slope_grid=(gx, None),
             slopes_ms=(self.slopes_ms[0], 0.0), tail=self.tail, tail_fit=self.tail_fit,
             band_lo=self.band_lo, band_hi=self.band_hi, source=self.source, info=info,
             acf=None if self.acf is None else self.acf[self.acf.shape[0] // 2].copy(),
@@ -469,7 +497,8 @@ class MeasuredRoughness(Roughness):
             f"measured ({self.source}): σ={self.sigma:.4g} m, ℓ={self.length:.4g} m, "
             f"ℓy={self.length_y:.4g} m, rms slopes {math.sqrt(self.slopes_ms[0]):.4g}/"
             f"{math.sqrt(self.slopes_ms[1]):.4g}, band [{self.band_lo:.4g}, {self.band_hi:.4g}]"
-            f" rad/m, tail {self.tail}{masked}"
+            f" rad/m, tail {self.tail}, slope tail "
+            f"{(self.slope_tail or {}).get('shape', 'none')}{masked}"
         )
 
 
@@ -493,6 +522,7 @@ def measured_roughness(
     slope_bins: int | None = None,
     smooth: int = 0,
     slope_bandwidth: float | None = None,
+    slope_tail: str = "gaussian",
 ) -> MeasuredRoughness:
     """The :class:`MeasuredRoughness` of a height map.
 
@@ -522,6 +552,13 @@ def measured_roughness(
         is rounded over ≈ b rms. 0: the raw histogram (right only for maps whose slopes are
         not a random sample, or very many independent ones: its bins at 3 rms hold a few
         counts, and it is zero beyond the largest measured slope).
+    slope_tail : the slope density beyond the well-sampled slopes (:mod:`.slope_tail`,
+        ``info["slope_tail"]``): ``"gaussian"`` (default: a Gaussian-shaped tail in the
+        normalized slope radius, its curvature fitted to the last well-sampled shells, so a
+        random surface keeps the large slopes its map is too small to sample: the rim of a
+        rendered sphere, GO at grazing), ``"exponential"`` (heavier), or ``"none"`` (the
+        kernel estimate alone, 0 beyond it: for maps whose slopes are bounded, e.g. facets).
+        The tailed density integrates to 1 and keeps the measured mean-square slopes.
     """
     if not isinstance(hm, HeightMap):
         raise TypeError(
@@ -543,6 +580,8 @@ def measured_roughness(
     requested = segments
     if min(hm.shape) // segments < MIN_PATCH:
         segments = max(1, min(hm.shape) // MIN_PATCH)
+    if slope_tail not in SLOPE_TAILS:
+        raise ValueError(f"slope_tail must be one of {SLOPE_TAILS}, got {slope_tail!r}")
     if isinstance(smooth, bool) or not isinstance(smooth, int) or not 0 <= smooth <= 8:
         raise ValueError(f"smooth must be an integer 0…8 (bins), got {smooth!r}")
     psd, k0, dk, patch = _welch(hm, segments, smooth)
@@ -583,6 +622,21 @@ def measured_roughness(
             + ("Scott's rule" if slope_bandwidth is None else "given"),
             "map_band": hm.band, "detrend": hm.detrend, "holes": hm.holes,
             "spectral_mass": float(psd.sum() * np.prod(dk) / sigma**2)}  # fmt: skip
+    rec = None
+    if slope_tail != "none":
+        rms = tuple(math.sqrt(v) for v in mss[: hm.dimension])
+        grids = (gx,) if gy is None else (gx, gy)
+        half = tuple((g[0] * -1) / r for g, r in zip(grids, rms, strict=True))
+        inner = MeasuredRoughness(sigma=sigma, length=1.0, length_y=None, psd=psd, k0=k0,
+                                  dk=dk, slope_density=dens, slope_grid=(gx, gy),
+                                  dimension=hm.dimension)._slope_kernel  # fmt: skip
+        try:
+            rec = fit_tail(inner, slope_tail, zx, zy, n_eff, half, rms)
+        except ValueError as exc:
+            raise HeightMapError(f"the map from {hm.source}: no {slope_tail} slope tail ({exc}); "
+                                 "use slope_tail='none'") from None  # fmt: skip
+    info["slope_tail"] = rec or {"shape": "none", "rule": "the kernel estimate alone, 0 "
+                                 "beyond the histogram grid"}  # fmt: skip
     common = {"psd": psd, "k0": k0, "dk": dk, "slope_density": dens, "slope_grid": (gx, gy),
               "slopes_ms": mss, "band_lo": band_lo, "band_hi": band_hi,
               "isotropic": bool(isotropic) and hm.dimension == 2, "source": hm.source,
@@ -621,4 +675,4 @@ def measured_roughness(
         fit = (float(math.exp(icpt)), float(-slope))
         info["tail_fit_range"] = (0.25 * band_hi, 0.9 * band_hi)
     return MeasuredRoughness(sigma=sigma, length=lx, length_y=ly, tail=tail, tail_fit=fit,
-                             **common)  # fmt: skip
+                             slope_tail=rec, **common)  # fmt: skip
