@@ -17,7 +17,9 @@ K = 2 * math.pi  # λ = 1 m
 GRAZING = np.radians([0.0, 30.0, 60.0, 80.0, 85.0, 88.0, 89.0])
 # issue 11: SPM, PEC, kσ = 0.2, kℓ = 1 — emissivity −2.2 at 89° (incoherent reflectivity 3.2)
 SPM_PEC = em.GaussianCorrelation(0.2 / K, 1.0 / K)
-# issue 11: GO, σ = 0.6, ℓ = 4, λ = 1, ε = 17+2i — e_h = −0.268 at 85°, −0.607 at 88°
+# issue 11: GO, σ = 0.6, ℓ = 4, λ = 1, ε = 17+2i — outside GO's angle range at grazing (its
+# e_h = −0.268 at 85° was the Kirchhoff coherent term added on top of GO's σ⁰, fixed in issue 21;
+# tests/test_go_emissivity_grazing.py)
 GO_CASE = em.GaussianCorrelation(0.6, 4.0)
 
 
@@ -70,14 +72,15 @@ def test_ignore_records_without_warning():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         e = em.emissivity(
-            GO_CASE, 17 + 2j, wavelength=1.0, theta_i=GRAZING, method="go", out_of_range="ignore"
+            SPM_PEC, "pec", wavelength=1.0, theta_i=GRAZING, method="spm", out_of_range="ignore"
         )
     assert not e.energy_ok.all() and e.info["energy"]["reasons"]
+    assert not e.info["validity"]["angle_valid"].all()  # recorded, not warned
 
 
 def test_auto_replaces_the_method_only_where_it_fails_and_stays_continuous():
     # kσ = 1.9, kℓ = 38, slope 0.1: GO is valid for the roughness but its stationary phase fails
-    # from θi ≈ 34° ((2kσ cosθi)² < 10) and it gives e_h = −0.31 at 80°; PO holds there.
+    # from θi ≈ 34° ((2kσ cosθi)² < 10): e_h 0.240 at 80° against PO's 0.153; PO holds there.
     rough = em.GaussianCorrelation(0.3, 6.0)
     th = np.radians(np.arange(0.0, 90.0, 10.0))
     with warnings.catch_warnings():
@@ -92,7 +95,8 @@ def test_auto_replaces_the_method_only_where_it_fails_and_stays_continuous():
     po = em.emissivity(
         rough, 17 + 2j, wavelength=1.0, theta_i=th, method="po", out_of_range="ignore"
     )
-    assert go.h[-1] < 0  # what auto avoided
+    # what auto avoided: GO outside its angle range, off PO by > 0.05 at 80°
+    assert not go.info["validity"]["angle_valid"][4:].any() and go.h[-1] - po.h[-1] > 0.05
     np.testing.assert_allclose(e.emissivity[:, 4:], po.emissivity[:, 4:], atol=1e-12)
     np.testing.assert_allclose(e.emissivity[:, :4], go.emissivity[:, :4], atol=1e-12)
     # at the switch the two methods agree within their quadrature errors and 1e-3

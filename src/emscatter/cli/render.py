@@ -37,7 +37,11 @@ def register(subparsers) -> None:
         subparsers,
         "render",
         help="render a sphere or a Mitsuba scene with a BRDF table (.npz) or .bsdf file",
-        description=__doc__.split("\n\n")[0],
+        description=(
+            'render a sphere (or a Mitsuba scene that uses <ref id="emscatter"/>) with an '
+            "emscatter BRDF table (through the emscatter plugin or Mitsuba's measured), an RGL "
+            ".bsdf file, or a dielectric's BRDF/BTDF pair; write a PNG (and an OpenEXR)"
+        ),
     )
     p.add_argument("source", type=Path, help="BRDF table (.npz) or RGL file (.bsdf)")
     p.add_argument("--out", type=OutputPath(suffixes=(".png",)), required=True, help="PNG")
