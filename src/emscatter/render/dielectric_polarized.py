@@ -27,7 +27,8 @@ transport the other way round); the matrix maps Stokes vectors in
   diag(1,1,1,−1) Mᵀ diag(1,1,1,−1)`` in :func:`~emscatter.brdf.mueller.jones_to_mueller`'s
   convention, times ``diag(1,1,−1,−1)`` for reversing each basis' second vector to stay
   right-handed; checked against Mitsuba's smooth ``dielectric``), in bases with x axes
-  ``x_b`` (incident) and ``x_a`` (outgoing), then rotated onto ``stokes_basis(−L)``, ``stokes_basis(V)``.
+  ``x_b`` (incident) and ``x_a`` (outgoing), then rotated onto ``stokes_basis(−L)``,
+  ``stokes_basis(V)``.
 * inside reflection: the ``inner`` plugin at the directions mirrored through the surface
   (``z → −z``, as the unpolarized plugin). A mirror maps a right-handed basis ``(x, y)`` to the
   left-handed ``(Px, Py)``; flipping ``y`` back gives ``D M D``, ``D = diag(1, 1, −1, −1)``,
