@@ -2,7 +2,8 @@
 sides and transmission through it (plugin ``"emscatter_dielectric"``).
 
 Usage, after ``mi.set_variant(...)`` with an RGB, mono or spectral LLVM variant
-(``llvm_ad_rgb`` and ``llvm_ad_spectral`` tested; not the polarized ones)::
+(``llvm_ad_rgb`` and ``llvm_ad_spectral`` tested; ``*_polarized`` variants with Mueller tables:
+:mod:`.dielectric_polarized`)::
 
     from emscatter.render import dielectric as em_d
     bsdf = mi.load_dict(em_d.bsdf_dict(reflection=brdf, transmission=btdf, inner=brdf_in))
@@ -53,6 +54,7 @@ import numpy as np
 
 from ..brdf.btdf_table import BtdfTable
 from ..brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
+from ..brdf.mueller import MuellerTable
 from ..brdf.table import BrdfTable
 from . import mitsuba as em_mi
 from .plugin_data import Axis
@@ -65,9 +67,18 @@ _CLASSES: dict[str, type] = {}
 _COUNTER = itertools.count()
 
 
+def _s0(t):
+    """The unpolarized table of a MuellerTable (its ``M₀₀``), other objects as they are."""
+    return t.table if isinstance(t, MuellerTable) else t
+
+
 def register_dielectric(reflection, transmission, inner=None, key: str | None = None) -> str:
     """Register the tables of one interface (module docstring); returns the key for
-    ``{"type": "emscatter_dielectric", "tables": key}``."""
+    ``{"type": "emscatter_dielectric", "tables": key}``. ``reflection`` and ``inner`` may be
+    :class:`~emscatter.brdf.mueller.MuellerTable` objects (needed in polarized variants,
+    :mod:`.dielectric_polarized`; their ``M₀₀`` elsewhere)."""
+    refl_obj, inner_obj = reflection, inner
+    reflection, inner = _s0(reflection), _s0(inner)
     if not isinstance(reflection, BrdfTable) or not reflection.isotropic:
         raise TypeError(
             f"reflection must be an isotropic BrdfTable, got {type(reflection).__name__}"
@@ -92,8 +103,10 @@ def register_dielectric(reflection, transmission, inner=None, key: str | None = 
         )
     key = f"emscatter-dielectric-{next(_COUNTER)}" if key is None else str(key)
     _SETS[key] = {
-        "reflection": em_mi.register_table(reflection),
-        "inner": None if inner is None else em_mi.register_table(inner),
+        "reflection": em_mi.register_table(refl_obj),
+        "inner": None if inner is None else em_mi.register_table(inner_obj),
+        "polarized_tables": isinstance(refl_obj, MuellerTable)
+        and (inner is None or isinstance(inner_obj, MuellerTable)),
         "transmission": transmission,
         "r_albedo": reflection.albedo().total,
         "r_in_albedo": None if inner is None else inner.albedo().total,
@@ -108,11 +121,6 @@ def register(name: str = PLUGIN_NAME) -> None:
     mi = em_mi._mitsuba()
     em_mi.register()
     variant = mi.variant()
-    if "polarized" in variant:
-        raise ValueError(
-            "the emscatter_dielectric plugin supports RGB, mono and spectral variants (not "
-            f"the polarized ones), got {variant!r}"
-        )
     if variant not in _CLASSES:
         _CLASSES[variant] = _bsdf_class(mi)
         mi.register_bsdf(name, lambda props: _CLASSES[variant](props))
@@ -367,4 +375,8 @@ def _bsdf_class(mi):
         def to_string(self):
             return f"EmscatterDielectricBSDF[η = {self._eta:.6g}, α = {self._alpha:.4g}]"
 
+    if "polarized" in mi.variant():
+        from .dielectric_polarized import polarized_dielectric_class
+
+        return polarized_dielectric_class(mi, DielectricBSDF, coord, theta, _SETS)
     return DielectricBSDF
