@@ -352,7 +352,8 @@ def _map_spec(a):
     try:
         return MaterialSpec.from_height_map(
             a.height_map, model=a.map_model, segments=a.segments, tail=a.tail, unit=a.unit,
-            detrend=a.detrend, holes=a.holes, frequencies=a.frequencies_ghz,
+            detrend=a.detrend, holes=a.holes, slope_tail=a.slope_tail,
+            frequencies=a.frequencies_ghz,
         )  # fmt: skip
     except (HeightMapError, ImportError, ValueError) as exc:
         raise map_error(a.height_map, exc) from None

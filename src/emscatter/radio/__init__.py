@@ -120,6 +120,7 @@ class MaterialSpec:
         unit=None,
         detrend="plane",
         holes: str = "reject",
+        slope_tail: str = "gaussian",
         frequencies=None,
         **spec,
     ) -> MaterialSpec:
@@ -134,7 +135,7 @@ class MaterialSpec:
 
         rough, record = surface_from_map(
             source, model=model, family=family, segments=segments, tail=tail, unit=unit,
-            detrend=detrend, holes=holes, frequencies=frequencies,
+            detrend=detrend, holes=holes, slope_tail=slope_tail, frequencies=frequencies,
         )  # fmt: skip
         out = cls(surface=rough, **spec)
         object.__setattr__(out, "map_record", record)

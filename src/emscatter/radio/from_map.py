@@ -116,6 +116,7 @@ def surface_from_map(
     unit: str | None = None,
     detrend="plane",
     holes: str = "reject",
+    slope_tail: str = "gaussian",
     frequencies=None,
     max_below: float = 0.25,
 ) -> tuple[Roughness, dict]:
@@ -131,6 +132,8 @@ def surface_from_map(
     family : ``"best"``, ``"gaussian"`` or ``"exponential"`` (``model="fit"`` only).
     segments, tail : Welch segments per axis and the spectrum beyond ``π/Δ``
         (:func:`~emscatter.surfaces.measured.measured_roughness`).
+    slope_tail : the measured slope density beyond its well-sampled slopes (``"gaussian"``,
+        ``"exponential"`` or ``"none"``; ``measured_roughness``'s, recorded).
     frequencies : [Hz], optional: the band check per frequency (module docstring).
     max_below : the largest fraction of ``[0, 2k]`` allowed below the map's ``2π/L``.
 
@@ -153,7 +156,9 @@ def surface_from_map(
                 f"a radio material needs a 2-D height map; the one from {source.source} is a "
                 f"profile of shape {source.shape}"
             )
-        source = measured_roughness(source, segments=segments, tail=tail, isotropic=True)
+        source = measured_roughness(
+            source, segments=segments, tail=tail, slope_tail=slope_tail, isotropic=True
+        )
     if not isinstance(source, MeasuredRoughness):
         raise TypeError(
             "source must be a height-map file, a HeightMap or a MeasuredRoughness, got "
@@ -174,6 +179,7 @@ def surface_from_map(
         "segments": m.info.get("segments"),
         "tail": m.tail,
         "holes": dict(m.info.get("holes") or {}),
+        "slope_tail": (m.info.get("slope_tail") or {}).get("shape", "none"),
     }
     if frequencies is not None:
         record["band"] = _band(m, frequencies, float(max_below))

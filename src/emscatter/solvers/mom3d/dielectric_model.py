@@ -12,7 +12,10 @@ with the sources ``(u, w)`` in air and ``(−u, −w)`` below (the normal into m
 ``−n̂``). Power per steradian ``n_i k₀² |p̂·(F_u − n_i k̂ × F_w)|² / (16π²)`` (flux
 ``n_i |E|²`` in these units). The reflectivity per incident polarization is the upper-hemisphere
 integral over ``P_inc``; the transmissivity the lower one, for a lossless medium (a lossy one
-has no far field below: there ``1 − R`` is the absorbed fraction).
+has no far field below: there ``1 − R`` is the absorbed fraction). The sums ``F_u, F_w`` are
+:func:`~emscatter.solvers.mom3d.farfield.amplitudes_em`'s: direct, or the Taylor-in-height /
+non-uniform-FFT sum of :mod:`.gridsum` on the patch's grid (``farfield``; ``"auto"`` takes it
+for large patches, within ``1e-7`` of ``Σ|u| + n Σ|w|``).
 """
 
 from __future__ import annotations
@@ -28,31 +31,11 @@ from emscatter.solvers.mom3d.dielectric import (
     rhs_dielectric,
     solve_dielectric,
 )
-from emscatter.solvers.mom3d.farfield import DIR_BLOCK, hemisphere, pol_vectors
+from emscatter.solvers.mom3d.farfield import METHODS, amplitudes_em, hemisphere
 from emscatter.solvers.mom3d.incident import tapered_beam
 from emscatter.solvers.mom3d.operator import make_patch
 
 __all__ = ["amplitudes_em", "beam_fresnel", "solve_dielectric_realization"]
-
-
-def amplitudes_em(points, area, k0, n_med, u, w, theta_s, phi_s) -> np.ndarray:
-    """``p̂·(F_u − n k̂ × F_w)`` ``(2, P, D)`` (h, v scattered) for densities ``u, w``
-    ``(P, N, 3)`` radiating into a medium of real index ``n_med`` in directions
-    ``theta_s, phi_s`` [rad] (flat; ``θ > π/2`` below the interface) [m²]."""
-    theta_s = np.asarray(theta_s, dtype=float).ravel()
-    phi_s = np.asarray(phi_s, dtype=float).ravel()
-    khat, hs, vs = pol_vectors(theta_s, phi_s)
-    p = u.shape[0]
-    uu = np.concatenate([u, w], axis=0).transpose(1, 0, 2).reshape(u.shape[1], 6 * p)
-    out = np.empty((2, p, theta_s.size), dtype=complex)
-    for d0 in range(0, theta_s.size, DIR_BLOCK):
-        d = slice(d0, min(theta_s.size, d0 + DIR_BLOCK))
-        f = (np.exp(-1j * k0 * n_med * (khat[d] @ points.T)) @ uu).reshape(-1, 2 * p, 3) * area
-        fu, fw = f[:, :p], f[:, p:]
-        vec = fu - n_med * np.cross(khat[d][:, None, :], fw)
-        out[0, :, d] = np.einsum("dpc,dc->pd", vec, hs[d])
-        out[1, :, d] = np.einsum("dpc,dc->pd", vec, vs[d])
-    return out
 
 
 def beam_fresnel(beam, eps2) -> np.ndarray:
@@ -92,6 +75,7 @@ def solve_dielectric_realization(
     tol: float = 1e-6,
     max_iter: int = 400,
     dtype=np.complex128,
+    farfield: str = "auto",
 ) -> dict:
     """Solve Müller's equations on one ``(ny, nx)`` height map [m] (square ``spacing`` [m])
     for air over ``eps2`` at wavenumber ``k`` [rad/m], incidence ``theta_i, phi_i`` [rad].
@@ -101,8 +85,11 @@ def solve_dielectric_realization(
     ``σ⁰ = k² cosθi |A|² / (4π P_inc)``), ``hemisphere`` and ``weights`` (upper quadrature),
     ``reflectivity`` ``(2,)`` and ``transmissivity`` ``(2,)`` (NaN for a lossy medium),
     ``power``, ``beam``, ``u``, ``w``, ``points``, ``iterations``, ``residual``, ``seconds``,
-    ``unknowns``.
+    ``unknowns``. ``farfield``: how the far-field sums are taken (``"auto"``, ``"direct"``
+    or ``"fast"``, :func:`~emscatter.solvers.mom3d.farfield.amplitudes_em`).
     """
+    if farfield not in METHODS:
+        raise ValueError(f"farfield must be one of {METHODS}, got {farfield!r}")
     t0 = time.perf_counter()
     eps2 = complex(eps2)
     patch = make_patch(np.asarray(heights, dtype=float), spacing, spacing)
@@ -125,19 +112,19 @@ def solve_dielectric_realization(
     u = np.stack([lift(x[:n], x[n : 2 * n]) for x in xs])
     w = np.stack([lift(x[2 * n : 3 * n], x[3 * n :]) for x in xs])
     area = spacing * spacing
-    amp = amplitudes_em(points, area, k, 1.0, u, w, theta_s, phi_s)
+    amp = amplitudes_em(points, area, k, 1.0, u, w, theta_s, phi_s, method=farfield)
     size = max(nx, ny) * spacing
     if n_mu is None:
         n_mu = max(24, int(math.ceil(2.0 * k * size / math.pi)))
     th, ph, wt = hemisphere(n_mu)
-    hemi = amplitudes_em(points, area, k, 1.0, u, w, th, ph)
+    hemi = amplitudes_em(points, area, k, 1.0, u, w, th, ph, method=farfield)
     scale = k * k / (16.0 * math.pi**2) / beam.power
     refl = scale * np.einsum("spd,d->p", np.abs(hemi) ** 2, wt)
     trans = np.full(2, np.nan)
     if eps2.imag == 0.0 and eps2.real > 0:
         n2 = math.sqrt(eps2.real)
         th2, ph2, wt2 = hemisphere(max(24, int(math.ceil(n_mu * n2))))
-        low = amplitudes_em(points, area, k, n2, -u, -w, math.pi - th2, ph2)
+        low = amplitudes_em(points, area, k, n2, -u, -w, math.pi - th2, ph2, method=farfield)
         trans = n2 * scale * np.einsum("spd,d->p", np.abs(low) ** 2, wt2)
     if not np.all(np.isfinite(refl)) or not np.all(np.isfinite(amp)):
         raise FloatingPointError("mom3d dielectric: the scattered field is not finite")
