@@ -2,6 +2,7 @@
 
 import csv
 import json
+import math
 import re
 import subprocess
 import sys
@@ -279,11 +280,13 @@ def test_warnings_are_one_line_and_flagged_rows(tmp_path, capsys):
         "--quantity",
         "emissivity",
         "--method",
-        "go",
+        "spm",
+        "--eps",
+        "pec",
         "--sigma",
-        "0.6",
+        str(0.2 / (2 * math.pi)),  # issue 11's SPM over a PEC, kσ = 0.2, kℓ = 1 (λ = 1 m)
         "--length",
-        "4",
+        str(1.0 / (2 * math.pi)),
         "--theta-i-deg",
         "60,85,88",
         "--csv",
@@ -292,11 +295,11 @@ def test_warnings_are_one_line_and_flagged_rows(tmp_path, capsys):
     assert main(argv) == 0
     err = capsys.readouterr().err
     assert (
-        "emscatter curves: warning: method 'go' at θi = 85°, 88°" in err and "Traceback" not in err
+        "emscatter curves: warning: method 'spm' at θi = 85°, 88°" in err and "Traceback" not in err
     )
     _, cols, _ = read_csv(path)
-    assert cols["energy_ok"].tolist() == [1, 0, 0] and cols["valid"][1:].tolist() == [0, 0]
-    assert cols["e_h"][2] < 0  # the data is shown as computed, flagged — never hidden
+    assert cols["energy_ok"].tolist() == [1, 1, 0] and cols["valid"][1:].tolist() == [0, 0]
+    assert cols["e_v"][2] < 0  # the data is shown as computed, flagged — never hidden
 
 
 def test_emissivity_figure_shows_the_data_it_is_given():
