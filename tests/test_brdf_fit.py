@@ -90,6 +90,7 @@ def test_fit_dielectric_and_bad_input():
         resolution=(16, 19),
         out_of_range="ignore",
         shadowing=SEPARABLE,
+        transmission="off",  # the raw GO reflection, as roughdielectric's (no 1 − T cap)
     )
     fit = fit_microfacet(glass, kind="dielectric")
     assert fit.mitsuba["type"] == "roughdielectric"
