@@ -204,15 +204,18 @@ def _bsdf_class(mi):
             self.m_components = comps
             self.m_flags = refl | trans
 
-        def _spec(self, chans, si):
+        def _spec(self, chans, si, kind=None):
+            """Channels → ``kind`` (default ``mi.Spectrum``; the polarized class asks for
+            ``mi.UnpolarizedSpectrum``): RGB as is, spectral by hat functions in λ."""
+            kind = mi.Spectrum if kind is None else kind
             if channels == "rgb":
-                return mi.Spectrum(chans[0], chans[1], chans[2])
+                return kind(chans[0], chans[1], chans[2])
             if channels != "spectral":
-                return mi.Spectrum(chans[0])
+                return kind(chans[0])
             lam, inv, wl = self._lam, self._inv, si.wavelengths
             if len(lam) == 1:
-                return mi.Spectrum(chans[0])
-            acc = mi.Spectrum(0.0)
+                return kind(chans[0])
+            acc = kind(0.0)
             for k in range(len(lam)):  # hat functions in λ (wavelengths, not angles)
                 up = (wl - lam[k - 1]) * inv[k - 1] if k > 0 else None
                 down = (lam[k + 1] - wl) * inv[k] if k < len(lam) - 1 else None

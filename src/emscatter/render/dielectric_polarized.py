@@ -131,18 +131,7 @@ def polarized_dielectric_class(mi, base, coord, theta, sets):
 
         def _uspec(self, chans, si):
             """One element's channels → UnpolarizedSpectrum (the base's spectral rule)."""
-            if channels == "rgb":
-                return mi.UnpolarizedSpectrum(chans[0], chans[1], chans[2])
-            if channels != "spectral" or len(self._lam) == 1:
-                return mi.UnpolarizedSpectrum(chans[0])
-            lam, inv, wl = self._lam, self._inv, si.wavelengths
-            acc = mi.UnpolarizedSpectrum(0.0)
-            for k in range(len(lam)):  # hat functions in λ (wavelengths, not angles)
-                up = (wl - lam[k - 1]) * inv[k - 1] if k > 0 else None
-                down = (lam[k + 1] - wl) * inv[k] if k < len(lam) - 1 else None
-                w = up if down is None else (down if up is None else dr.minimum(up, down))
-                acc += dr.clip(w, 0.0, 1.0) * chans[k]
-            return acc
+            return self._spec(chans, si, mi.UnpolarizedSpectrum)
 
         def _mt(self, a, b, active, si):
             """Mueller BTDF (no cosine) of light from above along ``−a`` to ``b`` below, in
