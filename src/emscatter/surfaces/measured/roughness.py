@@ -51,14 +51,11 @@ import scipy.fft as sfft
 
 from emscatter.spectra import Roughness
 from emscatter.surfaces.heightmap import HeightMap, HeightMapError
-from emscatter.surfaces.measured.estimators import (
-    cell_slopes,
-    density_estimate,
-    map_acf,
-    slope_acf_sum,
-)
+from emscatter.surfaces.measured.bilinear import bilinear
+from emscatter.surfaces.measured.estimators import map_acf
 from emscatter.surfaces.measured.nfold import nfold_table
-from emscatter.surfaces.measured.slope_tail import SLOPE_TAILS, evaluate, fit_tail
+from emscatter.surfaces.measured.slope_tail import SLOPE_TAILS, evaluate
+from emscatter.surfaces.measured.slopes import kernel_density, measure_slope_density
 
 __all__ = [
     "MeasuredRoughness",
@@ -90,29 +87,6 @@ MIN_MAP_SAMPLES = MIN_SEGMENTS * MIN_PATCH
 
 class BandWarning(UserWarning):
     """Part of the spectral band a computation needs lies beyond what the map resolves."""
-
-
-def _bilinear(grid: np.ndarray, x0: float, dx: float, x: np.ndarray, y0=None, dy=None, y=None):
-    """Bilinear (linear in 1-D) interpolation on a uniform grid; NaN outside it."""
-    fx = (x - x0) / dx
-    nx = grid.shape[-1]
-    inside = (fx >= 0) & (fx <= nx - 1)
-    fx = np.clip(fx, 0, nx - 1)
-    ix = np.minimum(np.floor(fx).astype(np.intp), nx - 2)
-    tx = fx - ix
-    if y is None:
-        val = grid[ix] * (1 - tx) + grid[ix + 1] * tx
-        return np.where(inside, val, np.nan)
-    fy = (y - y0) / dy
-    ny = grid.shape[0]
-    inside &= (fy >= 0) & (fy <= ny - 1)
-    fy = np.clip(fy, 0, ny - 1)
-    iy = np.minimum(np.floor(fy).astype(np.intp), ny - 2)
-    ty = fy - iy
-    val = (grid[iy, ix] * (1 - tx) + grid[iy, ix + 1] * tx) * (1 - ty) + (
-        grid[iy + 1, ix] * (1 - tx) + grid[iy + 1, ix + 1] * tx
-    ) * ty
-    return np.where(inside, val, np.nan)
 
 
 def _symmetric_extended(p: np.ndarray) -> np.ndarray:
@@ -294,16 +268,16 @@ class MeasuredRoughness(Roughness):
         if self.dimension == 1:
             kr = np.abs(kx)
             kr0, lp = self._log_radial
-            val = _bilinear(lp, 0.0, kr0[1] - kr0[0], kr)
+            val = bilinear(lp, 0.0, kr0[1] - kr0[0], kr)
         elif self.isotropic:
             kr = np.sqrt(kx * kx + np.asarray(ky, dtype=float) ** 2)
             kr0, lp = self._log_radial
-            val = _bilinear(lp, 0.0, kr0[1] - kr0[0], kr)
+            val = bilinear(lp, 0.0, kr0[1] - kr0[0], kr)
         else:
             ky = np.asarray(ky, dtype=float)
             kx, ky = np.broadcast_arrays(kx, ky)
             kr = np.sqrt(kx * kx + ky * ky)
-            val = _bilinear(self._log_psd, self.k0[1], self.dk[1], kx, self.k0[0], self.dk[0], ky)
+            val = bilinear(self._log_psd, self.k0[1], self.dk[1], kx, self.k0[0], self.dk[0], ky)
         return np.where(np.isnan(val), self._tail(kr), np.exp(val))
 
     @cached_property
@@ -336,10 +310,10 @@ class MeasuredRoughness(Roughness):
         x = np.asarray(x, dtype=float)
         if self.dimension == 1:
             c = rho.size // 2
-            v = _bilinear(rho, -c * sp[0], sp[0], x)
+            v = bilinear(rho, -c * sp[0], sp[0], x)
         else:
             cy, cx = rho.shape[0] // 2, rho.shape[1] // 2
-            v = _bilinear(rho, -cx * sp[1], sp[1], x, -cy * sp[0], sp[0], np.asarray(y, float))
+            v = bilinear(rho, -cx * sp[1], sp[1], x, -cy * sp[0], sp[0], np.asarray(y, float))
         return np.nan_to_num(v, nan=0.0)
 
     def nfold_spectrum(self, n, kx, ky=0.0) -> np.ndarray:
@@ -363,9 +337,9 @@ class MeasuredRoughness(Roughness):
             dk = tuple(2 * math.pi / (m * d) for m, d in zip(shp, sp, strict=True))
             k0 = tuple(-(m // 2) * s for m, s in zip(shp, dk, strict=True))
             if self.dimension == 1:
-                v = _bilinear(grid, k0[0], dk[0], kx[sel])
+                v = bilinear(grid, k0[0], dk[0], kx[sel])
             else:
-                v = _bilinear(grid, k0[1], dk[1], kx[sel], k0[0], dk[0], ky[sel])
+                v = bilinear(grid, k0[1], dk[1], kx[sel], k0[0], dk[0], ky[sel])
             out[sel] = np.nan_to_num(v, nan=0.0)
         return out
 
@@ -405,14 +379,7 @@ class MeasuredRoughness(Roughness):
 
     def _slope_kernel(self, zx, zy=None) -> np.ndarray:
         """The kernel estimate on its grid, bilinear between bin centres, 0 beyond it."""
-        if self.dimension == 1:
-            (x0, sx), _ = self.slope_grid
-            v = _bilinear(self.slope_density, x0, sx, zx)
-        else:
-            (x0, sx), (y0, sy) = self.slope_grid
-            zx, zy = np.broadcast_arrays(zx, zy)
-            v = _bilinear(self.slope_density, x0, sx, zx, y0, sy, zy)
-        return np.nan_to_num(v, nan=0.0)
+        return kernel_density(self.slope_density, self.slope_grid, zx, zy)
 
     def slope_pdf(self, zx, zy=None) -> np.ndarray:
         """The measured slope density ``p(ζx, ζy)`` [-] (1-D: ``p₁(ζx)``): the kernel estimate
@@ -586,55 +553,17 @@ def measured_roughness(
         raise ValueError(f"smooth must be an integer 0…8 (bins), got {smooth!r}")
     psd, k0, dk, patch = _welch(hm, segments, smooth)
     sigma = hm.rms_height()
-    if slope_bandwidth is not None and (
-        isinstance(slope_bandwidth, bool)
-        or not isinstance(slope_bandwidth, (int, float))
-        or not 0 <= slope_bandwidth <= 2
-    ):
-        raise ValueError(
-            f"slope_bandwidth must be None (Scott's rule) or a number 0…2 (rms slopes; 0: the "
-            f"raw histogram), got {slope_bandwidth!r}"
-        )
-    zx, zy = cell_slopes(hm)
-    n_sl = zx.size
-    n_eff = n_sl / slope_acf_sum(hm, zx, zy)
-    if slope_bandwidth is None:
-        b_rule = (4 / 3) ** 0.2 * n_eff**-0.2 if hm.dimension == 1 else n_eff ** (-1 / 6)
-    else:
-        b_rule = float(slope_bandwidth)
-    if slope_bins:
-        bins = slope_bins
-    elif b_rule > 0:  # ≥ 3 bins per kernel rms over the (6 + 4b) rms half-width
-        bins = int(np.clip(math.ceil(6 * (6 + 4 * b_rule) / b_rule), 21, 301))
-    else:
-        bins = int(np.clip(2 * round(n_sl**0.25), 21, 201))
-    dens, gx, gy, lost, b_used = density_estimate(zx, zy, bins, b_rule, n_eff)
-    mss = (float(np.mean(zx * zx)), float(np.mean(zy * zy)) if zy is not None else 0.0)
+    slopes = measure_slope_density(hm, slope_bins=slope_bins, slope_bandwidth=slope_bandwidth,
+                                   slope_tail=slope_tail)  # fmt: skip
+    dens, (gx, gy), mss = slopes.density, slopes.grid, slopes.mean_square
     band_lo = 2 * math.pi / max(p * d for p, d in zip(patch, hm.spacing, strict=True))
     band_hi = math.pi / max(hm.spacing)
     info = {"spacing": hm.spacing, "patch": patch, "segments": segments,
             "segments_requested": requested, "window": "hann",
-            "overlap": 0.5, "smooth": smooth, "slope_bins": bins,
-            "slopes_outside_histogram": float(lost),
-            "slope_bandwidth": b_used, "slope_samples_effective": float(n_eff),
-            "slope_density": "histogram" if b_used == 0 else "variance-preserving Gaussian "
-            "kernel estimate (Jones 1991), bandwidth "
-            + ("Scott's rule" if slope_bandwidth is None else "given"),
+            "overlap": 0.5, "smooth": smooth, **slopes.info,
             "map_band": hm.band, "detrend": hm.detrend, "holes": hm.holes,
             "spectral_mass": float(psd.sum() * np.prod(dk) / sigma**2)}  # fmt: skip
-    rec = None
-    if slope_tail != "none":
-        rms = tuple(math.sqrt(v) for v in mss[: hm.dimension])
-        grids = (gx,) if gy is None else (gx, gy)
-        half = tuple((g[0] * -1) / r for g, r in zip(grids, rms, strict=True))
-        inner = MeasuredRoughness(sigma=sigma, length=1.0, length_y=None, psd=psd, k0=k0,
-                                  dk=dk, slope_density=dens, slope_grid=(gx, gy),
-                                  dimension=hm.dimension)._slope_kernel  # fmt: skip
-        try:
-            rec = fit_tail(inner, slope_tail, zx, zy, n_eff, half, rms)
-        except ValueError as exc:
-            raise HeightMapError(f"the map from {hm.source}: no {slope_tail} slope tail ({exc}); "
-                                 "use slope_tail='none'") from None  # fmt: skip
+    rec = slopes.tail
     info["slope_tail"] = rec or {"shape": "none", "rule": "the kernel estimate alone, 0 "
                                  "beyond the histogram grid"}  # fmt: skip
     common = {"psd": psd, "k0": k0, "dk": dk, "slope_density": dens, "slope_grid": (gx, gy),
