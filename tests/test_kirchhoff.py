@@ -531,16 +531,17 @@ def test_po_series_continuum_limit(rough, monkeypatch):
 
 def test_po_emissivity_answers_at_huge_k_sigma():
     """Issue 11: PO emissivity at kσ = 1e3 did not answer within 90 s (≈10⁴ terms per
-    geometry); with the continuum limit it is a fraction of a second (bound kept loose)."""
+    geometry); with the continuum limit it is a fraction of a second (bound kept loose, in
+    this process's CPU seconds: a loaded machine stretches the wall clock, not the work)."""
     import time
     import warnings
 
     import emscatter as em
 
     rough = GaussianCorrelation(1e3 / K0, 1e4 / K0)
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         e = em.emissivity(rough, 17 + 2j, wavelength=1.0, theta_i=_deg(10, 40), method="po")
-    assert time.perf_counter() - t0 < 30.0
+    assert time.process_time() - t0 < 30.0
     assert np.all(np.isfinite(e.emissivity)) and np.all((e.emissivity > 0) & (e.emissivity < 1))
