@@ -129,7 +129,9 @@ def polarized_radio_map(scene, *, seed: int = 1, **map_kw) -> dict:
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
         raise TypeError(f"seed must be an integer, got {seed!r}")
     if not scene.transmitters:
-        raise ValueError("the scene has no transmitter: scene.add(sionna.rt.Transmitter(...)) first")
+        raise ValueError(
+            "the scene has no transmitter: scene.add(sionna.rt.Transmitter(...)) first"
+        )
     kw = dict(map_kw)
     for key, cls in (("center", mi.Point3f), ("orientation", mi.Point3f), ("size", mi.Point2f),
                      ("cell_size", mi.Point2f)):  # fmt: skip
@@ -139,9 +141,7 @@ def polarized_radio_map(scene, *, seed: int = 1, **map_kw) -> dict:
     ports = []
     try:
         for pol in PORTS:
-            scene.tx_array = rt.PlanarArray(
-                num_rows=1, num_cols=1, pattern="iso", polarization=pol
-            )
+            scene.tx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso", polarization=pol)
             v, h, centers = _solve_ports(scene, int(seed), kw)
             ports.append((v, h))
     finally:
@@ -203,8 +203,18 @@ def write_xpd_map(result: dict, out_dir, stem: str, *, title: str = "", tx_xy=No
             "rough_summary": xpd_summary(ro["xpd_db"][0], ro["lit"][0]),
             **{k: v for k, v in result["settings"].items() if v is not None}}  # fmt: skip
     diff = xm["difference_db"][0]
-    cols = [c[..., 0], c[..., 1], c[..., 2], _db(fl["co"][0]), _db(fl["cross"][0]),
-            fl["xpd_db"][0], _db(ro["co"][0]), _db(ro["cross"][0]), ro["xpd_db"][0], diff]
+    cols = [
+        c[..., 0],
+        c[..., 1],
+        c[..., 2],
+        _db(fl["co"][0]),
+        _db(fl["cross"][0]),
+        fl["xpd_db"][0],
+        _db(ro["co"][0]),
+        _db(ro["cross"][0]),
+        ro["xpd_db"][0],
+        diff,
+    ]
     written = [write_csv(
         out / f"{stem}_xpd_map.csv",
         ["x_m", "y_m", "z_m", "flat_co_db", "flat_cross_db", "flat_xpd_db", "rough_co_db",
@@ -216,8 +226,7 @@ def write_xpd_map(result: dict, out_dir, stem: str, *, title: str = "", tx_xy=No
     hy = 0.5 * (c[1, 0, 1] - c[0, 0, 1]) if c.shape[0] > 1 else 0.5
     ext = (c[0, 0, 0] - hx, c[0, -1, 0] + hx, c[0, 0, 1] - hy, c[-1, 0, 1] + hy)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
-    imgs = [np.where(np.isnan(x), np.nan, np.minimum(x, 60.0)) for x in (fl["xpd_db"][0],
-                                                                         ro["xpd_db"][0])]  # fmt: skip
+    imgs = [np.minimum(x, 60.0) for x in (fl["xpd_db"][0], ro["xpd_db"][0])]  # nan stays nan
     d = diff[np.isfinite(diff)]
     lim = float(np.clip(np.percentile(np.abs(d), 95), 1.0, 40.0)) if d.size else 10.0
     panels = ((imgs[0], f"{result['reference']}: XPD [dB] (capped at 60)", "magma", (0, 60)),
@@ -272,6 +281,7 @@ def write_xpd_vs_frequency(rows: list, out_dir, stem: str, *, title: str = "") -
         ax.errorbar(f / 1e9 * dx, med, yerr=[med - lo, hi - med], fmt="o-", color=colour,
                     capsize=4, label=f"{s} walls (median, quartiles)")  # fmt: skip
     ax.set_xscale("log")
+    ax.minorticks_off()
     ax.set_xticks(f / 1e9, [f"{x:g}" for x in f / 1e9])
     ax.set_xlabel("frequency [GHz]")
     ax.set_ylabel("XPD per radio-map cell [dB]")
