@@ -123,15 +123,15 @@ def polarized_radio_map(scene, *, seed: int = 1, **map_kw) -> dict:
     ``{"ports": (2, 2, n_tx, ny, nx) [pol_rx, pol_tx] (0 = V, 1 = H) [linear], "co", "cross"
     (n_tx, ny, nx) [linear], "xpd_db" (n_tx, ny, nx) [dB], "lit" (co > 0), "cell_centers"
     (ny, nx, 3) [m]}``. A non-finite power from the solver is an error."""
-    import mitsuba as mi
-    import sionna.rt as rt
-
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
         raise TypeError(f"seed must be an integer, got {seed!r}")
     if not scene.transmitters:
         raise ValueError(
             "the scene has no transmitter: scene.add(sionna.rt.Transmitter(...)) first"
         )
+    import mitsuba as mi
+    import sionna.rt as rt
+
     kw = dict(map_kw)
     for key, cls in (("center", mi.Point3f), ("orientation", mi.Point3f), ("size", mi.Point2f),
                      ("cell_size", mi.Point2f)):  # fmt: skip
