@@ -96,7 +96,7 @@ def test_cli_xpd_map_street_canyon(tmp_path):
     p = subprocess.run([sys.executable, "-m", "emscatter.cli", "radio", *args],
                        capture_output=True, text=True, env=_env(), timeout=900)  # fmt: skip
     assert p.returncode == 0, p.stderr[-3000:]
-    assert "XPD per cell: flat median" in p.stdout
+    assert "cells lit in both): flat median" in p.stdout
     for name in ("28GHz_xpd_map.csv", "28GHz_xpd_map.png", "xpd_vs_frequency.csv",
                  "xpd_vs_frequency.png"):  # fmt: skip
         assert (tmp_path / f"simple_street_canyon_{name}").stat().st_size > 0

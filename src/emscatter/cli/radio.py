@@ -513,11 +513,13 @@ def run_any_scene(a) -> int:
             for p in write_xpd_map(res, out, f"{stem}_{f / 1e9:g}GHz", title=stem, tx_xy=tx[:2]):
                 print(f"  {p}")
             xm = res["xpd_map"]
-            row = {"frequency_hz": f, **{s: xpd_summary(xm[s]["xpd_db"][0], xm[s]["lit"][0])
+            both = xm["flat"]["lit"][0] & xm["rough"]["lit"][0]  # the same cells for both
+            row = {"frequency_hz": f, **{s: xpd_summary(xm[s]["xpd_db"][0], both)
                                          for s in ("flat", "rough")}}  # fmt: skip
             xpd_rows.append(row)
             print(
-                f"  XPD per cell: flat median {row['flat']['median']:.1f} dB (quartiles "
+                f"  XPD per cell ({row['flat']['n']} cells lit in both): flat median "
+                f"{row['flat']['median']:.1f} dB (quartiles "
                 f"{row['flat']['q25']:.1f}…{row['flat']['q75']:.1f}), rough median "
                 f"{row['rough']['median']:.1f} dB ({row['rough']['q25']:.1f}…"
                 f"{row['rough']['q75']:.1f})"

@@ -181,10 +181,11 @@ def _db(x):
 
 def write_xpd_map(result: dict, out_dir, stem: str, *, title: str = "", tx_xy=None) -> list:
     """``<stem>_xpd_map.csv`` (per cell of the first transmitter: x, y, z [m]; flat and rough
-    co- and cross-polar path gain [dB, −inf where none] and XPD [dB, +inf without cross-polar
-    power, nan unlit]; rough − flat XPD [dB]) and ``<stem>_xpd_map.png`` (flat XPD, rough XPD,
-    rough − flat), atomic writes, from :func:`~emscatter.radio.roughening.compare_rough_flat`
-    run with ``xpd_map=True``. Returns the paths written."""
+        co- and cross-polar path gain [dB, −inf where none] and XPD [dB, +inf without cross-polar
+        power, nan unlit]; rough − flat XPD [dB]; metadata: median and quartiles over the cells lit
+    in both) and ``<stem>_xpd_map.png`` (flat XPD, rough XPD,
+        rough − flat), atomic writes, from :func:`~emscatter.radio.roughening.compare_rough_flat`
+        run with ``xpd_map=True``. Returns the paths written."""
     from pathlib import Path
 
     import matplotlib
@@ -196,11 +197,12 @@ def write_xpd_map(result: dict, out_dir, stem: str, *, title: str = "", tx_xy=No
 
     xm = result["xpd_map"]
     fl, ro = xm["flat"], xm["rough"]
+    both = fl["lit"][0] & ro["lit"][0]  # summaries over the same cells
     c = fl["cell_centers"]
     out = Path(out_dir)
     meta = {"frequency_hz": result["frequency"], "reference": result["reference"],
-            "flat_summary": xpd_summary(fl["xpd_db"][0], fl["lit"][0]),
-            "rough_summary": xpd_summary(ro["xpd_db"][0], ro["lit"][0]),
+            "flat_summary": xpd_summary(fl["xpd_db"][0], both),
+            "rough_summary": xpd_summary(ro["xpd_db"][0], both),
             **{k: v for k, v in result["settings"].items() if v is not None}}  # fmt: skip
     diff = xm["difference_db"][0]
     cols = [
@@ -251,8 +253,8 @@ def write_xpd_map(result: dict, out_dir, stem: str, *, title: str = "", tx_xy=No
 
 def write_xpd_vs_frequency(rows: list, out_dir, stem: str, *, title: str = "") -> list:
     """``<stem>_xpd_vs_frequency.csv`` and ``.png``: per frequency, the median and quartiles of
-    per-cell XPD [dB] flat and rough (``rows``: ``{"frequency_hz", "flat": xpd_summary,
-    "rough": xpd_summary}``), atomic writes. Returns the paths written."""
+    per-cell XPD [dB] flat and rough, over the same cells (``rows``: ``{"frequency_hz",
+    "flat": xpd_summary, "rough": xpd_summary}``), atomic writes. Returns the paths written."""
     from pathlib import Path
 
     import matplotlib
@@ -284,7 +286,7 @@ def write_xpd_vs_frequency(rows: list, out_dir, stem: str, *, title: str = "") -
     ax.minorticks_off()
     ax.set_xticks(f / 1e9, [f"{x:g}" for x in f / 1e9])
     ax.set_xlabel("frequency [GHz]")
-    ax.set_ylabel("XPD per radio-map cell [dB]")
+    ax.set_ylabel("XPD per radio-map cell [dB] (cells lit in both)")
     ax.grid(alpha=0.3)
     ax.legend()
     ax.set_title(f"{title} XPD per cell: flat vs emscatter rough".strip(), fontsize=10)
