@@ -13,7 +13,9 @@ pattern is ``θ̂`` and an ``"H"`` one ``φ̂`` (ITU-R/3GPP slant angles 0 and �
 :func:`emscatter.radio.xpd.path_xpd` reads from PathSolver paths traced with ``"VH"`` arrays. The
 radio map used here (:func:`port_map_class`) is Sionna's ``PlanarRadioMap`` that accumulates
 these two powers into two maps (same rays, same weights ``Ω/cos θ`` and normalization as
-Sionna's); their sum is Sionna's own map to float32 rounding.
+Sionna's, for reflected, refracted, diffuse and diffracted rays alike); their sum is Sionna's own
+map to float32 rounding (measured 2e-6 on the plate, 9e-7 in ``simple_street_canyon`` with
+diffraction on).
 
 Per cell, with ``P_rt`` the power into receive port ``r`` from transmit polarization ``t``:
 
