@@ -6,7 +6,9 @@ arrays one isotropic dual-polarized (``"VH"``) element — what the per-path XPD
 (:mod:`emscatter.radio.xpd`) needs. Built-in: the scene's ITU materials with ``S = 0.3``
 Lambertian (so that diffuse reflection costs the built-in model something too); emscatter:
 ``roughen(scene)`` (the default roughness table, one shared material per medium). Targets:
-``PathSolver`` ≤ 1.3×, ``RadioMapSolver`` with diffuse ≤ 1.5× the built-in wall time. The two
+``PathSolver`` ≤ 1.3×, ``RadioMapSolver`` with diffuse ≤ 1.5× the built-in wall time; the
+XPD map (:func:`emscatter.radio.xpd_map.polarized_radio_map`: a V and an H transmitter, the
+V/H receive-port split) against two plain built-in maps (the same two transmitters). The two
 are timed alternately after one warm-up call each (kernel compilation; emscatter's tables are
 built once per frequency and reported apart); medians of ``--repeat`` calls. Process CPU time is
 recorded beside wall time (the steadier measure on a loaded machine).
@@ -89,10 +91,30 @@ def main(argv=None) -> int:
         )  # fmt: skip
         r.path_gain.numpy()
 
+    from emscatter.radio.xpd_map import polarized_radio_map
+
+    map_kw = {"center": (0.0, 0.0, 1.5), "orientation": (0.0, 0.0, 0.0), "size": (180.0, 120.0),
+              "cell_size": (2.0, 2.0), "samples_per_tx": a.map_samples, "max_depth": 3,
+              "refraction": True}  # fmt: skip
+
+    def xpd_map(sc, diffuse, kind):
+        if kind == "emscatter":
+            polarized_radio_map(sc, seed=1, diffuse_reflection=diffuse, **map_kw)
+            return
+        saved = sc.tx_array
+        try:
+            for pol in ("V", "H"):
+                sc.tx_array = rt.PlanarArray(num_rows=1, num_cols=1, pattern="iso",
+                                             polarization=pol)  # fmt: skip
+                radio_map(sc, diffuse, kind)
+        finally:
+            sc.tx_array = saved
+
     configs = {
         "PathSolver specular+refraction, VH (XPD)": (paths, False, 1.3),
         "PathSolver +diffuse, VH (XPD)": (paths, True, 1.3),
         "RadioMapSolver +diffuse": (radio_map, True, 1.5),
+        "RadioMapSolver +diffuse, XPD map (V, H tx)": (xpd_map, True, 1.5),
     }
     results = {
         "command": "python benchmarks/bench_radio_scenes.py" + (" --quick" if a.quick else ""),

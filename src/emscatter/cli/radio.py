@@ -4,7 +4,9 @@ Two modes: the indoor cross-check (``--scene room|floor_wall|box|all``: Sionna S
 and rough sets) and, with ``--medium`` or ``--tx`` or any other scene (a Sionna scene name such
 as ``simple_street_canyon``, or a Mitsuba/Sionna ``*.xml`` file), "any scene rough": the scene's
 own materials against emscatter's rough equivalents (:func:`emscatter.radio.roughen`), radio
-maps of rough − flat as PNG and CSV per frequency. Every argument, the media named, the bands
+maps of rough − flat as PNG and CSV per frequency (``--xpd-map``: also cross-polar
+discrimination per cell, flat and rough, and its median and quartiles against frequency,
+:mod:`emscatter.radio.xpd_map`). Every argument, the media named, the bands
 and the output folder are checked before a ray is traced.
 
 ``--height-map FILE`` (with ``--detrend``, ``--unit``, ``--segments``, ``--tail`` as for
@@ -248,6 +250,15 @@ def register(subparsers) -> None:
             "correlation family (Gaussian or exponential) that fits the map best"
         ),
     )
+    r.add_argument(
+        "--xpd-map",
+        action="store_true",
+        help=(
+            "any-scene mode: also cross-polar discrimination per radio-map cell, flat and rough "
+            "(isotropic V and H transmitters, V/H receive ports): <scene>_<f>_xpd_map.csv/.png "
+            "and <scene>_xpd_vs_frequency.csv/.png (median and quartiles per frequency)"
+        ),
+    )
     r.add_argument("--quick", action="store_true", help="few rays, coarse maps and tables")
     r.add_argument(
         "--quiet",
@@ -276,6 +287,10 @@ def _run(a) -> int:
     if a.plate and a.height_map:
         raise ValueError("--height-map applies to scenes, not to --plate")
     a.map_spec = _map_spec(a)  # the map read and its band checked before anything else
+    if a.xpd_map and (a.plate or a.builtin_json is not None):
+        raise ValueError(
+            "--xpd-map applies to scenes (radio maps), not to --plate or --builtin-json"
+        )
     if a.builtin_json is not None:
         if a.plate or a.tx is not None or a.extrapolate:
             raise ValueError(
@@ -294,7 +309,8 @@ def _run(a) -> int:
         for p in demo.run(out, a.quick):
             print(f"  {p}")
         return 0
-    if a.medium or a.tx is not None or a.rx or a.height_map or a.scene not in (*SCENES, "all"):
+    if (a.medium or a.tx is not None or a.rx or a.height_map or a.xpd_map
+            or a.scene not in (*SCENES, "all")):  # fmt: skip
         return run_any_scene(a)
     if a.cell_size is None:
         a.cell_size = 0.1
@@ -434,6 +450,7 @@ def run_any_scene(a) -> int:
 
     from ..radio import indoor
     from ..radio.roughening import compare_rough_flat, plan, write_comparison
+    from ..radio.xpd_map import write_xpd_map, write_xpd_vs_frequency, xpd_summary
 
     tx = a.tx
     if tx is None:
@@ -471,11 +488,13 @@ def run_any_scene(a) -> int:
     stem = Path(a.scene).stem
     out = Path(a.out)
     _write_map_record(a, out, stem)
+    xpd_rows = []
     for f in freqs:
         sc.frequency = f
         res = compare_rough_flat(
             sc, common, mapping=mapping, extrapolate=a.extrapolate, table_options=opts,
             frequencies=freqs, xpd=bool(a.rx), texture_direction=_texture_directions(a),
+            xpd_map=a.xpd_map,
             paths={"samples_per_src": samples, "max_depth": depth} if a.rx else False,
             radio_map={"center": (*((lo[:2] + hi[:2]) / 2), a.map_height),
                        "orientation": (0.0, 0.0, 0.0), "size": tuple(size),
@@ -490,12 +509,30 @@ def run_any_scene(a) -> int:
             f"{stem} {f / 1e9:g} GHz: rough − flat median {med:+.2f} dB over {int(lit.sum())} "
             f"cells lit in both ({cell:g} m cells, {samples} rays, depth {depth})"
         )
+        if a.xpd_map:
+            for p in write_xpd_map(res, out, f"{stem}_{f / 1e9:g}GHz", title=stem, tx_xy=tx[:2]):
+                print(f"  {p}")
+            xm = res["xpd_map"]
+            both = xm["flat"]["lit"][0] & xm["rough"]["lit"][0]  # the same cells for both
+            row = {"frequency_hz": f, **{s: xpd_summary(xm[s]["xpd_db"][0], both)
+                                         for s in ("flat", "rough")}}  # fmt: skip
+            xpd_rows.append(row)
+            print(
+                f"  XPD per cell ({row['flat']['n']} cells lit in both): flat median "
+                f"{row['flat']['median']:.1f} dB (quartiles "
+                f"{row['flat']['q25']:.1f}…{row['flat']['q75']:.1f}), rough median "
+                f"{row['rough']['median']:.1f} dB ({row['rough']['q25']:.1f}…"
+                f"{row['rough']['q75']:.1f})"
+            )
         for i, name in enumerate(res.get("receivers", []) if a.rx else []):
             pg, x = res["path_gain"], res["xpd"]
             print(
                 f"  {name}: rough − flat {pg['difference_db'][i, 0]:+.2f} dB, XPD flat "
                 f"{x['flat'][i, 0]:.1f} dB, rough {x['rough'][i, 0]:.1f} dB"
             )
+    if xpd_rows:
+        for p in write_xpd_vs_frequency(xpd_rows, out, stem, title=stem):
+            print(f"  {p}")
     return 0
 
 

@@ -25,7 +25,9 @@ gains and radio maps in one call: ``roughen``, ``flatten``, ``compare_rough_flat
 built-in model stands in: ``builtin_equivalent``), :mod:`.calibration` (σ and ℓ fitted to
 observed path gains, with their uncertainty: ``calibrate``), :mod:`.plate`, :mod:`.indoor` and
 :mod:`.sweep` (the three cross-checks), :mod:`.demo`, :mod:`.from_map` (the roughness of a
-measured height map: ``MaterialSpec.from_height_map``).
+measured height map: ``MaterialSpec.from_height_map``), :mod:`.xpd` (cross-polar
+discrimination per path) and :mod:`.xpd_map` (per radio-map cell: ``polarized_radio_map``;
+rough vs flat with ``compare_rough_flat(..., xpd_map=True)``).
 """
 
 from __future__ import annotations
@@ -54,6 +56,7 @@ from .tables import (
     build_tables,
     reset_build_log,
 )
+from .xpd_map import polarized_radio_map
 
 __all__ = [
     "MaterialSpec",
@@ -62,6 +65,7 @@ __all__ = [
     "roughen",
     "flatten",
     "compare_rough_flat",
+    "polarized_radio_map",
     "Roughened",
     "DEFAULT_ROUGHNESS",
     "DEFAULT_ROUGHNESS_SOURCE",

@@ -115,7 +115,7 @@ def _dual_pol_xpd(scene, path_kw, seed):
         scene.tx_array, scene.rx_array = saved
 
 
-def _solve(scene, path_kw, map_kw, seed, xpd=False):
+def _solve(scene, path_kw, map_kw, seed, xpd=False, xpd_map=False):
     import sionna.rt as rt
 
     out = {}
@@ -128,6 +128,10 @@ def _solve(scene, path_kw, map_kw, seed, xpd=False):
         rm = rt.RadioMapSolver()(scene, seed=seed, **_mi_args(map_kw))
         out["radio_map"] = _finite(np.asarray(rm.path_gain.numpy(), dtype=np.float64), "radio map")
         out["cell_centers"] = np.asarray(rm.cell_centers.numpy(), dtype=np.float64)
+        if xpd_map:
+            from ..xpd_map import polarized_radio_map
+
+            out["xpd_map"] = polarized_radio_map(scene, seed=seed, **map_kw)
     return out
 
 
@@ -150,6 +154,7 @@ def compare_rough_flat(
     reference: str = "original",
     seed: int = 1,
     xpd: bool = False,
+    xpd_map: bool = False,
     **roughen_kw,
 ) -> dict:
     """Path gains (``paths``: True, False or PathSolver settings over :data:`PATH_DEFAULTS`)
@@ -168,7 +173,13 @@ def compare_rough_flat(
     cross-polar power of all paths, both transmit polarizations), from one more PathSolver run
     per state with the scene's arrays swapped for one isotropic dual-polarized element
     each (restored afterwards); ``+inf`` where no cross-polar power arrives, NaN where no
-    path does."""
+    path does.
+
+    ``xpd_map=True`` (with ``radio_map``) adds ``"xpd_map": {"flat", "rough"}``, each
+    :func:`emscatter.radio.xpd_map.polarized_radio_map` (co- and cross-polar maps and XPD per
+    cell [dB], from two more RadioMapSolver runs per state: a V and an H isotropic
+    transmitter), and ``"difference_db"``: rough − flat XPD per cell [dB], NaN where either is
+    unlit or both are ``+inf`` (``−inf`` where only the flat cell has no cross-polar power)."""
     if reference not in ("original", "flat"):
         raise ValueError(f"reference must be 'original' or 'flat', got {reference!r}")
     if "flat" in roughen_kw:
@@ -179,6 +190,10 @@ def compare_rough_flat(
     map_kw = _settings(radio_map, MAP_DEFAULTS, "radio_map")
     if xpd and path_kw is None:
         raise ValueError("xpd=True needs path gains: give paths=True (or PathSolver settings)")
+    if xpd_map and map_kw is None:
+        raise ValueError(
+            "xpd_map=True needs a radio map: give radio_map=True (or RadioMapSolver settings)"
+        )
     if path_kw is None and map_kw is None:
         raise ValueError("nothing to compare: give paths=True and/or radio_map=True (or settings)")
     if not scene.transmitters:
@@ -200,9 +215,9 @@ def compare_rough_flat(
     try:
         if reference == "flat":
             roughen(scene, roughness, mapping, flat=True, **roughen_kw)
-        flat = _solve(scene, path_kw, map_kw, seed, xpd)
+        flat = _solve(scene, path_kw, map_kw, seed, xpd, xpd_map)
         handle = roughen(scene, roughness, mapping, **roughen_kw)
-        rough = _solve(scene, path_kw, map_kw, seed, xpd)
+        rough = _solve(scene, path_kw, map_kw, seed, xpd, xpd_map)
         rows = handle.rows()
     finally:
         if roughened(scene) is not None:
@@ -223,6 +238,11 @@ def compare_rough_flat(
         out["radio_map"]["cell_centers"] = flat["cell_centers"]
     if xpd:
         out["xpd"] = {"flat": flat["xpd"], "rough": rough["xpd"]}
+    if xpd_map:
+        fx, rx = flat["xpd_map"]["xpd_db"], rough["xpd_map"]["xpd_db"]
+        with np.errstate(invalid="ignore"):
+            d = rx - fx  # inf − inf is NaN: both without cross-polar power
+        out["xpd_map"] = {"flat": flat["xpd_map"], "rough": rough["xpd_map"], "difference_db": d}
     return out
 
 
