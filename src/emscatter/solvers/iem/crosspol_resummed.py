@@ -54,6 +54,7 @@ every node: ~0.1–0.3 s per angle (numpy). Opt-in (``auto`` is unchanged).
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -111,6 +112,44 @@ def backscatter_resummed(roughness, eps, k: float, theta, phi_i: float = 0.0, *,
     if not math.isfinite(d):
         raise ValueError(f"phi_i must be a finite angle [rad], got {phi_i!r}")
     uniq, inv = np.unique(th.ravel(), return_inverse=True)
+    out = _compiled(rough, eps, k, uniq, d, n_nodes)
+    if out is None:
+        out = _numpy(rough, eps, k, uniq, d, n_nodes)
+    elif np.isnan(out[0]).any():  # angles whose node rule lacks the point symmetry
+        miss = np.isnan(out[0])
+        out[:, miss] = _numpy(rough, eps, k, uniq[miss], d, n_nodes)
+    if not np.all(np.isfinite(out)) or np.any(out < 0):
+        raise FloatingPointError(f"resummed cross-pol not finite/positive at theta={uniq!r}")
+    res = out[:, inv].reshape((2, *th.shape))
+    return res if both else res[0]
+
+
+def _compiled(rough, eps, k, uniq, d, n_nodes):
+    """``(hv, vh)`` (2, n) from the compiled kernel (:mod:`.kernels.crosspol_resummed`;
+    ``vh = hv`` there: reciprocity, tested on the numpy path), NaN where an angle's rule lacks
+    the point symmetry, or None where the numpy reference runs (backend numpy). Any call takes it
+    when numba is there (no size gate: one angle costs 0.1–0.3 s in numpy, more than loading
+    the kernels)."""
+    from emscatter.kernels import backend
+
+    if uniq.size == 0 or backend() != "numba":
+        return None
+    from emscatter.solvers.iem.kernels import crosspol_resummed as kern
+
+    code = kern.GAUSSIAN if type(rough) is GaussianCorrelation else kern.EXPONENTIAL
+    vals, done = kern.backscatter_resummed(
+        uniq, eps, k, rough.sigma, rough.length, rough.length_y, d, code, int(n_nodes),
+        threads=min(os.cpu_count() or 1, 8),
+    )  # fmt: skip
+    vals[~done] = np.nan
+    return np.stack([vals, vals])
+
+
+def _numpy(rough, eps, k, uniq, d, n_nodes):
+    """The numpy reference of :func:`backscatter_resummed`: ``(hv, vh)`` (2, n) at the
+    distinct angles ``uniq`` [rad], azimuth ``d`` [rad] (the whole-plane σ⁰⁽²²⁾ rule, both
+    polarizations of the kernel, the series by
+    :func:`emscatter.solvers.kirchhoff.po.series_sum`)."""
     log_w = log_nfold(rough)
     lx, ly = rough.length, rough.length_y
     cr, sr = math.cos(d), math.sin(d)
@@ -132,7 +171,4 @@ def backscatter_resummed(roughness, eps, k: float, theta, phi_i: float = 0.0, *,
         acc = (g * np.conj(g + gp)).real @ wt
         scale = 4.0 * math.pi * k * k * ci * ci * rough.sigma**4
         out[0, j], out[1, j] = scale * acc[0, 1], scale * acc[1, 0]
-    if not np.all(np.isfinite(out)) or np.any(out < 0):
-        raise FloatingPointError(f"resummed cross-pol not finite/positive at theta={uniq!r}")
-    res = out[:, inv].reshape((2, *th.shape))
-    return res if both else res[0]
+    return out
