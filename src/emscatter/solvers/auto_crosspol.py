@@ -76,6 +76,7 @@ from ..fresnel import is_pec
 __all__ = ["backscatter_mask", "supplement", "takes_iem_term", "clear_cache", "IEM_BACKSCATTER"]
 
 _BACK_TOL = 1e-9
+_IEM_OPTIONS = frozenset({"crosspol", "crosspol_order", "rms_slope"})  # (its cross-pol's)
 #: The ``name`` under which :func:`supplement` gives the IEM's own backscatter hv (for ``auto``'s
 #: IEM run with ``crosspol=False``: the same term, remembered per angle).
 IEM_BACKSCATTER = "iem (backscatter)"
@@ -172,18 +173,20 @@ def takes_iem_term(name: str, rough, options: dict) -> bool:
     surface with the cross-pol options at their defaults (the term here is the solver's own
     at ``crosspol_order=8`` and the nominal rms slope, to 1e-13: tests/test_auto_crosspol.py),
     so a repeated scene pays the ×3–6-the-co-pol term once."""
-    return (
-        name == "iem"
-        and rough.dimension == 2
-        and not {"crosspol", "crosspol_order", "rms_slope"} & options.keys()
-    )
+    return name == "iem" and rough.dimension == 2 and not _IEM_OPTIONS & options.keys()
 
 
-def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
+def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_, *, options=None):
     """``(hv, label)``: the backscatter cross-pol σ⁰ [-] to add to method ``name``'s hv and vh,
     in the broadcast shape of the angles [rad] (0 away from backscatter), or ``(None, None)``
     where nothing is added (module docstring). ``eps`` complex scalar or array, or "pec".
+    ``name="iem"`` (``auto``'s IEM branch run with its own cross-pol, a bistatic call):
+    with ``options`` (the IEM's, a dict) free of cross-pol options, the difference that turns
+    the solver's own backscatter term into the resummed one where that applies (so
+    ``bistatic`` and ``backscatter`` agree at a backscatter geometry); else nothing.
     A repeated call (same inputs) is answered from the cache (a fresh array)."""
+    if name == "iem" and (options is None or _IEM_OPTIONS & options.keys()):
+        return None, None
     args = (ti, ts, ps, pi_) if is_pec(eps) else (ti, ts, ps, pi_, eps)
     arrays = [np.asarray(a) for a in args]
     key = None
@@ -205,7 +208,9 @@ def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
 
 def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     """:func:`supplement` without its per-call cache (per-angle values still remembered)."""
-    if name not in ("spm", "po", "go", IEM_BACKSCATTER) or rough.dimension != 2 or rough.sigma == 0:
+    if name not in ("spm", "po", "go", "iem", IEM_BACKSCATTER):
+        return None, None
+    if rough.dimension != 2 or rough.sigma == 0 or (name == "iem" and not _spm2_ok(rough, eps)):
         return None, None
     back = backscatter_mask(ti, ts, ps, pi_)
     if not back.any():
@@ -224,9 +229,13 @@ def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
         use, rest = w > 0, w < 1
         if use.any():
             vals[use] = w[use] * _resummed_values(rough, complex(eps), k, tb[use], pb[use])
-        if rest.any():
+        if name == "iem":  # the difference to the solver's own term (supplement)
+            vals[use] -= w[use] * _today(name, rough, eps, k, tb[use], pb[use])[0]
+        elif rest.any():
             vals[rest] += (1 - w[rest]) * _today(name, rough, eps, k, tb[rest], pb[rest])[0]
         out[back] = vals
+        if name == "iem":
+            return out, f"{RESUMMED}, in place of the IEM's own term there"
         return out, RESUMMED if not rest.any() else f"{RESUMMED}, faded into {_today_label(name)}"
     e = eps if is_pec(eps) or np.ndim(eps) == 0 else np.broadcast_to(eps, shape)[back]
     out[back], how = _today(name, rough, e, k, tb, pb)
