@@ -185,7 +185,7 @@ def _bistatic_one(
     sigma0 = result.sigma0
     if picked:  # auto's closed-form branches: the backscatter cross-pol they lack
         what = auto_crosspol.IEM_BACKSCATTER if iem_hv else name
-        hv, how = auto_crosspol.supplement(what, rough, eps, k, ti, ts, ps, pi_)
+        hv, how = auto_crosspol.supplement(what, rough, eps, k, ti, ts, ps, pi_, options=opts)
         if hv is not None:
             sigma0 = np.array(sigma0, dtype=float)
             sigma0[0, 1] += hv

@@ -4,12 +4,13 @@
 
 Without it the first call of a method in a fresh environment compiles that method's kernels:
 ~20 s for the integral-equation model (its series, the lockstep backscatter walk and the
-cross-pol integral), 1–4 s for SPM, GO and PO. Here each method runs once through the public
-API on a few angles with ``EMSCATTER_KERNELS=numba`` (so even these tiny calls take the
-compiled path), in the layouts and argument types that select distinct compiled signatures:
-a dielectric and ``"pec"``, Gaussian and exponential correlations, flat geometries and a grid
-(θi × θs × φs), bistatic and backscatter, 1-D and 2-D where the kernel covers both. numba
-writes what it compiles to the cache folder of :mod:`emscatter.kernels._runtime`
+cross-pol integral), 1–4 s for SPM, GO and PO (and for the backscatter cross-pol ``auto`` adds,
+:mod:`emscatter.solvers.auto_crosspol`: the ``"auto"`` entry). Here each method runs once
+through the public API on a few angles with ``EMSCATTER_KERNELS=numba`` (so even these tiny
+calls take the compiled path), in the layouts and argument types that select distinct compiled
+signatures: a dielectric and ``"pec"``, Gaussian and exponential correlations, flat geometries
+and a grid (θi × θs × φs), bistatic and backscatter, 1-D and 2-D where the kernel covers both.
+numba writes what it compiles to the cache folder of :mod:`emscatter.kernels._runtime`
 (``EMSCATTER_NUMBA_CACHE_DIR``, default ``~/.cache/emscatter/numba``; ``NUMBA_CACHE_DIR`` when
 the user set it); a later process loads it (≈ 0.1–0.5 s per method instead of seconds).
 
@@ -85,11 +86,13 @@ def _calls():
         for e in (17 + 2j, "pec")
         for f in (bi, back, lambda r, e, m: bi(r, e, m, grid))
     ]
+    # the backscatter cross-pol auto adds (solvers.auto_crosspol): the resummed term's kernel
+    out["auto"] = [back(r, 17 + 2j, "auto") for r in (spm_e, iem_g)]
     return out
 
 
 #: the methods warmed, in this order (MoM has no compiled kernel)
-CASES = ("spm", "go", "po", "iem")
+CASES = ("spm", "go", "po", "iem", "auto")
 
 
 def warm(methods=CASES, *, echo=print) -> dict:

@@ -4,42 +4,60 @@ In backscatter (``θs = θi``, ``φs = φi + π``) the single-scattering cross-p
 closed-form method vanishes: first-order SPM (its ``f_hv ∝ sin(φs − φi)``, Rice 1951), and the
 Kirchhoff methods PO and GO (the facet that reflects back is normal to the incident direction,
 so ``R_h`` and ``R_v`` act on one polarization each, no mixing; Ulaby, Moore & Fung 1982 vol. II
-§12-4). A radar user's ``hv`` there is a second-order effect, which these branches add:
+§12-4). A radar user's ``hv`` there is a second-order effect, which these branches add.
+
+The resummed term, on every branch (``spm``, ``po``, ``go``, and ``iem`` as ``auto`` runs it)
+---------------------------------------------------------------------------------------
+For a dielectric (one ε, ``medium_class`` "dielectric") 2-D Gaussian or exponential surface,
+every branch adds the same hv: the resummed second-order cross-pol
+(:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed` — second-order SPM's
+exact kernel over the whole spectral plane with the IEM's Gaussian height series; issue 20:
+against NMM3D at 40° its HV RMSE is 3.24 dB, bias −2.10 dB, where the IEM term below has 5.23 /
+−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: 0.35–1 ms of CPU
+per angle), on :data:`RESUMMED_NODES` nodes per segment. Without numba (or with
+``EMSCATTER_KERNELS=numpy``) its numpy reference runs, the same values at 35–80 ms per angle
+(each angle once: remembered). So:
+
+* at small kσ it is σ⁰⁽²²⁾ (relative O((kσ cosθ)²); tested on the ``spm`` branch), the exact
+  small-roughness limit that branch added before;
+* one term on both sides of every method switch: ``auto``'s hv is continuous across them (and
+  across the blend, whose weights sum to one);
+* valid for ``kσ cosθ ≤`` :data:`~emscatter.solvers.iem.crosspol_resummed.MAX_KSIGMA_COS` (= 3,
+  the IEM's range); between :data:`FADE_KSIGMA_COS` (2.5) and 3 it fades linearly into the
+  branch's own term below, which alone is used beyond (and at grazing, θ = 90°): no step.
+
+Elsewhere — a conductor (PEC, Re ε < 0, ``|ε| ≥ 100``: SPM2's TM kernel is singular at the
+horizon), ε given per angle (an array), a power-law or measured spectrum, ``kσ cosθ > 3`` —
+each branch keeps its own second-order term, as before:
 
 * ``spm`` on a dielectric Gaussian or exponential surface: the second-order SPM cross-pol
   σ⁰⁽²²⁾ (:func:`emscatter.solvers.spm.crosspol.sigma0_22`), which in the plane of incidence —
-  backscatter
-  included — *is* the whole fourth-order (``σ⁴``) hv of perturbation theory (the exact
-  small-roughness limit). Nodes ``6 × 6`` per segment: within 0.002 dB of the ``16 × 16``
+  backscatter included — *is* the whole fourth-order (``σ⁴``) hv of perturbation theory (the
+  exact small-roughness limit). Nodes ``6 × 6`` per segment: within 0.002 dB of the ``16 × 16``
   default (Gaussian kσ = 0.3, kℓ = 3, ε = 3, 40°: −49.405 vs −49.407 dB), evaluated by
-  :func:`emscatter.solvers.spm.crosspol.backscatter_hv` (the backscatter symmetries: an
-  eighth of the general kernel work, same value to rounding): compiled
-  (:mod:`emscatter.solvers.spm.kernel_crosspol`) ≈ 0.13 ms per angle, numpy ≈ 1.5 ms.
-  For a conductor (PEC, Re ε < 0, ``|ε| ≥ 100``; SPM2's TM kernel is singular at the horizon)
-  or a power-law spectrum the IEM term below is used instead.
+  :func:`emscatter.solvers.spm.crosspol.backscatter_hv` (compiled ≈ 0.13 ms per angle).
 * ``po``, ``go`` (and ``spm`` where SPM2 cannot): the IEM's multiple-scattering cross-pol
   (:func:`emscatter.solvers.iem.crosspol.backscatter`, Fung, Li & Chen 1992 appendix; Fung
-  1994; in
-  backscatter the form of Ulaby & Long 2014 code 10.1 and SMRT's ``iiem_fung02``). Why it
-  belongs to the Kirchhoff regimes: it is the second bounce of the same tangent-plane field
-  (Kirchhoff field at an arbitrary intermediate direction, then re-radiated), and its spectral
-  weights are the physical-optics series ``T(Q, K) = e^{−Q} Σ Qⁿ⁻¹/n! wₙ(K)`` that
-  :mod:`emscatter.solvers.kirchhoff.po` sums — at large kσ that series tends to the slope density of
-  geometric optics (stationary phase), so the term becomes a double-bounce facet model,
-  with the intermediate wave's shadowing ``S_m``. Beyond the IEM's own ``kσ ≤ 3`` it is that
-  extrapolation (the term used is named in ``info["crosspol_added"]``); at kσ ≳ 10 it
-  grows to within ~3 dB of the co-pol (ε = 15 + 2i) and above it for a PEC (kσ = 10,
-  kℓ = 50): not checked against exact solutions there. It is 4–5 dB below exact 3-D solutions on
-  published comparisons
-  (issue 20: emscatter IEM −4.4 dB bias, SMRT −5.1, pyi2em −4.6): a lower bound.
+  1994; in backscatter the form of Ulaby & Long 2014 code 10.1 and SMRT's ``iiem_fung02``).
+  Why it belongs to the Kirchhoff regimes: it is the second bounce of the same tangent-plane
+  field, and its spectral weights are the physical-optics series
+  ``T(Q, K) = e^{−Q} Σ Qⁿ⁻¹/n! wₙ(K)`` that :mod:`emscatter.solvers.kirchhoff.po` sums — at
+  large kσ that series tends to the slope density of geometric optics, so the term becomes a
+  double-bounce facet model, with the intermediate wave's shadowing ``S_m``. Beyond the IEM's
+  own ``kσ ≤ 3`` it is that extrapolation (the term used is named in
+  ``info["crosspol_added"]``); at kσ ≳ 10 it grows to within ~3 dB of the co-pol (ε = 15 + 2i)
+  and above it for a PEC (kσ = 10, kℓ = 50): not checked against exact solutions there. It is
+  4–5 dB below exact 3-D solutions on published comparisons (issue 20): a lower bound.
+* ``iem`` picked by ``auto`` in backscatter: the API runs the IEM with ``crosspol=False`` and
+  adds the hv from here (:data:`IEM_BACKSCATTER`): the resummed term where it applies, else the
+  IEM's own multiple-scattering term (:func:`emscatter.solvers.iem.crosspol.backscatter`, equal
+  to the solver's to 1e-13). ``method="iem"`` itself keeps the published IEM term (Fung et al.
+  1992), and so does ``auto``'s IEM branch when cross-pol options are given or the call is
+  bistatic (its backscatter points then carry the solver's own term).
 
-* ``iem`` picked by ``auto`` in backscatter: the IEM's own multiple-scattering hv is this same
-  term (:func:`emscatter.solvers.iem.crosspol.backscatter`, equal to the solver's to 1e-13), so
-  the API runs the IEM with ``crosspol=False`` and adds it from here (:data:`IEM_BACKSCATTER`).
-
-Both terms are remembered per (roughness, ε, k, θi, φi) — SPM2's per unit σ⁴, since
-σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k and the angles only — so a repeated scene, a σ sweep or the
-blend's second method pays once (:func:`clear_cache`).
+Every term is remembered per (roughness, ε, k, θi, φi) — SPM2's per unit σ⁴, since
+σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k and the angles only — and a whole call per its inputs, so a
+repeated scene or the blend's second method pays once (:func:`clear_cache`).
 
 What stays zero, by physics: a 1-D profile (a 2-D problem has no cross-polarization), a flat
 surface (σ = 0), and bistatic geometries in the plane of incidence for these branches'
@@ -60,10 +78,21 @@ from ..fresnel import is_pec
 __all__ = ["backscatter_mask", "supplement", "takes_iem_term", "clear_cache", "IEM_BACKSCATTER"]
 
 _BACK_TOL = 1e-9
+_IEM_OPTIONS = frozenset({"crosspol", "crosspol_order", "rms_slope"})  # (its cross-pol's)
 #: The ``name`` under which :func:`supplement` gives the IEM's own backscatter hv (for ``auto``'s
 #: IEM run with ``crosspol=False``: the same term, remembered per angle).
 IEM_BACKSCATTER = "iem (backscatter)"
 SPM2_NODES = 6
+#: Nodes per segment of the resummed term's rule: within 0.05 dB of its 16-node default
+#: (Gaussian and exponential, kσ 0.13–2.5, kℓ 0.5–20, ε 3 + i and 30 + 3i, 10–70°; 8 nodes:
+#: 0.07 dB, 12: 0.009 dB) at 0.4 of its cost.
+RESUMMED_NODES = 10
+#: The resummed term fades linearly into the branch's own term between this ``kσ cosθ`` and
+#: the resummed term's limit :data:`MAX_KSIGMA_COS` (no step where it stops).
+FADE_KSIGMA_COS = 2.5
+RESUMMED = "resummed second-order cross-pol (SPM2 kernel, IEM height series; backscatter)"
+SPM2_LABEL = "second-order SPM σ⁰⁽²²⁾ (backscatter)"
+IEM_LABEL = "IEM multiple scattering (Fung et al. 1992; backscatter)"
 #: Backscatter hv values remembered (per method family, roughness, ε, k and angle); SPM2's
 #: are stored divided by σ⁴ (σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k, θ only), so a σ sweep reuses them.
 _CACHE: OrderedDict = OrderedDict()
@@ -146,18 +175,20 @@ def takes_iem_term(name: str, rough, options: dict) -> bool:
     surface with the cross-pol options at their defaults (the term here is the solver's own
     at ``crosspol_order=8`` and the nominal rms slope, to 1e-13: tests/test_auto_crosspol.py),
     so a repeated scene pays the ×3–6-the-co-pol term once."""
-    return (
-        name == "iem"
-        and rough.dimension == 2
-        and not {"crosspol", "crosspol_order", "rms_slope"} & options.keys()
-    )
+    return name == "iem" and rough.dimension == 2 and not _IEM_OPTIONS & options.keys()
 
 
-def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
+def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_, *, options=None):
     """``(hv, label)``: the backscatter cross-pol σ⁰ [-] to add to method ``name``'s hv and vh,
     in the broadcast shape of the angles [rad] (0 away from backscatter), or ``(None, None)``
     where nothing is added (module docstring). ``eps`` complex scalar or array, or "pec".
+    ``name="iem"`` (``auto``'s IEM branch run with its own cross-pol, a bistatic call):
+    with ``options`` (the IEM's, a dict) free of cross-pol options, the difference that turns
+    the solver's own backscatter term into the resummed one where that applies (so
+    ``bistatic`` and ``backscatter`` agree at a backscatter geometry); else nothing.
     A repeated call (same inputs) is answered from the cache (a fresh array)."""
+    if name == "iem" and (options is None or _IEM_OPTIONS & options.keys()):
+        return None, None
     args = (ti, ts, ps, pi_) if is_pec(eps) else (ti, ts, ps, pi_, eps)
     arrays = [np.asarray(a) for a in args]
     key = None
@@ -179,7 +210,9 @@ def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
 
 def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     """:func:`supplement` without its per-call cache (per-angle values still remembered)."""
-    if name not in ("spm", "po", "go", IEM_BACKSCATTER) or rough.dimension != 2 or rough.sigma == 0:
+    if name not in ("spm", "po", "go", "iem", IEM_BACKSCATTER):
+        return None, None
+    if rough.dimension != 2 or rough.sigma == 0 or (name == "iem" and not _spm2_ok(rough, eps)):
         return None, None
     back = backscatter_mask(ti, ts, ps, pi_)
     if not back.any():
@@ -188,6 +221,60 @@ def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
     tb = np.broadcast_to(ti, shape)[back]
     pb = np.broadcast_to(pi_, shape)[back]
     out = np.zeros(shape)
+    if _spm2_ok(rough, eps):  # the resummed term, faded into today's term near its limit
+        from .iem.crosspol_resummed import MAX_KSIGMA_COS
+
+        kc = k * rough.sigma * np.cos(tb)
+        w = np.clip((MAX_KSIGMA_COS - kc) / (MAX_KSIGMA_COS - FADE_KSIGMA_COS), 0.0, 1.0)
+        w = np.where(tb < 0.5 * math.pi, w, 0.0)  # (grazing: the resummed rule excludes it)
+        vals = np.zeros(tb.shape)
+        use, rest = w > 0, w < 1
+        if use.any():
+            vals[use] = w[use] * _resummed_values(rough, complex(eps), k, tb[use], pb[use])
+        if name == "iem":  # the difference to the solver's own term (supplement)
+            vals[use] -= w[use] * _today(name, rough, eps, k, tb[use], pb[use])[0]
+        elif rest.any():
+            vals[rest] += (1 - w[rest]) * _today(name, rough, eps, k, tb[rest], pb[rest])[0]
+        out[back] = vals
+        if name == "iem":
+            return out, f"{RESUMMED}, in place of the IEM's own term there"
+        return out, RESUMMED if not rest.any() else f"{RESUMMED}, faded into {_today_label(name)}"
+    e = eps if is_pec(eps) or np.ndim(eps) == 0 else np.broadcast_to(eps, shape)[back]
+    out[back], how = _today(name, rough, e, k, tb, pb)
+    return out, how
+
+
+def _today_label(name: str) -> str:
+    return SPM2_LABEL if name == "spm" else IEM_LABEL
+
+
+def _resummed_values(rough, eps: complex, k: float, tb, pb):
+    """The resummed hv (:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed`,
+    :data:`RESUMMED_NODES` per segment) at flat backscatter angles ``tb``, ``pb`` [rad],
+    remembered per (roughness, ε, k, θi, φi)."""
+    from .iem.crosspol_resummed import backscatter_resummed
+
+    iso = rough.length == rough.length_y
+    pairs = np.stack([tb, np.zeros_like(pb) if iso else np.mod(pb, 2 * math.pi)], -1)
+    uniq, inv = _unique_rows(pairs)
+    keys = [("resummed", rough, eps, float(k), float(t), float(f)) for t, f in uniq]
+
+    def compute(idx):
+        vals = np.empty(idx.size)
+        for f in np.unique(uniq[idx, 1]):  # one call per azimuth: every angle at once
+            sel = idx[uniq[idx, 1] == f]
+            vals[np.searchsorted(idx, sel)] = backscatter_resummed(
+                rough, eps, k, uniq[sel, 0], f, n_nodes=RESUMMED_NODES
+            )
+        return vals
+
+    return _cached(keys, compute)[inv.reshape(-1)]
+
+
+def _today(name: str, rough, eps, k: float, tb, pb):
+    """``(hv, label)`` of the branch's own second-order term at flat backscatter angles
+    ``tb``, ``pb`` [rad] (module docstring: σ⁰⁽²²⁾ on ``spm`` where SPM2 can, else the IEM
+    term), remembered per angle."""
     if name == "spm" and _spm2_ok(rough, eps):
         from .spm.crosspol import backscatter_hv
 
@@ -212,9 +299,8 @@ def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
                 )
             return vals
 
-        out[back] = rough.sigma**4 * _cached(keys, spm2)[inv.reshape(-1)]
-        return out, "second-order SPM σ⁰⁽²²⁾ (backscatter)"
-    e = eps if is_pec(eps) or np.ndim(eps) == 0 else np.broadcast_to(eps, shape)[back]
+        return rough.sigma**4 * _cached(keys, spm2)[inv.reshape(-1)], SPM2_LABEL
+    e = eps if is_pec(eps) or np.ndim(eps) == 0 else np.asarray(eps)  # (one per angle)
     ea = np.broadcast_to(np.asarray(e if not is_pec(e) else 0.0, dtype=complex), tb.shape)
     cols = np.stack([tb, np.mod(pb, 2 * math.pi), ea.real, ea.imag], -1)
     uniq, inv = _unique_rows(cols)
@@ -226,5 +312,4 @@ def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):
         ee = e if is_pec(e) or np.ndim(e) == 0 else rows[:, 2] + 1j * rows[:, 3]
         return _iem_term(rough, ee, k, rows[:, 0], rows[:, 1])
 
-    out[back] = _cached(keys, iem)[inv.reshape(-1)]
-    return out, "IEM multiple scattering (Fung et al. 1992; backscatter)"
+    return _cached(keys, iem)[inv.reshape(-1)], IEM_LABEL
