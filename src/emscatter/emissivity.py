@@ -249,11 +249,12 @@ def _evaluate(sigma0_fn, theta_s, phi_s, lead: int, clock: _Clock):
     _progress.expect(total)  # the bar of the call, if any, counts σ⁰ evaluations
     while start < m:
         stop = min(m, start + size)
+        done = stop - start  # this chunk's directions (the next chunk grows from it)
         t = time.perf_counter()
         idx = (Ellipsis, slice(start, stop), *rest)
         parts.append(sigma0_fn(ts[idx], ps[idx]))
-        rate = (time.perf_counter() - t) / ((stop - start) * per_index)
-        _progress.advance((stop - start) * per_index)
+        rate = (time.perf_counter() - t) / (done * per_index)
+        _progress.advance(done * per_index)
         clock.rate = rate if clock.rate is None else min(clock.rate, rate)
         start = stop
         left = (m - start) * per_index + clock.follow * total
@@ -263,7 +264,7 @@ def _evaluate(sigma0_fn, theta_s, phi_s, lead: int, clock: _Clock):
             if spent or (not early and not clock.fits(left)):
                 predicted = clock.elapsed() + clock.rate * left
                 raise _OverBudget(predicted, (1 + clock.follow) * total, clock.rate)
-        size = max(1, min(8 * (stop - start), int(CHUNK_SECONDS / max(rate * per_index, 1e-12))))
+        size = max(1, min(8 * done, int(CHUNK_SECONDS / max(rate * per_index, 1e-12))))
     axis = lead + 2  # after (pol_s, pol_i)
     sig = np.concatenate(parts, axis=axis) if len(parts) > 1 else parts[0]
     return sig.reshape(*sig.shape[:axis], *tail)
