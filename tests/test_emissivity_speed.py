@@ -109,6 +109,7 @@ def test_quadrature_that_stops_short_warns_with_the_error_reached():
                           method="go", tol=1e-12, out_of_range="ignore")  # fmt: skip
     assert not e.info["quadrature"]["converged"].all()
     assert np.all(np.isfinite(e.emissivity)) and float(e.error.max()) > 1e-12
+    assert em.QuadratureWarning is QuadratureWarning  # public, to filter
 
 
 @pytest.mark.parametrize("method", ["spm", "go"])
