@@ -131,3 +131,28 @@ def test_grazing_tolerance_met_or_warned(method, tol):
         ),  # fmt: skip
         tol,
     )
+
+
+def test_refinements_evaluate_only_the_angles_not_yet_within_tol():
+    # A narrow lobe at one incidence angle and a broad one at the others: with ``restrict``
+    # only the narrow-lobe angle is refined further; every angle still meets tol.
+    ti = np.radians([10.0, 30.0, 50.0])
+    width = np.array([0.5, 0.5, 0.02])
+
+    def make(sel=None):
+        t, w = (ti, width) if sel is None else (ti[sel], width[sel])
+
+        def lobe(ts, ps):
+            tt, ww = t[:, None, None], w[:, None, None]
+            px, py = np.sin(ts) * np.cos(ps), np.sin(ts) * np.sin(ps)
+            d2 = (px - np.sin(tt)) ** 2 + py**2
+            return _diag(4 * np.cos(tt) * np.cos(ts) * np.exp(-d2 / ww**2) / ww**2 / math.pi)
+
+        return lobe
+
+    kw = dict(finest=0.1, tol=1e-6, budget_s=None)
+    full = hemispherical_reflectivity(make(), ti, **kw)
+    part = hemispherical_reflectivity(make(), ti, restrict=make, **kw)
+    assert np.all(full[1] <= 1e-6) and np.all(part[1] <= 1e-6)
+    np.testing.assert_allclose(part[0], full[0], atol=2e-6)
+    assert part[2] < 0.7 * full[2], (part[2], full[2])

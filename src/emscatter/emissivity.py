@@ -469,6 +469,7 @@ def hemispherical_reflectivity(
     max_evaluations: int | None = None,
     budget_s="default",
     mirror: bool = False,
+    restrict=None,
 ):
     """Incoherent reflectivity ``r_p(θi)`` of a bistatic σ⁰ by the graded quadrature above.
 
@@ -491,6 +492,9 @@ def hemispherical_reflectivity(
         A refinement whose measured-rate estimate ends past it is not started (the error
         reached is returned); a first estimate that would end past it raises
         :class:`TimeBudgetError` (module docstring). σ⁰ is evaluated in chunks either way.
+    restrict : optional ``restrict(mask) -> sigma0_fn`` for the incidence angles
+        ``theta_i[mask]`` only (flattened): refinements then evaluate only the angles whose
+        error is not yet within ``tol`` (the others keep their estimate and error).
     mirror : the caller guarantees that σ⁰ summed over the scattered polarization is even
         under reflection in the plane of incidence (``φs − φi → φi − φs``; isotropic
         roughness and a deterministic solver): 2-D estimates then evaluate half the azimuths.
@@ -507,13 +511,12 @@ def hemispherical_reflectivity(
     clock = _Clock(_budget_left() if budget_s == "default" else
                    _check_budget("budget_s", budget_s))  # fmt: skip
 
-    def estimate(o, na):
+    def estimate(o, na, fn=sigma0_fn, ti=theta_i, pi_=phi_i):
         if dimension == 1:
-            return _reflectivity_1d(sigma0_fn, theta_i, phi_i, finest, o, clock)
-        return _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, o, na, clock, mirror)
+            return _reflectivity_1d(fn, ti, pi_, finest, o, clock)
+        return _reflectivity_2d(fn, ti, pi_, finest, o, na, clock, mirror)
 
-    budget = MAX_EVALUATIONS_PER_ANGLE if max_evaluations is None else int(max_evaluations)
-    budget *= max(1, theta_i.size)
+    per_angle = MAX_EVALUATIONS_PER_ANGLE if max_evaluations is None else int(max_evaluations)
     growth = 2 if dimension == 1 else 4
     clock.follow = growth if max_refinements > 0 else 0
     try:
@@ -522,15 +525,24 @@ def hemispherical_reflectivity(
         raise TimeBudgetError(_over_budget_message(over, clock, theta_i)) from None
     clock.follow = 0
     evals += n
+    last = n / max(1, theta_i.size)  # evaluations per angle of the last estimate
+    used = last  # ... and so far, per angle still refined
     err = np.full(r_prev.shape, np.inf)
+    active = np.ones(theta_i.shape, dtype=bool)  # angles not yet within tol
     for _ in range(max_refinements):
-        if evals + growth * n > budget and np.isfinite(err).all():
+        n_active = max(1, int(active.sum()))
+        if used + growth * last > per_angle and np.isfinite(err).all():
             break  # the next refinement would exceed the budget: report the error reached
-        if not clock.fits(growth * n) and np.isfinite(err).all():
+        if not clock.fits(growth * last * n_active) and np.isfinite(err).all():
             break  # ... or end past the time budget (estimated from the measured rate)
         order, n_alpha = 2 * order, 2 * n_alpha
         try:
-            r, n = estimate(order, n_alpha)
+            if restrict is not None and not active.all():  # refine only where tol is not met
+                sub, n = estimate(order, n_alpha, restrict(active), theta_i[active], phi_i[active])
+                r = r_prev.copy()
+                r[:, active] = sub
+            else:
+                r, n = estimate(order, n_alpha)
         except _OverBudget:
             if np.isfinite(err).all():
                 break  # keep the previous estimate and its error
@@ -539,8 +551,12 @@ def hemispherical_reflectivity(
                 f"second would end past the time budget of {clock.budget:g} s; " + _WAYS_OUT
             ) from None
         evals += n
-        err = np.abs(r - r_prev)
+        last = n / n_active
+        used += last
+        err = np.where(active, np.abs(r - r_prev), err)
         r_prev = r
+        if restrict is not None:
+            active = ~np.all(err <= tol, axis=0)
         if np.all(err <= tol):
             break
     return r_prev, err, evals

@@ -73,24 +73,30 @@ def _integrate_uncached(module, rough, eps, k, ti, pi_, tol, options):
         r_coh, r_inc, err = module.reflectivity(rough, eps, k, ti, pi_, **options)
         return np.asarray(r_coh), np.asarray(r_inc), np.asarray(err), 0
     dims = (Ellipsis,) + (None,) * (1 if rough.dimension == 1 else 2)
-    eps_q = eps if is_pec(eps) or np.ndim(eps) == 0 else np.asarray(eps)[dims]
     # σ⁰ only inside the integral: skip a solver's coherent part when it offers to.
     skip = {"coherent": False} if _takes(module.bistatic, "coherent") else {}
 
-    def sigma0_fn(theta_s, phi_s, **extra):
-        return module.bistatic(
-            rough, eps_q, k, ti[dims], theta_s, phi_s, pi_[dims], **skip, **{**options, **extra}
-        ).sigma0
+    def make(sel=None, **extra):
+        """σ⁰(θs, φs) at the incidence angles ``ti[sel]`` (all when ``sel`` is None)."""
+        t, p, e = (ti, pi_, eps) if sel is None else (ti[sel], pi_[sel], _sub_eps(eps, sel))
+        e_q = e if is_pec(e) or np.ndim(e) == 0 else np.asarray(e)[dims]
+        kw = {**skip, **options, **extra}
+
+        def sigma0_fn(theta_s, phi_s):
+            return module.bistatic(rough, e_q, k, t[dims], theta_s, phi_s, p[dims], **kw).sigma0
+
+        return sigma0_fn
 
     finest = lobe_width(rough, k)
     # isotropic roughness and a deterministic σ⁰ (no realizations): mirror-symmetric in φs − φi
     mirror = bool(getattr(rough, "is_isotropic", False)) and not _takes(module.bistatic, "seed")
     if _splits_multiple(module, rough, options):
-        r_inc, err, evals = _split_multiple(sigma0_fn, ti, pi_, finest, tol, mirror)
+        r_inc, err, evals = _split_multiple(make, ti, pi_, finest, tol, mirror)
     else:
         r_inc, err, evals = hemispherical_reflectivity(
-            sigma0_fn, ti, pi_, dimension=rough.dimension, finest=finest, tol=tol, mirror=mirror
-        )
+            make(), ti, pi_, dimension=rough.dimension, finest=finest, tol=tol, mirror=mirror,
+            restrict=make,
+        )  # fmt: skip
     if getattr(module, "COHERENT_IN_SIGMA0", False):  # GO: σ⁰ is the whole intensity
         return np.zeros_like(r_inc), r_inc, err, evals
     r_coh = module.bistatic(rough, eps, k, ti, ti, pi_, pi_, **options).coherent
@@ -117,7 +123,7 @@ def _default(func, name: str):
     return inspect.signature(func).parameters[name].default
 
 
-def _split_multiple(sigma0_fn, ti, pi_, finest, tol, mirror=False):
+def _split_multiple(make, ti, pi_, finest, tol, mirror=False):
     """``(r, error, evaluations)``: ∫σ⁰ = ∫σ⁰_single + ∫(σ⁰ − σ⁰_single), each integral on its
     own adaptive rule. The single-scattering σ⁰ is cheap (tens of µs per direction) and may
     have a narrow lobe; the multiple-scattering hv term (Fung 1994; Chen et al. 2003 app. C)
@@ -125,18 +131,23 @@ def _split_multiple(sigma0_fn, ti, pi_, finest, tol, mirror=False):
     ``r``: integrated together, every node of the fine rule the single part needs paid for
     it. Here the difference starts on the coarsest rule (order 2, 8 azimuths) and refines
     only until it meets its share of ``tol`` (:data:`MULTIPLE_TOL_SHARE`); the errors add.
-    ``evaluations`` counts both rules' directions."""
-    single = functools.partial(sigma0_fn, crosspol=False)
+    ``evaluations`` counts both rules' directions. ``make(sel, **options)``: σ⁰ at
+    ``ti[sel]``."""
+
+    def single(sel=None):
+        return make(sel, crosspol=False)
+
+    def multiple(sel=None):
+        full, one = make(sel), make(sel, crosspol=False)
+        return lambda theta_s, phi_s: full(theta_s, phi_s) - one(theta_s, phi_s)
+
     r1, e1, n1 = hemispherical_reflectivity(
-        single, ti, pi_, finest=finest, tol=tol * (1.0 - MULTIPLE_TOL_SHARE), mirror=mirror
-    )
-
-    def multiple(theta_s, phi_s):
-        return sigma0_fn(theta_s, phi_s) - single(theta_s, phi_s)
-
+        single(), ti, pi_, finest=finest, tol=tol * (1.0 - MULTIPLE_TOL_SHARE), mirror=mirror,
+        restrict=single,
+    )  # fmt: skip
     r2, e2, n2 = hemispherical_reflectivity(
-        multiple, ti, pi_, finest=finest, tol=tol * MULTIPLE_TOL_SHARE, order=2, n_alpha=8,
-        mirror=mirror,
+        multiple(), ti, pi_, finest=finest, tol=tol * MULTIPLE_TOL_SHARE, order=2, n_alpha=8,
+        mirror=mirror, restrict=multiple,
     )  # fmt: skip
     return r1 + r2, e1 + e2, n1 + n2
 
