@@ -303,7 +303,10 @@ def emissivity(
     the energy balance checked at every angle.
 
     ``tol`` [-]: absolute tolerance of the quadrature (the reported ``error`` is the difference
-    of the last two refinements). Other parameters as :func:`bistatic`.
+    of the last two refinements; only the angles not yet within ``tol`` are refined). Where
+    it stops short of ``tol`` (evaluation or time budget) a
+    :class:`~emscatter.emissivity.QuadratureWarning` names the error reached and the angles
+    (``info["quadrature"]`` records it). Other parameters as :func:`emscatter.api.bistatic`.
 
     Energy is a checked law: wherever ``e ∉ [0, 1]`` or ``r_coh + r_incoh > 1`` beyond the
     quadrature error (:func:`emscatter.emissivity.energy_balance`), the angle is flagged in
