@@ -243,7 +243,7 @@ def main(argv=None) -> dict:
         ax.axvline(t_pyi2em * 1e3, color="C3", ls="--", label="pyi2em (nominal 1e-3·r_incoh)")
         ax.axhline(nominal, color="C3", ls=":")
     ax.set_xlabel("one-θi call [ms] (median, warm, result cache off)")
-    ax.set_ylabel("max |emissivity error| vs the tol = 1e-7 (IEM: 1e-6) reference")
+    ax.set_ylabel("max |e error| vs own tol=1e-7 (IEM 1e-6) ref.")
     ax.set_title("Emissivity through the API: error against time", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
