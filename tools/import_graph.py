@@ -40,7 +40,7 @@ FLOORS: list[tuple[str, ...]] = [
     ("solvers.spm", "solvers.kirchhoff", "solvers.mom", "solvers.mom3d"),
     ("solvers.iem",),
     ("solvers.measured", "solvers.select", "solvers.blend", "solvers.auto_crosspol"),
-    ("method_resolution", "api", "coherent"),
+    ("method_resolution", "api", "emissivity_api", "coherent"),
     ("brdf", "radio", "render"),
     ("validation", "validity_maps", "demo", "warm", "cli", "__main__"),
 ]

@@ -24,6 +24,7 @@ from . import constants, fresnel
 from ._version import __version__
 from .api import backscatter, bistatic, emissivity
 from .conventions import ConventionError, PlausibilityWarning
+from .emissivity import QuadratureWarning
 from .fresnel import PEC
 from .scattering import Scattering
 from .solvers.select import ValidityError, ValidityWarning
@@ -55,6 +56,7 @@ __all__ = [
     "PlausibilityWarning",
     "ValidityWarning",
     "ValidityError",
+    "QuadratureWarning",
     "OutOfBandError",
     "__version__",
 ]

@@ -32,7 +32,8 @@ and the last estimate is returned with its error (the documented cheaper path, a
 evaluation budget); if even the first two, coarsest estimates (one is no error bound) would
 end past it, the call raises :class:`TimeBudgetError` once a tenth of the budget is spent
 (:data:`EARLIEST_REFUSAL`: the first chunks can be slowed by tables a solver fills on first
-use), naming the estimate, the budget and the ways out.
+use; and not on the first chunk's rate alone, which carries compilation), naming the
+estimate, the budget and the ways out.
 """
 
 from __future__ import annotations
@@ -57,6 +58,7 @@ __all__ = [
     "MAX_EVALUATIONS_PER_ANGLE",
     "TIME_BUDGET_S",
     "TimeBudgetError",
+    "QuadratureWarning",
     "time_budget",
     "hemispherical_reflectivity",
     "lobe_width",
@@ -123,6 +125,11 @@ _BUDGET = contextvars.ContextVar("emscatter_time_budget", default=())
 
 class TimeBudgetError(RuntimeError):
     """A hemispherical integral would not finish within its time budget."""
+
+
+class QuadratureWarning(UserWarning):
+    """An emissivity quadrature stopped short of its tolerance (evaluation or time budget):
+    the message names the error reached and the angles; ``result.error`` holds it."""
 
 
 def _check_budget(name: str, value) -> float | None:
@@ -218,6 +225,7 @@ class _Clock:
         self.budget = budget
         self.rate: float | None = None
         self.follow = 0
+        self.chunks = 0  # chunks measured: a refusal needs two (the first carries one-offs)
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
@@ -245,25 +253,31 @@ def _evaluate(sigma0_fn, theta_s, phi_s, lead: int, clock: _Clock):
     ts, ps = theta_s.reshape(flat), phi_s.reshape(flat)
     rest = (slice(None),) * (len(tail) - 1)
     parts = []
-    start, size = 0, 1
+    start = 0
+    # the first chunk measures the rate (1 direction); later estimates start from that rate
+    size = (
+        1 if clock.rate is None else max(1, int(CHUNK_SECONDS / max(clock.rate * per_index, 1e-12)))
+    )
     _progress.expect(total)  # the bar of the call, if any, counts σ⁰ evaluations
     while start < m:
         stop = min(m, start + size)
+        done = stop - start  # this chunk's directions (the next chunk grows from it)
         t = time.perf_counter()
         idx = (Ellipsis, slice(start, stop), *rest)
         parts.append(sigma0_fn(ts[idx], ps[idx]))
-        rate = (time.perf_counter() - t) / ((stop - start) * per_index)
-        _progress.advance((stop - start) * per_index)
+        rate = (time.perf_counter() - t) / (done * per_index)
+        _progress.advance(done * per_index)
         clock.rate = rate if clock.rate is None else min(clock.rate, rate)
+        clock.chunks += 1
         start = stop
         left = (m - start) * per_index + clock.follow * total
         if clock.budget is not None and start < m:
             spent = clock.elapsed() > clock.budget
             early = clock.elapsed() < EARLIEST_REFUSAL * clock.budget
-            if spent or (not early and not clock.fits(left)):
+            if spent or (not early and clock.chunks >= 2 and not clock.fits(left)):
                 predicted = clock.elapsed() + clock.rate * left
                 raise _OverBudget(predicted, (1 + clock.follow) * total, clock.rate)
-        size = max(1, min(8 * (stop - start), int(CHUNK_SECONDS / max(rate * per_index, 1e-12))))
+        size = max(1, min(8 * done, int(CHUNK_SECONDS / max(rate * per_index, 1e-12))))
     axis = lead + 2  # after (pol_s, pol_i)
     sig = np.concatenate(parts, axis=axis) if len(parts) > 1 else parts[0]
     return sig.reshape(*sig.shape[:axis], *tail)
@@ -385,10 +399,17 @@ def _over_budget_message(over: _OverBudget, clock: _Clock, theta_i) -> str:
     )
 
 
-def _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, order, n_alpha, clock):
-    """One quadrature estimate; returns (r (2, *S), evaluations)."""
+def _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, order, n_alpha, clock, mirror=False):
+    """One quadrature estimate; returns (r (2, *S), evaluations). ``mirror``: the azimuths
+    ``α`` and ``−α`` (mirror images in the plane of incidence) carry the same σ⁰, so only
+    ``0 ≤ α ≤ π`` is evaluated, the inner azimuths weighted twice (same sum, ~half the cost)."""
     t, wt = _graded_rule(finest, order)
     alpha = np.arange(n_alpha) * (2 * math.pi / n_alpha)
+    wa = np.ones(n_alpha)
+    if mirror and n_alpha % 2 == 0:
+        alpha = alpha[: n_alpha // 2 + 1]
+        wa = np.full(alpha.size, 2.0)
+        wa[0] = wa[-1] = 1.0
     ti = theta_i[..., None, None]
     pi_ = phi_i[..., None, None]
     p0x, p0y = np.sin(ti) * np.cos(pi_), np.sin(ti) * np.sin(pi_)
@@ -409,7 +430,7 @@ def _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, order, n_alpha, clock):
     summed = sig.sum(axis=0)  # over scattered pol -> (2, *S, n_alpha, n_t)
     with np.errstate(divide="ignore", invalid="ignore"):
         jac = np.where(cos_s > 0, rho_max * rho / cos_s, 0.0) * wt
-    integral = (summed * jac).sum(axis=-1).sum(axis=-1) * (2 * math.pi / n_alpha)
+    integral = ((summed * jac).sum(axis=-1) * wa).sum(axis=-1) * (2 * math.pi / n_alpha)
     r = integral / (4 * math.pi * np.cos(theta_i))
     return r, summed[0].size
 
@@ -447,6 +468,8 @@ def hemispherical_reflectivity(
     max_refinements: int = 4,
     max_evaluations: int | None = None,
     budget_s="default",
+    mirror: bool = False,
+    restrict=None,
 ):
     """Incoherent reflectivity ``r_p(θi)`` of a bistatic σ⁰ by the graded quadrature above.
 
@@ -469,6 +492,12 @@ def hemispherical_reflectivity(
         A refinement whose measured-rate estimate ends past it is not started (the error
         reached is returned); a first estimate that would end past it raises
         :class:`TimeBudgetError` (module docstring). σ⁰ is evaluated in chunks either way.
+    restrict : optional ``restrict(mask) -> sigma0_fn`` for the incidence angles
+        ``theta_i[mask]`` only (flattened): refinements then evaluate only the angles whose
+        error is not yet within ``tol`` (the others keep their estimate and error).
+    mirror : the caller guarantees that σ⁰ summed over the scattered polarization is even
+        under reflection in the plane of incidence (``φs − φi → φi − φs``; isotropic
+        roughness and a deterministic solver): 2-D estimates then evaluate half the azimuths.
 
     Returns ``(r, error, evaluations)`` with ``r`` and ``error`` of shape ``(2, *S)``.
     """
@@ -482,13 +511,12 @@ def hemispherical_reflectivity(
     clock = _Clock(_budget_left() if budget_s == "default" else
                    _check_budget("budget_s", budget_s))  # fmt: skip
 
-    def estimate(o, na):
+    def estimate(o, na, fn=sigma0_fn, ti=theta_i, pi_=phi_i):
         if dimension == 1:
-            return _reflectivity_1d(sigma0_fn, theta_i, phi_i, finest, o, clock)
-        return _reflectivity_2d(sigma0_fn, theta_i, phi_i, finest, o, na, clock)
+            return _reflectivity_1d(fn, ti, pi_, finest, o, clock)
+        return _reflectivity_2d(fn, ti, pi_, finest, o, na, clock, mirror)
 
-    budget = MAX_EVALUATIONS_PER_ANGLE if max_evaluations is None else int(max_evaluations)
-    budget *= max(1, theta_i.size)
+    per_angle = MAX_EVALUATIONS_PER_ANGLE if max_evaluations is None else int(max_evaluations)
     growth = 2 if dimension == 1 else 4
     clock.follow = growth if max_refinements > 0 else 0
     try:
@@ -497,15 +525,24 @@ def hemispherical_reflectivity(
         raise TimeBudgetError(_over_budget_message(over, clock, theta_i)) from None
     clock.follow = 0
     evals += n
+    last = n / max(1, theta_i.size)  # evaluations per angle of the last estimate
+    used = last  # ... and so far, per angle still refined
     err = np.full(r_prev.shape, np.inf)
+    active = np.ones(theta_i.shape, dtype=bool)  # angles not yet within tol
     for _ in range(max_refinements):
-        if evals + growth * n > budget and np.isfinite(err).all():
+        n_active = max(1, int(active.sum()))
+        if used + growth * last > per_angle and np.isfinite(err).all():
             break  # the next refinement would exceed the budget: report the error reached
-        if not clock.fits(growth * n) and np.isfinite(err).all():
+        if not clock.fits(growth * last * n_active) and np.isfinite(err).all():
             break  # ... or end past the time budget (estimated from the measured rate)
         order, n_alpha = 2 * order, 2 * n_alpha
         try:
-            r, n = estimate(order, n_alpha)
+            if restrict is not None and not active.all():  # refine only where tol is not met
+                sub, n = estimate(order, n_alpha, restrict(active), theta_i[active], phi_i[active])
+                r = r_prev.copy()
+                r[:, active] = sub
+            else:
+                r, n = estimate(order, n_alpha)
         except _OverBudget:
             if np.isfinite(err).all():
                 break  # keep the previous estimate and its error
@@ -514,8 +551,12 @@ def hemispherical_reflectivity(
                 f"second would end past the time budget of {clock.budget:g} s; " + _WAYS_OUT
             ) from None
         evals += n
-        err = np.abs(r - r_prev)
+        last = n / n_active
+        used += last
+        err = np.where(active, np.abs(r - r_prev), err)
         r_prev = r
+        if restrict is not None:
+            active = ~np.all(err <= tol, axis=0)
         if np.all(err <= tol):
             break
     return r_prev, err, evals

@@ -11,6 +11,10 @@
   ``"raise"`` raises :class:`~emscatter.solvers.select.ValidityError`, ``"ignore"`` records.
 
 Roughness-level validity (the whole call) keeps :func:`emscatter.solvers.select.enforce`.
+
+Also the checks and helpers that both entry-point modules (:mod:`emscatter.api` and
+:mod:`emscatter.emissivity_api`) share: :func:`resolve_method`, the method/roughness checks,
+option mapping, per-angle masks and the merge of per-frequency results.
 """
 
 from __future__ import annotations
@@ -24,14 +28,15 @@ from collections import OrderedDict
 import numpy as np
 
 from emscatter import solvers
-from emscatter.conventions import fmt
+from emscatter.conventions import broadcast_view, fmt
 from emscatter.fresnel import is_pec
 from emscatter.solvers import blend, select
 from emscatter.solvers.validity import with_angle_total
+from emscatter.spectra import Roughness, check_roughness
 
 __all__ = [
     "validity_report", "angle_report", "call_report", "rank_methods", "angle_policy",
-    "angles_deg", "blend_weights",
+    "angles_deg", "blend_weights", "resolve_method",
 ]  # fmt: skip
 
 _CACHE: OrderedDict = OrderedDict()
@@ -358,3 +363,101 @@ def eps_label(eps) -> str:
         return "pec"
     arr = np.asarray(eps)
     return fmt(complex(arr)) if arr.ndim == 0 else f"array of shape {arr.shape}"
+
+
+# ------------------------------------------------------ shared by the API entry points
+def _check_roughness(surface) -> Roughness:
+    return check_roughness(surface, "surface")
+
+
+def _check_method(method) -> str:
+    if not isinstance(method, str):
+        raise ValueError(f"method must be 'auto' or one of {solvers.available()}, got {method!r}")
+    name = method.strip().lower()
+    if name != "auto":
+        solvers.get(name)  # raises naming the allowed methods
+    return name
+
+
+def _map_options(name: str, options: dict, auto: bool) -> dict:
+    if not options:  # nothing to map (check_options would return {} too)
+        return {}
+    mapper = getattr(select, "check_options", None)
+    # always a new dict: _bistatic_one pops from it, the caller's options stay whole (bands)
+    return dict(mapper(name, options, picked_by_auto=auto) if mapper else options)
+
+
+def resolve_method(
+    roughness: Roughness,
+    k: float,
+    method: str,
+    out_of_range: str,
+    eps=None,
+    *,
+    theta_i=None,
+    stacklevel: int = 5,
+):
+    """``(name, module, report, make_nan)`` for a method name or ``"auto"``.
+
+    ``report`` is the roughness-level validity report (angle entries added when ``theta_i``
+    [rad] is given); ``make_nan`` is True when ``out_of_range="nan"`` and the method is outside
+    its roughness-level validity (the policy has been applied: warned or raised)."""
+    select.check_out_of_range(out_of_range)
+    name = _check_method(method)
+    return _resolve(roughness, k, name, out_of_range, eps, theta_i, stacklevel + 1)
+
+
+def _resolve(roughness, k, name, out_of_range, eps, theta_i, stacklevel):
+    """:func:`resolve_method` for a ``name`` and ``out_of_range`` already checked (the API's
+    own calls: each check once per call)."""
+    if name == "auto":
+        name = rank_methods(roughness, k, eps=eps)[0][0]
+    # the per-angle checks are skipped where the policy does not need them (call_report)
+    report = call_report(name, roughness, k, eps=eps, theta_i=theta_i, out_of_range=out_of_range)
+    # the roughness-level policy sees the roughness-level verdict (angles: angle_policy)
+    whole = {"valid": report["roughness_valid"], "reasons": report.get("reasons", [])}
+    make_nan = select.enforce(name, whole, out_of_range, stacklevel=stacklevel)
+    return name, solvers.get(name), report, make_nan
+
+
+def _angle_mask(report: dict, shape) -> np.ndarray:
+    """Per-element validity from a report's ``angle_valid`` (all True when absent)."""
+    valid = report.get("angle_valid")
+    if valid is None:
+        return np.ones(shape, dtype=bool)
+    valid = np.asarray(valid, dtype=bool)
+    return valid if valid.shape == shape else broadcast_view(valid, shape)
+
+
+def _takes(func, name: str) -> bool:
+    """Whether ``func`` has a parameter ``name`` (signatures read once per function)."""
+    try:
+        return _params(func).__contains__(name)
+    except TypeError:  # an unhashable callable: read its signature each time
+        return name in inspect.signature(func).parameters
+
+
+@functools.lru_cache(maxsize=256)
+def _params(func) -> frozenset:
+    return frozenset(inspect.signature(func).parameters)
+
+
+def _merge_methods(names) -> str:
+    return "+".join(dict.fromkeys(names))
+
+
+def _merged_validity(parts) -> dict:
+    """One report for several frequencies: valid if all are; reasons name the frequency."""
+    reports = [(g, res.info["validity"]) for g, res in parts]
+    return {
+        "valid": all(rep.get("valid", False) for _, rep in reports),
+        "reasons": [
+            f"at {g.frequency:.6g} Hz: {why}"
+            for g, rep in reports
+            for why in rep.get("reasons", [])
+        ],
+        "by_frequency": [
+            {"frequency": g.frequency, "method": res.method, "validity": res.info["validity"]}
+            for g, res in parts
+        ],
+    }
