@@ -284,13 +284,18 @@ def _executor(client, n_workers, threads):
                     "MKL_NUM_THREADS",
                 )
             }  # fmt: skip
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                env=env,
-            )
+            import dask
+
+            # the workers' statistical profiler samples every thread each 10 ms: CPU a 2-core
+            # farm of small tables does not have (the dashboard's task stream stays)
+            with dask.config.set({"distributed.worker.profile.enabled": False}):
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    env=env,
+                )
             dc = Client(cluster)
 
             def close():
