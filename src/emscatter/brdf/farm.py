@@ -36,6 +36,7 @@ dashboard.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import inspect
 import itertools
 import numbers
@@ -181,7 +182,10 @@ def _build_one(kwargs: dict, threads: int | None, in_worker: bool = True, compil
     if compiled:
         _load_compiled()
     kwargs = _cap_threads(kwargs, threads, in_worker)
-    with warnings.catch_warnings(record=True) as caught:
+    from ..kernels import thread_cap
+
+    cap = thread_cap(threads) if threads is not None else contextlib.nullcontext()
+    with cap, warnings.catch_warnings(record=True) as caught:  # every compiled call capped
         warnings.simplefilter("always")
         table = _build_mod.build_table(progress=False, **kwargs)
     return table, [(w.category, str(w.message)) for w in caught]
@@ -280,8 +284,8 @@ def _executor(client, n_workers, threads):
             env = {
                 name: cap
                 for name in (
-                    "NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                    "MKL_NUM_THREADS",
+                    "NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS",
+                    "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                 )
             }  # fmt: skip
             import dask

@@ -26,7 +26,8 @@ import math
 
 import numpy as np
 
-from emscatter.kernels._runtime import _CPUS, _MIN_CHUNK, inline, jit, run_split
+from emscatter.kernels import default_threads
+from emscatter.kernels._runtime import _MIN_CHUNK, inline, jit, run_split
 
 __all__ = ["angle_entries", "MIN_ANGLES"]
 
@@ -149,7 +150,7 @@ def angle_entries(q0: float, s2: float, q_min: float, g_min: float, theta: np.nd
     valid = np.empty(theta.shape, dtype=bool)
     excess = np.empty(theta.shape)
     flat, v_out, e_out = theta.reshape(-1), valid.reshape(-1), excess.reshape(-1)
-    threads = min(_CPUS, 8)
+    threads = default_threads()
     parts = int(max(1, min(threads, flat.size // _MIN_CHUNK)))
     edges = np.linspace(0, flat.size, parts + 1).astype(np.int64)
     stats = np.empty((parts, 2, 6))
