@@ -15,7 +15,12 @@ table per task (``batch=1``, the previous behaviour) and with ``out_dir`` (the w
 the ``.npz`` files, the serial side writes the same files).
 
     EMSCATTER_CACHE=off PYTHONPATH=src python benchmarks/bench_brdf_farm.py [--repeat 3]
-        [--workloads go po iem spm] [--workers 2] [--scale 1.0]
+        [--workloads go po iem spm] [--workers 2] [--scale 1.0] [--resolution 90 180]
+        [--out brdf_farm]
+
+The default tables are small (GO 5 ms, IEM 20 ms of CPU each on the reference machine): the
+farm's fixed costs show. Full-size tables (``--resolution 90 180``: 17.5 MB each in float32)
+are where ``out_dir`` matters — the workers write them instead of pickling them back.
 
 Writes ``benchmarks/results/brdf_farm.json``. The issue's target is ≥ 1.7× for 64 tables on 2
 cores; ``--scale`` multiplies the table counts (small runs to check the script).
@@ -47,13 +52,14 @@ MATERIALS = ["Au", "Ag", "Cu", "Al"]
 WAVELENGTHS = (450e-9, 550e-9, 650e-9, 750e-9)
 
 
-def specs(workload: str, scale: float = 1.0) -> list[dict]:
+def specs(workload: str, scale: float = 1.0, resolution=None) -> list[dict]:
     """The workload's specs: roughness × materials × wavelengths (one wavelength each), the
-    first ``tables × scale`` of them."""
+    first ``tables × scale`` of them (``resolution``: ``(n_theta, n_phi)`` instead)."""
     from emscatter.brdf import table_specs
     from emscatter.spectra import GaussianCorrelation
 
     method, n, res, sigmas, ell = WORKLOADS[workload]
+    res = tuple(resolution) if resolution else res
     rough = [GaussianCorrelation(sigma=s * 1e-6, length=ell * 1e-6, dimension=2) for s in sigmas]
     wls = [[w] for w in WAVELENGTHS]
     sp = table_specs(rough, MATERIALS, wls, method=method, resolution=res, out_of_range="ignore")
@@ -71,10 +77,10 @@ def _timed(fn) -> tuple[float, float, object]:
     return time.perf_counter() - t, time.process_time() - c, out
 
 
-def run_workload(name, client, repeat, scale) -> dict:
+def run_workload(name, client, repeat, scale, resolution=None) -> dict:
     from emscatter.brdf import build_tables
 
-    sp = specs(name, scale)
+    sp = specs(name, scale, resolution)
     variants = {"farm": {}}
     if name == "go":
         variants["farm_batch1"] = {"batch": 1}
@@ -112,6 +118,7 @@ def run_workload(name, client, repeat, scale) -> dict:
                 wall, _, _ = _timed(lambda f=folder: build_tables(sp, out_dir=f, progress=False))
                 times["serial_out_dir"].append(wall)
     method, _, res, _, _ = WORKLOADS[name]
+    res = tuple(resolution) if resolution else res
     med = statistics.median(serial_t)
     row = {
         "what": f"{len(sp)} {method.upper()} tables {res[0]}×{res[1]}, 1 wavelength each, "
@@ -141,6 +148,13 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--workloads", nargs="+", default=list(WORKLOADS), choices=list(WORKLOADS))
     ap.add_argument("--scale", type=float, default=1.0, help="× the table counts")
+    ap.add_argument(
+        "--resolution",
+        type=int,
+        nargs=2,
+        metavar=("N_THETA", "N_PHI"),
+        help="every workload's table resolution instead of its own (e.g. 90 180)",
+    )
     ap.add_argument("--out", default="brdf_farm", help="results file name (results/NAME.json)")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
@@ -157,7 +171,9 @@ def main() -> None:
         Client(cluster) as client,
     ):  # fmt: skip
         for name in args.workloads:
-            data["rows"][name] = run_workload(name, client, args.repeat, args.scale)
+            data["rows"][name] = run_workload(
+                name, client, args.repeat, args.scale, args.resolution
+            )
     data["machine"]["load_average_end"] = list(os.getloadavg())
     print(json.dumps({k: {m: v[m] for m in v if m.endswith("speedup")}
                       for k, v in data["rows"].items()}, indent=1))  # fmt: skip
