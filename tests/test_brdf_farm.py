@@ -153,3 +153,74 @@ def test_cli_quiet(tmp_path, monkeypatch):
     assert main(["brdf", str(tmp_path / "a.npz"), *argv, "--quiet"]) == 0
     assert main(["brdf", str(tmp_path / "b.npz"), *argv]) == 0
     assert seen == [False, None]  # --quiet: never; default: only on a terminal
+
+
+@pytest.mark.parametrize("batch", [1, 3, None])
+def test_batched_tasks_give_the_serial_tables_in_order(batch):
+    specs = _specs(out_of_range="ignore")
+    serial = build_tables(specs, progress=False)
+    with cf.ProcessPoolExecutor(2) as pool:
+        parallel = build_tables(specs, client=pool, batch=batch, progress=False)
+    for a, b in zip(serial, parallel, strict=True):
+        _same(a, b)
+
+
+def test_auto_batch_is_about_four_tasks_per_worker():
+    assert [len(r) for r in farm._batches(64, None, 2)] == [8] * 8
+    assert [len(r) for r in farm._batches(10, None, None)] == [1] * 10  # workers unknown
+    assert [len(r) for r in farm._batches(10, 4, 2)] == [4, 4, 2]
+    with cf.ProcessPoolExecutor(3) as pool:
+        assert farm._workers_of(pool, pool, None, 1) == 3
+
+
+def test_out_dir_workers_write_the_files_and_paths_come_back(tmp_path):
+    from emscatter.brdf.export_npz import read_npz
+
+    specs = _specs(out_of_range="ignore")[:4]
+    serial = build_tables(specs, progress=False)
+    with cf.ProcessPoolExecutor(2) as pool:
+        paths = build_tables(specs, client=pool, out_dir=tmp_path, batch=2, progress=False)
+    assert [p.name for p in paths] == [f"{s['name']}.npz" for s in specs]
+    for table, path in zip(serial, paths, strict=True):
+        assert path.parent == tmp_path
+        _same(table, read_npz(path))
+    again = build_tables(specs[:1], out_dir=tmp_path, progress=False)  # serial: same file
+    _same(serial[0], read_npz(again[0]))
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in paths)
+
+
+@pytest.mark.parametrize(
+    "kw, message",
+    [
+        ({"batch": 0}, "batch must be a positive integer or None, got 0"),
+        ({"batch": 2.5}, "batch must be a positive integer or None, got 2.5"),
+        ({"out_dir": "/nonexistent-emscatter-folder"}, "is not an existing folder"),
+        ({"out_dir": 3}, "out_dir must be a folder path or None, got 3"),
+    ],
+)
+def test_bad_batch_and_out_dir(kw, message):
+    with pytest.raises(ValueError, match=message.replace("(", r"\(")):
+        build_tables(_specs()[:1], **kw)
+
+
+def test_out_dir_needs_unique_file_names(tmp_path):
+    specs = _specs(out_of_range="ignore")[:2]
+    specs[1] = {**specs[1], "name": specs[0]["name"]}
+    match = r"specs\[1\] field 'name' = 's0-Au-w0' repeats specs\[0\]"
+    with pytest.raises(ValueError, match=match):
+        build_tables(specs, out_dir=tmp_path, progress=False)
+    specs[1] = {**specs[1], "name": "a/b"}
+    with pytest.raises(ValueError, match=r"specs\[1\] field 'name' = 'a/b'"):
+        build_tables(specs, out_dir=tmp_path, progress=False)
+    assert not list(tmp_path.iterdir())  # checked before any work
+
+
+def test_dask_batched_out_dir_bit_identical_to_serial(tmp_path):
+    pytest.importorskip("dask.distributed")
+    from emscatter.brdf.export_npz import read_npz
+
+    specs = _specs(out_of_range="ignore")[:4]
+    serial = build_tables(specs, progress=False)
+    paths = build_tables(specs, client="local", n_workers=2, out_dir=tmp_path, progress=False)
+    for a, p in zip(serial, paths, strict=True):
+        _same(a, read_npz(p))

@@ -344,3 +344,37 @@ def test_po_series_kernel_matches_numpy_reference(rough, monkeypatch):
     got8 = po.bistatic(*args, coherent=False).sigma0
     peak = ref8.max(axis=-1, keepdims=True)
     assert np.all(np.abs(got8 - ref8) <= 2e-8 * np.abs(ref8) + 1e-14 * peak)
+
+
+def test_default_threads_capped_by_env_and_per_thread(monkeypatch):
+    import threading
+
+    from emscatter.kernels import _runtime, default_threads, thread_cap
+
+    monkeypatch.delenv("EMSCATTER_THREADS", raising=False)
+    full = default_threads()
+    assert full == min(__import__("os").cpu_count() or 1, 8)
+    monkeypatch.setenv("EMSCATTER_THREADS", "1")
+    assert default_threads() == 1
+    monkeypatch.setenv("EMSCATTER_THREADS", "zero")
+    with pytest.raises(ValueError, match="EMSCATTER_THREADS must be a positive integer, got 'ze"):
+        default_threads()
+    monkeypatch.delenv("EMSCATTER_THREADS")
+    seen = set()
+
+    def part(a, b):  # which threads run the chunks
+        seen.add(threading.get_ident())
+
+    with thread_cap(1):
+        assert default_threads() == 1
+        other = []
+        t = threading.Thread(target=lambda: other.append(default_threads()))
+        t.start()
+        t.join()
+        assert other == [full]  # the cap is this thread's only
+        _runtime.run_chunked(part, 1 << 20)
+    assert seen == {threading.get_ident()}  # one chunk, in the calling thread
+    assert default_threads() == full
+    with pytest.raises(ValueError, match="threads must be a positive integer, got 0"):
+        with thread_cap(0):
+            pass

@@ -213,7 +213,10 @@ def angle_report(name: str, roughness, k: float, *, eps=None, theta_i) -> dict:
         own = True  # (fancy indexing copies)
     else:
         flat = part.ravel()
-        angular = _threshold_report(name, roughness, k, eps, flat)
+        fast = getattr(solvers.get(name), "angle_entries", None)  # a compiled pass (GO)
+        angular = fast(roughness, k, flat) if fast is not None else None
+        if angular is None:
+            angular = _threshold_report(name, roughness, k, eps, flat)
         own = angular is not None  # fresh arrays of flat's shape
         if angular is None:  # uncached (> 4096 angles): the report's arrays are fresh too
             angular = validity_report(name, roughness, k, eps=eps, theta_i=flat)

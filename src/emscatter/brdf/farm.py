@@ -16,6 +16,13 @@ spec, so the tables are the same, bit for bit, serially, on a process pool or on
     tables = build_tables(specs, client="tcp://host:8786")  # a running scheduler
     tables = build_tables(specs, client=my_dask_client)     # or a ProcessPoolExecutor
 
+Tasks are batches of specs (``batch`` tables each; by default about four batches per worker,
+so that a cluster's per-task cost — scheduling, pickling, a round trip — is paid per batch, not
+per small table), and with ``out_dir`` each worker writes its tables to
+``out_dir/<name>.npz`` itself (atomically, :func:`~emscatter.brdf.export_npz.write_npz`) and
+sends back only the path: thousands of 17.5 MB tables neither cross the network nor sit in
+this process's memory (the folder must be one the workers and this process share).
+
 Every spec is checked before any work (surface, material at every wavelength, method, the
 keyword names): a bad one raises a ``ValueError`` naming the spec, the field, the value and
 what is allowed. Warnings raised in the workers are passed on once each in this process,
@@ -29,6 +36,7 @@ dashboard.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import inspect
 import itertools
 import numbers
@@ -174,10 +182,86 @@ def _build_one(kwargs: dict, threads: int | None, in_worker: bool = True, compil
     if compiled:
         _load_compiled()
     kwargs = _cap_threads(kwargs, threads, in_worker)
-    with warnings.catch_warnings(record=True) as caught:
+    from ..kernels import thread_cap
+
+    cap = thread_cap(threads) if threads is not None else contextlib.nullcontext()
+    with cap, warnings.catch_warnings(record=True) as caught:  # every compiled call capped
         warnings.simplefilter("always")
         table = _build_mod.build_table(progress=False, **kwargs)
     return table, [(w.category, str(w.message)) for w in caught]
+
+
+def _build_batch(calls: list, names: list, threads, compiled: bool, out_dir) -> list:
+    """The tables of one task: ``[(table or its path, warnings), ...]`` in the order given;
+    with ``out_dir`` each is written to ``out_dir/<name>.npz`` here, in the worker."""
+    out = []
+    for kw, name in zip(calls, names, strict=True):
+        try:
+            table, caught = _build_one(kw, threads, True, compiled)
+        except Exception as exc:
+            if len(calls) == 1:
+                raise
+            raise RuntimeError(f"{name}: {type(exc).__name__}: {exc}") from exc
+        if out_dir is not None:
+            from .export_npz import write_npz
+
+            table = str(write_npz(table, os.path.join(out_dir, f"{name}.npz")))
+        out.append((table, caught))
+    return out
+
+
+def _workers_of(executor, client, n_workers, threads) -> int | None:
+    """How many tasks ``executor`` runs at once, where it says (None: unknown)."""
+    if client == "local":
+        return n_workers or max(1, (os.cpu_count() or 1) // (threads or 1))
+    dc = client if hasattr(client, "scheduler_info") else None
+    if dc is None and hasattr(executor, "_client"):
+        dc = executor._client  # dask's ClientExecutor
+    if dc is not None:
+        try:
+            workers = dc.scheduler_info().get("workers", {})
+            return max(1, sum(int(w.get("nthreads", 1)) for w in workers.values()))
+        except Exception:  # noqa: BLE001 - a client that cannot tell: unknown
+            return None
+    n = getattr(executor, "_max_workers", None)
+    return int(n) if isinstance(n, int) and n > 0 else None
+
+
+def _batches(n: int, batch: int | None, workers: int | None) -> list[range]:
+    """Contiguous index ranges of the tasks: ``batch`` specs each, or (None) about
+    :data:`BATCHES_PER_WORKER` tasks per worker (one spec per task when that is unknown)."""
+    if batch is None:
+        batch = 1 if workers is None else max(1, -(-n // (BATCHES_PER_WORKER * workers)))
+    return [range(a, min(a + batch, n)) for a in range(0, n, batch)]
+
+
+#: Tasks per worker when ``batch`` is None: few enough that the per-task cost is amortized,
+#: enough that a slow table does not leave the other workers idle at the end.
+BATCHES_PER_WORKER = 4
+
+
+def _check_out_dir(out_dir, names: list[str]):
+    if out_dir is None:
+        return None
+    if not isinstance(out_dir, str | os.PathLike):
+        raise ValueError(f"out_dir must be a folder path or None, got {out_dir!r}")
+    path = os.fspath(out_dir)
+    if not os.path.isdir(path):
+        raise ValueError(f"out_dir {path!r} is not an existing folder (create it first)")
+    seen = {}
+    for i, name in enumerate(names):
+        if not isinstance(name, str) or not name or os.sep in name or name in (".", ".."):
+            raise ValueError(
+                f"specs[{i}] field 'name' = {name!r}: with out_dir the name is the file name "
+                f"(<name>.npz): a non-empty string without {os.sep!r}"
+            )
+        if name in seen:
+            raise ValueError(
+                f"specs[{i}] field 'name' = {name!r} repeats specs[{seen[name]}]'s: with "
+                "out_dir every table needs its own name (its file)"
+            )
+        seen[name] = i
+    return path
 
 
 def _executor(client, n_workers, threads):
@@ -196,14 +280,26 @@ def _executor(client, n_workers, threads):
             ) from None
         if client == "local":
             n = n_workers or max(1, (os.cpu_count() or 1) // (threads or 1))
-            env = {"NUMBA_NUM_THREADS": str(threads or 1)}
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                env=env,
-            )
+            cap = str(threads or 1)  # numba's threads and the BLAS/FFT pools' of numpy/scipy
+            env = {
+                name: cap
+                for name in (
+                    "NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS",
+                    "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                )
+            }  # fmt: skip
+            import dask
+
+            # the workers' statistical profiler samples every thread each 10 ms: CPU a 2-core
+            # farm of small tables does not have (the dashboard's task stream stays)
+            with dask.config.set({"distributed.worker.profile.enabled": False}):
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    env=env,
+                )
             dc = Client(cluster)
 
             def close():
@@ -233,6 +329,8 @@ def build_tables(
     threads: int | None = 1,
     n_workers: int | None = None,
     progress: bool | None = None,
+    batch: int | None = None,
+    out_dir=None,
 ) -> list:
     """One :class:`~emscatter.brdf.BrdfTable` per spec, in the order of ``specs``.
 
@@ -249,8 +347,19 @@ def build_tables(
         the solvers' default (the CPU count, at most 8) — oversubscribes a cluster's workers.
     n_workers : workers of ``client="local"`` (default: the CPU count ÷ ``threads``).
     progress : tqdm bar over the tables: None → only when stderr is a terminal.
+    batch : specs per task on an executor or cluster (None: about
+        :data:`BATCHES_PER_WORKER` tasks per worker where the executor tells its workers,
+        else 1); the tables are the same whatever the batching.
+    out_dir : None (the tables come back) or an existing folder, shared with the workers:
+        each table is written there by its worker as ``<name>.npz`` (atomically; the spec
+        names must then be unique file names) and its :class:`~pathlib.Path` comes back
+        (read it with :func:`emscatter.brdf.export_npz.read_npz`).
     """
     threads = _check_threads(threads)
+    if batch is not None and (
+        isinstance(batch, bool) or not isinstance(batch, numbers.Integral) or batch < 1
+    ):
+        raise ValueError(f"batch must be a positive integer or None, got {batch!r}")
     if n_workers is not None and (
         isinstance(n_workers, bool) or not isinstance(n_workers, numbers.Integral) or n_workers < 1
     ):
@@ -262,6 +371,7 @@ def build_tables(
         raise ValueError("specs is empty: give at least one spec (see table_specs)")
     calls = [check_spec(s, i) for i, s in enumerate(specs)]  # every spec before any work
     names = [s.get("name") or f"specs[{i}]" for i, s in enumerate(specs)]
+    out_dir = _check_out_dir(out_dir, names)
     compiled = _load_compiled()  # the same kernel path in this process and every worker
     executor, close = _executor(client, n_workers, threads)
     results: list = [None] * len(calls)
@@ -269,21 +379,34 @@ def build_tables(
         with bar(len(calls), "BRDF tables", progress, unit="table") as b:
             if executor is None:
                 for j, kw in enumerate(calls):
-                    results[j] = _build_one(kw, threads, in_worker=False)
+                    table, caught = _build_one(kw, threads, in_worker=False)
+                    if out_dir is not None:
+                        from .export_npz import write_npz
+
+                        table = write_npz(table, os.path.join(out_dir, f"{names[j]}.npz"))
+                    results[j] = (table, caught)
                     b.update(1)
             else:
                 submit = executor.submit
+                tasks = _batches(len(calls), batch, _workers_of(executor, client, n_workers,
+                                                                threads))  # fmt: skip
                 futures = {
-                    submit(_build_one, kw, threads, True, compiled): j for j, kw in enumerate(calls)
-                }
+                    submit(_build_batch, [calls[j] for j in r], [names[j] for j in r], threads,
+                           compiled, out_dir): r
+                    for r in tasks
+                }  # fmt: skip
                 try:
                     for fut in cf.as_completed(futures):
-                        j = futures[fut]
+                        r = futures[fut]
                         try:
-                            results[j] = fut.result()
+                            done = fut.result()
                         except Exception as exc:
-                            raise RuntimeError(f"build_tables: {names[j]} failed: {exc}") from exc
-                        b.update(1)
+                            # a batch's error names its table (_build_batch)
+                            which = f"{names[r[0]]} failed" if len(r) == 1 else "a table failed"
+                            raise RuntimeError(f"build_tables: {which}: {exc}") from exc
+                        for j, item in zip(r, done, strict=True):
+                            results[j] = item
+                        b.update(len(r))
                 except BaseException:
                     for fut in futures:
                         fut.cancel()
@@ -296,4 +419,8 @@ def build_tables(
             if (category, message) not in seen:
                 seen.add((category, message))
                 warnings.warn(f"{name}: {message}", category, stacklevel=2)
+    if out_dir is not None:
+        from pathlib import Path
+
+        return [Path(table) for table, _ in results]
     return [table for table, _ in results]

@@ -23,17 +23,26 @@ cancellation (``sin²Δφ = 1 − cos²Δφ`` near the plane of incidence, ``cos
 at grazing, zeros of ``F_pq``): there the values differ by a few units of the last place of
 the polarization's largest value, as two numpy builds with different ``libm`` would.
 
+Threads: a compiled call that is not told how many threads to use takes the CPU count (at
+most 8), capped by ``EMSCATTER_THREADS`` (read at each call) and by :func:`thread_cap` (this
+thread only: what a farm's worker sets for its tasks, :mod:`emscatter.brdf.farm`) —
+:func:`default_threads`.
+
 Nothing here imports numba or compiles at ``import emscatter``: kernels compile on first use
 and are cached on disk (see :mod:`._runtime`). This package is light to import.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import importlib.util
 import os
+import threading
 
-__all__ = ["backend", "selection", "BACKENDS", "numba_available"]
+__all__ = [
+    "backend", "selection", "BACKENDS", "numba_available", "default_threads", "thread_cap",
+]  # fmt: skip
 
 BACKENDS = ("auto", "numba", "numpy")
 #: spectrum codes of the SPM1 kernel (here, so that choosing a path imports nothing heavy)
@@ -67,3 +76,37 @@ def backend() -> str:
             "pip install 'emscatter[fast]' or set EMSCATTER_KERNELS=auto"
         )
     return "numpy"
+
+
+_CPUS = os.cpu_count() or 1
+_LOCAL = threading.local()  # .cap: this thread's cap (thread_cap)
+
+
+def default_threads() -> int:
+    """Threads for a compiled call that does not say: ``min(CPU count, 8)``, at most
+    ``EMSCATTER_THREADS`` (a positive integer) and this thread's :func:`thread_cap`."""
+    n = min(_CPUS, 8)
+    env = os.environ.get("EMSCATTER_THREADS", "").strip()
+    if env:
+        try:
+            cap = int(env)
+        except ValueError:
+            cap = 0
+        if cap < 1:
+            raise ValueError(f"EMSCATTER_THREADS must be a positive integer, got {env!r}")
+        n = min(n, cap)
+    cap = getattr(_LOCAL, "cap", None)
+    return n if cap is None else min(n, cap)
+
+
+@contextlib.contextmanager
+def thread_cap(threads: int):
+    """Within the block, :func:`default_threads` in this thread is at most ``threads``."""
+    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+        raise ValueError(f"threads must be a positive integer, got {threads!r}")
+    old = getattr(_LOCAL, "cap", None)
+    _LOCAL.cap = threads if old is None else min(old, threads)
+    try:
+        yield
+    finally:
+        _LOCAL.cap = old

@@ -21,6 +21,8 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from . import default_threads
+
 __all__ = ["jit", "inline", "run_chunked", "run_fused", "run_split", "cache_dir", "NUMBA_VERSION"]
 
 NUMBA_VERSION = numba.__version__
@@ -99,12 +101,13 @@ def inline(fn):
 
 def run_chunked(part, n: int, threads: int | None = None) -> None:
     """Call ``part(start, stop)`` over ``[0, n)`` in contiguous chunks, one per thread
-    (``threads``: default the CPU count, at most 8); ``part`` calls a ``nogil`` kernel.
+    (``threads``: default :func:`emscatter.kernels.default_threads`, the CPU count, at most 8,
+    or the cap set for this thread); ``part`` calls a ``nogil`` kernel.
     The chunks run on the persistent pool of :func:`run_split` with the calling thread taking
     the last one: a 1e6-geometry call paid ~5 ms of thread starts per worker (wall, on a
     loaded 2-core machine) when each call made its own pool (issue 22)."""
     if threads is None:
-        threads = min(_CPUS, 8)
+        threads = default_threads()
     run_split(part, n, threads, _MIN_CHUNK)
 
 

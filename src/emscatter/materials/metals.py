@@ -45,10 +45,14 @@ def mitsuba_ior_dir() -> Path:
 
 def available_metals() -> list[str]:
     """Names with both an ``.eta.spd`` and a ``.k.spd`` file (e.g. Au, Ag, Cu, Al, Cr)."""
-    folder = mitsuba_ior_dir()
-    eta = {p.name[: -len(".eta.spd")] for p in folder.glob("*.eta.spd")}
+    return list(_metal_names(mitsuba_ior_dir()))
+
+
+@lru_cache(maxsize=8)
+def _metal_names(folder: Path) -> tuple[str, ...]:  # read once per process: a farm's tables
+    eta = {p.name[: -len(".eta.spd")] for p in folder.glob("*.eta.spd")}  # each asked (10 ms)
     k = {p.name[: -len(".k.spd")] for p in folder.glob("*.k.spd")}
-    return sorted(eta & k)
+    return tuple(sorted(eta & k))
 
 
 def read_spd(path: Path) -> tuple[np.ndarray, np.ndarray, str]:
@@ -105,7 +109,8 @@ def metal(name: str, *, extrapolate: bool = False) -> Tabulated:
     return Tabulated(lam_nm * 1e-9, n=n, k=k, name=name, source=source, extrapolate=extrapolate)
 
 
-def _mitsuba_version() -> str:
+@lru_cache(maxsize=1)
+def _mitsuba_version() -> str:  # importlib.metadata scans sys.path: once per process
     try:
         from importlib.metadata import version
 

@@ -498,9 +498,12 @@ def check_shadowing(shadowing_opt) -> str | None:
 
 
 def workers_for(threads, n_chunks: int) -> int:
-    """Number of worker threads: ``threads`` (None → CPU count, at most 8), ≤ ``n_chunks``."""
+    """Number of worker threads: ``threads`` (None → CPU count, at most 8, or the cap of
+    :func:`emscatter.kernels.default_threads`), ≤ ``n_chunks``."""
     if threads is None:
-        threads = min(_CPUS, 8)
+        from emscatter.kernels import default_threads
+
+        threads = default_threads()
     if isinstance(threads, bool) or not isinstance(threads, int | np.integer) or threads < 1:
         raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
     return int(min(threads, n_chunks))

@@ -77,7 +77,10 @@ from emscatter.solvers.validity import (
     upper,
 )
 
-__all__ = ["bistatic", "check_validity", "VALIDITY", "slope_pdf_factor", "measured_pdf_factor"]
+__all__ = [
+    "bistatic", "check_validity", "angle_entries", "VALIDITY", "slope_pdf_factor",
+    "measured_pdf_factor",
+]  # fmt: skip
 
 #: Validity of the geometric-optics (stationary-phase) Kirchhoff solution (Ulaby, Moore &
 #: Fung 1982 vol. II §12-4 / Table 12.2): ``kℓ ≥ 6``, ``ℓ² ≥ 2.76 σλ`` (tangent plane),
@@ -166,6 +169,25 @@ def check_validity(
         rms_slope=m,
         slope_cutoff=slope_cutoff(rough, k, k_max, slope_variance),
     )
+
+
+def angle_entries(roughness, k: float, theta_i: np.ndarray) -> dict | None:
+    """The per-angle entries (``angle_valid``, ``angle_excess``, ``angle_reasons``) of
+    :func:`check_validity` with its defaults at flat float64 ``theta_i`` [rad] (checked), in
+    one compiled pass (:mod:`.go_validity`); None where the compiled kernels do not run (the
+    numpy backend, few angles): the caller builds them from :func:`check_validity` then
+    (:func:`emscatter.method_resolution.angle_report`)."""
+    from emscatter.kernels import backend
+    from emscatter.solvers.kirchhoff import go_validity
+
+    if theta_i.size < go_validity.MIN_ANGLES or backend() != "numba":
+        return None
+    rough = check_roughness(roughness)
+    sx, sy = slope_variances(rough, None, None, k=float(k))
+    q0 = (2 * float(k) * rough.sigma) ** 2
+    v = VALIDITY
+    return go_validity.angle_entries(q0, max(sx, sy), v["phase_q_min"], v["illuminated_min"],
+                                     theta_i)  # fmt: skip
 
 
 def slope_cutoff(rough, k: float, k_max=None, slope_variance=None) -> float | None:
