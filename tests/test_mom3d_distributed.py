@@ -41,6 +41,9 @@ def test_serial_result_is_sane(serial):
     assert np.allclose(serial.info["energy"], 1.0, atol=0.05)
     assert np.all(serial.sigma0[0, 0] > 0) and np.all(np.isfinite(serial.sigma0))
     assert serial.info["bytes_per_worker"] >= serial.info["matrix_bytes"]
+    samples = serial.info["sigma0_samples"]  # per-realization σ⁰: their mean is σ⁰
+    assert samples.shape == (3, 2, 2, 3)
+    assert np.allclose(samples.mean(axis=0), serial.sigma0, rtol=1e-10, atol=0)
 
 
 def test_process_pool_bit_identical_to_serial(serial):

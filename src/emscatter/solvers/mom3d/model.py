@@ -340,7 +340,10 @@ def bistatic(
     ``coherent`` per incident pol, ``method="mom3d"``, and in ``info``: ``energy``
     ``(realizations, 2)``, ``incoherent_reflectivity`` ``(2,)``, iterations, seconds per
     realization, unknowns, matrix bytes, ``bytes_per_worker`` (matrix plus GMRES working
-    memory of one realization [bytes]), ``sigma0_std`` (standard error of σ⁰).
+    memory of one realization [bytes]), ``sigma0_std`` (standard error of σ⁰),
+    ``sigma0_samples`` ``(realizations, 2, 2, …)`` (each realization's incoherent σ⁰,
+    ``n/(n−1)·|A − ⟨A⟩|²`` scaled; their mean is σ⁰ — pool directions on them, then take the
+    standard error over realizations).
     """
     eps, k, ti, length, n_side, lam, mode, need = _check(
         roughness, eps, k, theta_i, length, points_per_wavelength, realizations,
@@ -372,6 +375,8 @@ def bistatic(
     var = n / (n - 1) * (np.mean(np.abs(a) ** 2, axis=0) - np.abs(a.mean(axis=0)) ** 2)
     sig = 4.0 * math.pi * math.cos(ti) * scale * var
     sig_se = 4.0 * math.pi * math.cos(ti) * scale * np.std(np.abs(a) ** 2, axis=0) / math.sqrt(n)
+    # per realization n/(n−1)|A − ⟨A⟩|²: their mean is σ⁰ (pool directions, then take the SE)
+    samples = 4.0 * math.pi * math.cos(ti) * scale * n / (n - 1) * np.abs(a - a.mean(axis=0)) ** 2
     hm = out["hemisphere"]
     p_tot = np.mean(np.abs(hm) ** 2, axis=0)
     p_coh = (n * np.abs(hm.mean(axis=0)) ** 2 - p_tot) / (n - 1)
@@ -399,6 +404,7 @@ def bistatic(
             "reflectivity": out["reflectivity"],
             "incoherent_reflectivity": r_tot - r_coh,
             "sigma0_std": sig_se.reshape(2, 2, *shape),
+            "sigma0_samples": samples.reshape(n, 2, 2, *shape),
             "iterations": out["iterations"],
             "seconds_per_realization": out["seconds"],
             "unknowns": out["unknowns"],
