@@ -60,7 +60,8 @@ def test_dask_local_cluster_bit_identical_to_serial(serial):
 
 
 def test_dask_client_with_two_threads_is_bit_identical(serial):
-    """A caller's own dask Client (left open) and threads=2 per task: the same bits."""
+    """A caller's own dask Client (left open), threads=2 per task, and the scheduler's
+    address "tcp://…": the same bits."""
     distributed = pytest.importorskip("dask.distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:  # fmt: skip
@@ -68,7 +69,10 @@ def test_dask_client_with_two_threads_is_bit_identical(serial):
             par = mom3d.bistatic(ROUGH, "pec", K, math.radians(30), TS, 0.0, client=client,
                                  threads=2, **TINY)  # fmt: skip
             assert client.status == "running"
+        by_address = mom3d.bistatic(ROUGH, "pec", K, math.radians(30), TS, 0.0,
+                                    client=cluster.scheduler_address, **TINY)  # fmt: skip
     _identical(serial, par)
+    _identical(serial, by_address)
 
 
 def test_seed_none_gives_one_set_of_surfaces_on_a_pool():
