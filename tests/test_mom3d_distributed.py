@@ -139,3 +139,16 @@ def test_dielectric_on_a_process_pool_is_bit_identical():
         b = mom3d.bistatic(*args, client=pool, **kw)
     _identical(a, b)
     assert np.all((a.info["reflectivity"] > 0) & (a.info["reflectivity"] < 1))
+
+
+def test_local_cluster_size_is_capped_by_memory():
+    """client="local" starts at most the CPU count ÷ threads workers and no more than 80 % of
+    the free memory holds at bytes_per_worker each (at least one)."""
+    import os
+
+    from emscatter.solvers.mom3d.montecarlo import local_workers
+
+    cpus = os.cpu_count() or 1
+    assert local_workers(1, 1) == cpus
+    assert local_workers(1, 2) == max(1, cpus // 2)
+    assert local_workers(2**50, 1) == 1  # a petabyte each: one worker, never zero

@@ -13,7 +13,8 @@ dask.distributed cluster: the plumbing shared by the package's farms (the Monte 
   results in submission order, cancels the rest on the first failure (re-raised as a
   ``RuntimeError`` naming the task) and passes on the warnings each task recorded
   (:func:`call_recording`), once each, prefixed with the task's name — Python's warnings
-  state is per process, so a worker's would otherwise be lost in its log.
+  state is per process, so a worker's would otherwise be lost in its log (and the recording
+  is not thread-safe: on a thread pool some may be lost; use processes or dask).
 
 A task that is a pure function of its arguments gives the same result, bit for bit, serially,
 on a process pool or on a cluster.
