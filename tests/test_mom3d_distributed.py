@@ -64,7 +64,7 @@ def test_dask_client_with_two_threads_is_bit_identical(serial):
     address "tcp://…": the same bits."""
     distributed = pytest.importorskip("dask.distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:  # fmt: skip
+                                  dashboard_address=":0") as cluster:  # fmt: skip
         with distributed.Client(cluster) as client:
             par = mom3d.bistatic(ROUGH, "pec", K, math.radians(30), TS, 0.0, client=client,
                                  threads=2, **TINY)  # fmt: skip

@@ -135,7 +135,7 @@ def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
                 n_workers=n,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=":0",
                 env=_thread_env(threads),
                 **extra,
             )
