@@ -32,6 +32,27 @@ gridding NUFFT, error ≤ 1e-7 Σ|u|ΔA) the far field takes ≈ 1 s at 16λ and
 inflated by the load, not by the far field). 16λ dense would need an 8 GiB matrix.
 Commands: ``--sizes 8 16 --accel
 smcg``, ``--sizes 32 --accel smcg`` and ``--sizes 8 --accel dense``.
+
+Dielectric (``--eps 4+0.5j 15+2j --sizes 2 3 4``): the dense Müller solve that
+``mom3d.bistatic`` uses for any ε (no SMCG yet), at its grid density, 8 points per wavelength
+*inside* the medium (λ₀/Re√ε: 16 points/λ₀ for ε = 4 + 0.5i, 31 for 15 + 2i), four unknowns
+per node, complex128 ``(4N)²`` matrix, one realization (same surface, θi = 30°), both
+polarizations. Rows over ``--max-gib`` (default 6) are not run: memory exact, time
+extrapolated as ``(4N)²`` from the largest row run (``est``). Shared 2-core machine, load
+average 8–10 (the 4λ rows ran at ≈ 25 % of a core; an idle machine is ~2–4× faster)::
+
+    eps     L/λ pts/λ0 nodes unknowns GiB  RSS_MiB asm_s  gmres_s total_s its   R_h    R_v
+    4+0.5i   2  16.0   1089   4356  0.28    489    8.2     5.3    13.8 21/21 0.1432 0.0899
+    4+0.5i   3  16.0   2401   9604  1.37   1608   20.2    20.6    41.0 24/23 0.1505 0.0811
+    4+0.5i   4  16.0   4225  16900  4.26   4571   78.0   136.7   215.2 25/24 0.1452 0.0828
+    15+2i    2  31.1   3969  15876  3.76   4041   59.0   121.4   180.9 28/29 0.3857 0.2914
+    15+2i    3  31.1   8836  35344 18.61      —   292e    602e    894e  (not run: memory)
+    15+2i    4  31.1  15625  62500 58.21      —   914e   1881e   2796e  (not run: memory)
+
+(``e``: extrapolated.) Memory is the wall: 4λ at ε = 15 + 2i needs a 58 GiB matrix (29 GiB
+in complex64); the same 4λ patch as a PEC (8 points/λ₀) is a 64 MiB dense matrix.
+Commands: ``--eps 4+0.5j --sizes 2 3 4`` and ``--eps 15+2j --sizes 2 3 4 --max-gib 5``
+(each < 10 min on the loaded machine).
 """
 
 from __future__ import annotations
@@ -49,6 +70,60 @@ from emscatter.spectra import GaussianCorrelation
 from emscatter.surfaces.generate import generate_surface
 
 
+def _peak_rss_mib() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
+
+
+def dielectric(eps_list, sizes, ppw: float, max_gib: float) -> None:
+    """The dense Müller solve (:mod:`emscatter.solvers.mom3d.dielectric`) at the grid density
+    ``bistatic`` uses: ``ppw`` nodes per wavelength inside the medium, ``λ₀ / Re√ε``; one
+    realization of the same Gaussian surface, both incident polarizations. Rows whose
+    complex128 ``(4N)²`` matrix is over ``max_gib`` are not run: their memory is exact, their
+    time extrapolated (marked ``est``) from the largest row run for that ε — assembly and each
+    GMRES matvec scale as ``(4N)²``, iterations taken as that row's."""
+    from emscatter.solvers.mom3d.dielectric_model import solve_dielectric_realization
+
+    k = 2 * math.pi
+    rough = GaussianCorrelation(0.3 / k, 3.0 / k)
+    print(
+        "eps        L/λ  pts/λ0  nodes  unknowns  matrix_GiB  peak_RSS_MiB  assemble_s  "
+        "gmres_s  total_s  iterations  R_h     R_v"
+    )
+    for eps in eps_list:
+        lam = 1.0 / max(1.0, np.sqrt(eps).real)
+        dx = lam / ppw
+        ref = None
+        for size in sorted(sizes):
+            n = int(math.ceil(size / lam * ppw))
+            unknowns = 4 * n * n
+            gib = unknowns**2 * 16 / 2**30
+            head = f"{eps!s:>9}  {size:3g}  {ppw / lam:8.1f}  {n * n:5d}  {unknowns:8d}  "
+            head += f"{gib:10.2f}"
+            if gib > max_gib:
+                if ref is None:
+                    print(f"{head}  (over --max-gib {max_gib:g}: not run, no row to scale)")
+                    continue
+                f = (unknowns / ref["unknowns"]) ** 2
+                a, g = ref["seconds"]["assemble"] * f, ref["seconds"]["solve"] * f
+                its = "/".join(map(str, ref["iterations"]))
+                print(f"{head}  {'—':>12}  {a:8.0f}est  {g:5.0f}est  {a + g:5.0f}est  "
+                      f"{its:>10}  (over --max-gib {max_gib:g}: not run)", flush=True)  # fmt: skip
+                continue
+            h = generate_surface(rough, (n, n), dx, rng=1).heights
+            t0 = time.perf_counter()
+            r = solve_dielectric_realization(h, dx, k, eps, math.radians(30), np.array([0.3]),
+                                             np.array([0.0]))  # fmt: skip
+            total = time.perf_counter() - t0
+            s = r["seconds"]
+            ref = r
+            print(
+                f"{head}  {_peak_rss_mib():12.0f}  {s['assemble']:10.2f}  {s['solve']:7.2f}  "
+                f"{total:7.2f}  {'/'.join(map(str, r['iterations'])):>10}  "
+                f"{r['reflectivity'][0]:.4f}  {r['reflectivity'][1]:.4f}",
+                flush=True,
+            )
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--sizes", type=float, nargs="+", default=[2.0, 4.0, 6.0, 8.0])
@@ -56,10 +131,21 @@ def main(argv=None) -> None:
     ap.add_argument("--accel", choices=("auto", "dense", "smcg"), default="auto")
     ap.add_argument("--near-radius", type=float, default=None, help="SMCG r_d [wavelengths]")
     ap.add_argument("--order", type=int, default=3, help="SMCG Taylor order")
+    ap.add_argument(
+        "--eps", type=complex, nargs="+", default=None,
+        help="dielectric rows (dense Müller solve) for these ε, e.g. 4+0.5j 15+2j",
+    )  # fmt: skip
+    ap.add_argument(
+        "--max-gib", type=float, default=6.0,
+        help="dielectric: run rows up to this matrix size [GiB], extrapolate the rest",
+    )  # fmt: skip
     args = ap.parse_args(argv)
+    print("load average (1, 5, 15 min): {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()))
+    if args.eps:
+        dielectric(args.eps, args.sizes, args.ppw, args.max_gib)
+        return
     k = 2 * math.pi
     rough = GaussianCorrelation(0.3 / k, 3.0 / k)
-    print("load average (1, 5, 15 min): {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()))
     print(
         "L/λ  accel  unknowns  matrix_MiB  peak_RSS_MiB  assemble_s  gmres_s  total_s  "
         "iterations  energy_h  energy_v"
@@ -74,7 +160,7 @@ def main(argv=None) -> None:
                               taylor_order=args.order)  # fmt: skip
         total = time.perf_counter() - t0
         s, e = r["seconds"], r["energy"]
-        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
+        rss = _peak_rss_mib()
         print(
             f"{size:4g}  {r['accel']:>5}  {r['unknowns']:8d}  {r['matrix_bytes'] / 2**20:10.0f}  "
             f"{rss:12.0f}  {s['assemble']:10.2f}  {s['solve']:7.2f}  {total:7.2f}  "

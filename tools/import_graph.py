@@ -32,7 +32,7 @@ MAX_FOLDER_LINES = 3000
 #: Floors, lowest first: a module may import from its own floor or below. The first prefix that
 #: matches a module's dotted name (without ``emscatter.``) gives its floor.
 FLOORS: list[tuple[str, ...]] = [
-    ("_version", "constants", "conventions", "io", "progress"),
+    ("_version", "constants", "conventions", "io", "progress", "parallel"),
     ("spectra", "fresnel", "materials", "montecarlo", "plots", "cache", "cache_entries"),
     ("frequency", "kernels", "surfaces"),
     ("scattering", "emissivity"),

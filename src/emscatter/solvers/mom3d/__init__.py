@@ -2,12 +2,14 @@
 dielectric 2-D rough surface ``z = f(x, y)`` — MFIE (PEC) or Müller's equations (dielectric),
 pulse bases, point matching, a tapered incident wave
 (Tsang, Kong, Ding & Ao 2001 vol. II ch. 10), GMRES on the dense matrix or (PEC, large
-patches) the sparse-matrix/canonical-grid product, Monte Carlo over realizations.
+patches) the sparse-matrix/canonical-grid product, Monte Carlo over realizations (serially,
+on a process pool or on a dask cluster: ``client=``).
 
 =========================  ===============================================================
 module                     what it holds
 =========================  ===============================================================
 :mod:`.model`              ``bistatic`` (Monte Carlo σ⁰, coherent part), ``solve_realization``
+:mod:`.montecarlo`         the realizations serially, on an Executor or on dask (bit-identical)
 :mod:`.operator`           the MFIE matrix (pulse basis, point matching, J/2 self term), GMRES
 :mod:`.smcg`               the SMCG product of the MFIE: near pairs sparse, far pairs by FFT
 :mod:`.dielectric`         Müller's equations (J and M, both media's Green functions), self cells

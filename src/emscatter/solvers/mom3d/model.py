@@ -32,11 +32,13 @@ import numpy as np
 
 from emscatter.conventions import check_angle, check_finite, check_positive, fmt
 from emscatter.fresnel import check_eps, is_pec
+from emscatter.parallel import check_client, check_n_workers, check_threads
 from emscatter.progress import task
 from emscatter.scattering import Scattering
 from emscatter.solvers.mom3d.dielectric_model import solve_dielectric_realization
 from emscatter.solvers.mom3d.farfield import amplitudes, hemisphere
 from emscatter.solvers.mom3d.incident import tapered_beam
+from emscatter.solvers.mom3d.montecarlo import MEMORY_OVERHEAD, run_realizations, stack_results
 from emscatter.solvers.mom3d.operator import assemble, make_patch, rhs, solve
 from emscatter.solvers.mom3d.smcg import smcg_operator
 
@@ -198,6 +200,35 @@ def solve_realization(
     }
 
 
+#: What one realization sends back from a worker (small arrays and scalars).
+RESULT_KEYS = (
+    "amplitude", "hemisphere", "weights", "energy", "iterations", "power", "unknowns",
+    "matrix_bytes", "taper_g", "reflectivity",
+)  # fmt: skip
+
+
+def _realization(job: dict, ss: np.random.SeedSequence) -> dict:
+    """One realization of ``job`` (the checked arguments of ``bistatic``) from the seed
+    ``ss``: the surface, its solve and the entries of :data:`RESULT_KEYS` plus ``seconds``
+    (module-level: the task of :func:`.montecarlo.run_realizations` on any executor)."""
+    from emscatter.surfaces.generate import generate_surface
+
+    n_side, spacing, k, eps = job["n_side"], job["spacing"], job["k"], job["eps"]
+    surf = generate_surface(job["roughness"], (n_side, n_side), spacing,
+                            rng=np.random.default_rng(ss))  # fmt: skip
+    args = (job["theta_i"], job["theta_s"], job["phi_s"], job["phi_i"])
+    if is_pec(eps):
+        out = solve_realization(surf.heights, spacing, k, *args, **job["options"], **job["fast"])
+        out["reflectivity"] = np.ones(2)
+    else:
+        out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args, **job["options"])
+        out["energy"] = out["reflectivity"] + out["transmissivity"]
+        out["matrix_bytes"] = out["unknowns"] ** 2 * 16
+    res = {key: out[key] for key in RESULT_KEYS}
+    res["seconds"] = out["seconds"]["total"]
+    return res
+
+
 def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes, accel="dense",
            near_radius=None):  # fmt: skip
     eps = check_eps(eps)
@@ -241,7 +272,7 @@ def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes, acc
             f"{n_side}² nodes and a {need / 2**30:.3g} GiB {what}, over "
             f"max_matrix_bytes={max_bytes / 2**30:.3g} GiB: use a smaller patch or raise it"
         )
-    return eps, k, ti, length, n_side, lam, mode
+    return eps, k, ti, length, n_side, lam, mode, need
 
 
 def bistatic(
@@ -265,6 +296,9 @@ def bistatic(
     accel: str = "auto",
     near_radius: float | None = None,
     taylor_order: int = TAYLOR_ORDER,
+    client=None,
+    threads: int | None = 1,
+    n_workers: int | None = None,
 ) -> Scattering:
     """Monte Carlo MoM σ⁰ per unit area of a perfectly conducting 2-D rough surface.
 
@@ -289,17 +323,29 @@ def bistatic(
     accel, near_radius, taylor_order : ``"dense"``, ``"smcg"`` (PEC only: strong pairs within
         ``near_radius`` wavelengths sparse, the rest by FFT, :mod:`.smcg`) or ``"auto"``
         (SMCG above :data:`SMCG_MIN_NODES` nodes); see :func:`solve_realization`.
+    client : where the realizations run (:mod:`.montecarlo`): None (serially, here),
+        ``"local"`` (a dask LocalCluster of ``n_workers`` single-threaded processes, closed at
+        the end), a scheduler address ``"tcp://host:port"``, a dask.distributed ``Client`` or
+        any :class:`concurrent.futures.Executor`. Realization ``j`` draws its surface from
+        ``seeds[j]`` whatever the worker, so the result is bit-identical to the serial run.
+        Each worker holds one realization's matrix at a time: ``info["bytes_per_worker"]``.
+    threads : compiled threads (BLAS, scipy.fft, numba) per worker (default 1); None: no cap.
+        Ignored serially (``client=None`` uses this process's defaults).
+    n_workers : workers of ``client="local"`` (default: CPU count ÷ ``threads``, no more
+        than the free memory holds at ``bytes_per_worker`` each).
 
     Returns
     -------
     :class:`~emscatter.scattering.Scattering` with ``sigma0[pol_s, pol_i]`` (incoherent),
     ``coherent`` per incident pol, ``method="mom3d"``, and in ``info``: ``energy``
     ``(realizations, 2)``, ``incoherent_reflectivity`` ``(2,)``, iterations, seconds per
-    realization, unknowns, matrix bytes, ``sigma0_std`` (standard error of σ⁰).
+    realization, unknowns, matrix bytes, ``bytes_per_worker`` (matrix plus GMRES working
+    memory of one realization [bytes]), ``sigma0_std`` (standard error of σ⁰),
+    ``sigma0_samples`` ``(realizations, 2, 2, …)`` (each realization's incoherent σ⁰,
+    ``n/(n−1)·|A − ⟨A⟩|²`` scaled; their mean is σ⁰ — pool directions on them, then take the
+    standard error over realizations).
     """
-    from emscatter.surfaces.generate import generate_surface
-
-    eps, k, ti, length, n_side, lam, mode = _check(
+    eps, k, ti, length, n_side, lam, mode, need = _check(
         roughness, eps, k, theta_i, length, points_per_wavelength, realizations,
         max_matrix_bytes, accel, near_radius,
     )  # fmt: skip
@@ -308,38 +354,30 @@ def bistatic(
     ps = check_finite("phi_s", phi_s)
     ts_b, ps_b = np.broadcast_arrays(ts, ps)
     shape = ts_b.shape
+    threads = check_threads(threads)
+    n_workers = check_n_workers(n_workers)
+    check_client(client)
     spacing = lam / points_per_wavelength
-    seeds = np.random.SeedSequence(seed).spawn(realizations)
-    amps, hemis, energy, iters, secs, refl = [], [], [], [], [], []
-    out = None
+    seeds = np.random.SeedSequence(seed).spawn(realizations)  # realization j: seeds[j]
+    job = {
+        "roughness": roughness, "n_side": n_side, "spacing": spacing, "k": k, "eps": eps,
+        "theta_i": ti, "theta_s": ts_b.ravel(), "phi_s": ps_b.ravel(), "phi_i": pi_,
+        "options": {"taper_g": taper_g, "tol": tol, "max_iter": max_iter},
+        "fast": {"accel": mode, "near_radius": near_radius, "taylor_order": taylor_order},
+    }  # fmt: skip
     with task("mom3d realizations", realizations, progress, unit="realization") as bar:
-        for ss in seeds:  # one solve per realization
-            rng = np.random.default_rng(ss)
-            surf = generate_surface(roughness, (n_side, n_side), spacing, rng=rng)
-            args = (ti, ts_b.ravel(), ps_b.ravel(), pi_)
-            opts = {"taper_g": taper_g, "tol": tol, "max_iter": max_iter}
-            if is_pec(eps):
-                fast = {"accel": mode, "near_radius": near_radius, "taylor_order": taylor_order}
-                out = solve_realization(surf.heights, spacing, k, *args, **opts, **fast)
-            else:
-                out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args, **opts)
-                out["energy"] = out["reflectivity"] + out["transmissivity"]
-                out["matrix_bytes"] = out["unknowns"] ** 2 * 16
-                refl.append(out["reflectivity"])
-            amps.append(out["amplitude"])
-            hemis.append(out["hemisphere"])
-            energy.append(out["energy"])
-            iters.append(out["iterations"])
-            secs.append(out["seconds"]["total"])
-            bar.set_postfix_str(f"{secs[-1]:.1f} s, energy {np.round(energy[-1], 4)}")
-            bar.update(1)
+        results = run_realizations(_realization, job, seeds, client=client, threads=threads,
+                                   n_workers=n_workers, bar=bar, bytes_per_worker=need)  # fmt: skip
+    out = stack_results(results)
     n = realizations
-    a = np.stack(amps)  # (n, 2, 2, D)
+    a = out["amplitude"]  # (n, 2, 2, D)
     scale = k * k / (16.0 * math.pi**2) / out["power"]
     var = n / (n - 1) * (np.mean(np.abs(a) ** 2, axis=0) - np.abs(a.mean(axis=0)) ** 2)
     sig = 4.0 * math.pi * math.cos(ti) * scale * var
     sig_se = 4.0 * math.pi * math.cos(ti) * scale * np.std(np.abs(a) ** 2, axis=0) / math.sqrt(n)
-    hm = np.stack(hemis)
+    # per realization n/(n−1)|A − ⟨A⟩|²: their mean is σ⁰ (pool directions, then take the SE)
+    samples = 4.0 * math.pi * math.cos(ti) * scale * n / (n - 1) * np.abs(a - a.mean(axis=0)) ** 2
+    hm = out["hemisphere"]
     p_tot = np.mean(np.abs(hm) ** 2, axis=0)
     p_coh = (n * np.abs(hm.mean(axis=0)) ** 2 - p_tot) / (n - 1)
     wt = out["weights"]
@@ -362,12 +400,13 @@ def bistatic(
         k=k,
         dimension=2,
         info={
-            "energy": np.array(energy),
-            "reflectivity": np.array(refl) if refl else np.ones((realizations, 2)),
+            "energy": out["energy"],
+            "reflectivity": out["reflectivity"],
             "incoherent_reflectivity": r_tot - r_coh,
             "sigma0_std": sig_se.reshape(2, 2, *shape),
-            "iterations": np.array(iters),
-            "seconds_per_realization": float(np.mean(secs)),
+            "sigma0_samples": samples.reshape(n, 2, 2, *shape),
+            "iterations": out["iterations"],
+            "seconds_per_realization": out["seconds"],
             "unknowns": out["unknowns"],
             "matrix_bytes": out["matrix_bytes"],
             "length": length,
@@ -375,5 +414,6 @@ def bistatic(
             "taper_g": out["taper_g"],
             "realizations": n,
             "accel": mode,
+            "bytes_per_worker": int(need * MEMORY_OVERHEAD),
         },
     )

@@ -1,0 +1,210 @@
+"""Independent tasks serially, on any :class:`concurrent.futures.Executor` or on a
+dask.distributed cluster: the plumbing shared by the package's farms (the Monte Carlo of
+:func:`emscatter.solvers.mom3d.bistatic`; the same rules as :mod:`emscatter.brdf.farm`).
+
+* :func:`open_executor` turns ``client`` (None, ``"local"``, ``"tcp://host:port"``, a dask
+  ``Client`` or an ``Executor``) into an executor and a ``close`` for what it started; a bad
+  one is refused before any work, with the accepted forms named.
+* :func:`limited_threads` caps the compiled threads of one task (numba's, scipy.fft's
+  workers and, where ``threadpoolctl`` is installed, BLAS's), so ``n_workers × threads``
+  stays within the cores; a ``"local"`` cluster also starts its workers with
+  ``OMP/OPENBLAS/MKL/NUMBA_NUM_THREADS = threads``.
+* :func:`run_ordered` submits the tasks, advances a progress bar as they finish, returns the
+  results in submission order, cancels the rest on the first failure (re-raised as a
+  ``RuntimeError`` naming the task) and passes on the warnings each task recorded
+  (:func:`call_recording`), once each, prefixed with the task's name — Python's warnings
+  state is per process, so a worker's would otherwise be lost in its log (and the recording
+  is not thread-safe: on a thread pool some may be lost; use processes or dask).
+
+A task that is a pure function of its arguments gives the same result, bit for bit, serially,
+on a process pool or on a cluster.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import numbers
+import os
+import warnings
+
+__all__ = [
+    "check_threads",
+    "check_n_workers",
+    "limited_threads",
+    "open_executor",
+    "call_recording",
+    "run_ordered",
+]
+
+_ADDRESS = ("tcp://", "tls://", "inproc://", "ucx://")
+_FORMS = (
+    "None (serial), 'local', a scheduler address 'tcp://host:port', a dask.distributed "
+    "Client or a concurrent.futures Executor"
+)
+
+
+def check_threads(threads) -> int | None:
+    """``threads`` as a positive int, or None (no cap)."""
+    if threads is None:
+        return None
+    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
+        raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
+    return int(threads)
+
+
+def check_n_workers(n_workers) -> int | None:
+    """``n_workers`` as a positive int, or None (the default of ``client="local"``)."""
+    if n_workers is None:
+        return None
+    if isinstance(n_workers, bool) or not isinstance(n_workers, numbers.Integral) or n_workers < 1:
+        raise ValueError(f"n_workers must be a positive integer or None, got {n_workers!r}")
+    return int(n_workers)
+
+
+def check_client(client) -> None:
+    """Refuse a ``client`` that :func:`open_executor` cannot use, without starting anything."""
+    if client is None or client == "local" or isinstance(client, cf.Executor):
+        return
+    if isinstance(client, str) and client.startswith(_ADDRESS):
+        return
+    if not isinstance(client, str) and callable(getattr(client, "get_executor", None)):
+        return
+    raise ValueError(f"client must be {_FORMS}, got {client!r:.80}")
+
+
+@contextlib.contextmanager
+def limited_threads(threads: int | None):
+    """Within the block, at most ``threads`` compiled threads: numba's (this thread's),
+    scipy.fft's default ``workers`` and BLAS's (through ``threadpoolctl`` when installed;
+    otherwise the worker's ``OPENBLAS_NUM_THREADS``). ``None``: no cap."""
+    if threads is None:
+        yield
+        return
+    with contextlib.ExitStack() as stack:
+        try:
+            import numba
+
+            before = numba.get_num_threads()
+            numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+            stack.callback(numba.set_num_threads, before)
+        except ImportError:
+            pass
+        from scipy import fft as sfft
+
+        stack.enter_context(sfft.set_workers(threads))
+        try:
+            from threadpoolctl import threadpool_limits
+
+            stack.enter_context(threadpool_limits(limits=threads))
+        except ImportError:
+            pass
+        yield
+
+
+def _thread_env(threads: int | None) -> dict:
+    t = str(threads or 1)
+    return {name: t for name in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS",
+                                 "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}  # fmt: skip
+
+
+def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
+                  memory_limit=None):  # fmt: skip
+    """``(executor or None, close)`` for ``client``; ``close()`` shuts down what was started
+    here (a ``"local"`` LocalCluster of ``n_workers`` single-threaded processes, default the
+    CPU count ÷ ``threads``; a Client to a scheduler address) and leaves a caller's own
+    Client or Executor open. ``memory_limit``: the LocalCluster's per-worker limit (dask's
+    default: the machine's memory ÷ workers)."""
+    check_client(client)
+    if client is None:
+        return None, lambda: None
+    if isinstance(client, cf.Executor):
+        return client, lambda: None
+    if isinstance(client, str):
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise ValueError(
+                f"client={client!r} needs dask.distributed (pip install 'emscatter[distributed]'); "
+                "or pass a concurrent.futures Executor, or None (serial)"
+            ) from None
+        if client == "local":
+            n = n_workers or max(1, (os.cpu_count() or 1) // (threads or 1))
+            extra = {} if memory_limit is None else {"memory_limit": memory_limit}
+            cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=":0",
+                env=_thread_env(threads),
+                **extra,
+            )
+            dc = Client(cluster)
+
+            def close():
+                dc.close()
+                cluster.close()
+
+            return dc.get_executor(), close
+        dc = Client(client)
+        return dc.get_executor(), dc.close
+    return client.get_executor(), lambda: None  # a dask.distributed Client
+
+
+def call_recording(fn, *args, threads: int | None = None, **kwargs):
+    """``(fn(*args, **kwargs), [(category, message), ...])`` with ``threads`` capped
+    (:func:`limited_threads`) and every warning recorded instead of shown: the task function
+    of :func:`run_ordered` in a worker (module-level, so it pickles)."""
+    with limited_threads(threads), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = fn(*args, **kwargs)
+    return out, [(w.category, str(w.message)) for w in caught]
+
+
+def run_ordered(executor, fn, arg_list, names, *, threads=None, bar=None, on_result=None,
+                stacklevel: int = 3):  # fmt: skip
+    """``[fn(*args) for args in arg_list]`` on ``executor`` (None: serially here, warnings
+    shown as they come, no thread cap), in the order of ``arg_list``.
+
+    ``names[j]`` labels task ``j`` in errors and in its warnings; ``bar`` (a tqdm-like object
+    or None) is advanced once per finished task; ``on_result(j, result)`` is called as each
+    finishes (in completion order). A failing task cancels the others and raises
+    ``RuntimeError("<name> failed: …")`` chained to the worker's exception."""
+    arg_list = list(arg_list)
+    results: list = [None] * len(arg_list)
+
+    def done(j, res):
+        results[j] = res
+        if on_result is not None:
+            on_result(j, res)
+        if bar is not None:
+            bar.update(1)
+
+    if executor is None:
+        for j, args in enumerate(arg_list):
+            done(j, fn(*args))
+        return results
+    futures = {
+        executor.submit(call_recording, fn, *args, threads=threads): j
+        for j, args in enumerate(arg_list)
+    }
+    caught: list = [[] for _ in arg_list]
+    try:
+        for fut in cf.as_completed(futures):
+            j = futures[fut]
+            try:
+                res, caught[j] = fut.result()
+            except Exception as exc:
+                raise RuntimeError(f"{names[j]} failed: {exc}") from exc
+            done(j, res)
+    except BaseException:
+        for fut in futures:
+            fut.cancel()
+        raise
+    seen = set()
+    for name, items in zip(names, caught, strict=True):
+        for category, message in items:
+            if (category, message) not in seen:
+                seen.add((category, message))
+                warnings.warn(f"{name}: {message}", category, stacklevel=stacklevel)
+    return results
