@@ -297,7 +297,10 @@ def build_btdf_table(
     else:
         rough = checked_surface(surface, options, "a BTDF table")
     if not rough.is_isotropic:
-        raise ValueError("BTDF tables are isotropic (θi, θt, Δφ): got an anisotropic surface")
+        raise ValueError(
+            "build_btdf_table is isotropic (θi, θt, Δφ): got an anisotropic surface; use "
+            "emscatter.brdf.btdf_aniso.build_anisotropic_btdf_table (GO)"
+        )
     if dtype not in ("float64", "float32", np.float64, np.float32):
         raise ValueError(f"dtype must be 'float64' or 'float32', got {dtype!r}")
     dt = np.dtype(dtype)
