@@ -210,7 +210,7 @@ def po_table():
 
 def test_po_table_equals_the_solver_and_counts_the_coherent_lobe(po_table):
     """At the θi nodes, between the (θt, Δφ) nodes, the table interpolates the PO solver
-    (median / p90 where f_t ≥ 1 % of its peak: measured 0.15 % / 0.71 % on 30 × 180 × 121 nodes);
+    (median / p90 where f_t ≥ 1 % of its peak: measured 0.15 % / 0.71 % on 30 × 262 × 121 nodes);
     its albedo adds the coherent transmissivity,
     and at normal incidence T = Fresnel 0.96 within the grid's quadrature error (3e-3)."""
     from emscatter.brdf import frames
@@ -294,3 +294,22 @@ def test_cli_brdf_transmission_method_po(tmp_path):
     bt = read_btdf_npz(tmp_path / "g_btdf.npz")
     assert bt.metadata["solver"] == "kirchhoff-po-transmission"
     assert bt.coherent is not None and bt.coherent[0, 0] > 0.3
+
+
+def test_po_table_polarized_is_the_facet_jones_matrix():
+    """polarized=True: M₀₀ is the PO BTDF, and M/M₀₀ is the stationary-phase facet's Mueller
+    matrix, the same as GO's at the same direction pair (Kirchhoff's polarization factor is
+    the local Fresnel transmission; only the scalar integral differs)."""
+    from emscatter.brdf.btdf_table import build_btdf_table
+
+    kw = {"n_theta": 6, "n_theta_t": 24, "n_phi": 25, "polarized": True}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = build_btdf_table(GLASS_PO, 2.25, [LAM], method="po", **kw)
+    g = build_btdf_table(GLASS_PO, 2.25, [LAM], shadowing=False, **kw)
+    np.testing.assert_array_equal(p.mueller[:, 0, 0], p.values)
+    ok = (g.values > 1e-6 * g.values.max()) & (p.values > 1e-6 * p.values.max())
+    assert ok.sum() > 100
+    ratio_p = p.mueller[0][:, :, ok[0]] / p.values[0][ok[0]]
+    ratio_g = g.mueller[0][:, :, ok[0]] / g.values[0][ok[0]]
+    np.testing.assert_allclose(ratio_p, ratio_g, atol=1e-10)
