@@ -369,7 +369,8 @@ def build_btdf_table(
             if method == "po":
                 res = tpo.bistatic_transmission(
                     rough, eps[j], k, a, b, c, math.pi, out_of_range="ignore", **po_opts
-                )
+                )  # the slopes of the same spectrum: the plugin samples Beckmann normals
+                slopes = [float(x) for x in slope_variances(rough, None, None, k=k)]
             else:
                 res = gt.bistatic_transmission(rough, eps[j], k, a, b, c, math.pi, **options)
                 slopes = [float(np.mean(x)) for x in res.info["slope_variance"]]
