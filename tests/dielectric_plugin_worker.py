@@ -23,7 +23,8 @@ EPS = 2.25
 ALPHA = 0.3
 
 
-def tables(n_theta: int, wavelengths=(550e-9,)):
+def tables(n_theta: int, wavelengths=(550e-9,), method: str = "go"):
+    """GO tables (``method="po"``: the outside BRDF and the BTDF from PO, same surface)."""
     wl = list(wavelengths)
     from emscatter.brdf import build_table
     from emscatter.brdf.btdf_table import build_btdf_table
@@ -37,6 +38,11 @@ def tables(n_theta: int, wavelengths=(550e-9,)):
         warnings.simplefilter("ignore")
         out = build_table(surf, EPS, wl, method="go", resolution=res, energy="off", **opts)
         inner = build_table(surf, 1 / EPS, wl, method="go", resolution=res, energy="off", **opts)
+        if method == "po":  # σ = 0.15 µm, ℓ = 1 µm: the same Beckmann α = 0.3 in PO's spectrum
+            out = build_table(surf, EPS, wl, method="po", resolution=res, energy="off")
+            bt = build_btdf_table(surf, EPS, wl, n_theta=n_theta, n_phi=2 * n_theta + 1,
+                                  method="po", out_of_range="ignore")  # fmt: skip
+            return out, bt, inner
     bt = build_btdf_table(surf, EPS, wl, n_theta=n_theta, n_phi=2 * n_theta + 1, **opts)
     return out, bt, inner
 
@@ -50,7 +56,7 @@ def main(arg: str) -> None:
     from emscatter.render import dielectric as em_d
 
     wls = [x * 1e-9 for x in args.get("wavelengths_nm", [550])]
-    out, bt, inner = tables(int(args["n_theta"]), wls)
+    out, bt, inner = tables(int(args["n_theta"]), wls, args.get("method", "go"))
     spectral = "spectral" in args["variant"]
     bsdfs = {
         "em": mi.load_dict(em_d.bsdf_dict(out, bt, inner)),

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..solvers.kirchhoff.common import slope_variances
 from ..solvers.kirchhoff.transmission import go as gt
+from ..solvers.kirchhoff.transmission import po as tpo
 from . import grid
 from .btdf import checked_surface, emscatter_to_mitsuba
 from .build import _check_count, _check_wavelengths, default_phi_d, default_theta, material_eps
@@ -77,6 +78,9 @@ class BtdfTable:
         [rad] from the downward normal in ``[0, π/2)``; phi_d : Δφ nodes [rad] in ``[0, π]``.
     values : ``f_t`` [1/sr], ``(n_wl, n_ti, n_tt, n_pd)``, ≥ 0 and finite.
     eps : (n_wl,) real relative permittivity of the lower medium (> 0, ≠ 1).
+    mueller : optional ``(n_wl, 4, 4, n_ti, n_tt, n_pd)`` Mueller BTDF, ``[:, 0, 0] = values``.
+    coherent : optional ``(n_wl, n_ti)`` coherent transmissivity [-] in ``[0, 1]`` (PO: the
+        delta lobe at the refracted direction, not in ``values``); None: zero (GO).
     metadata : dict (solver, surface, material, shadowing, version, ...).
     """
 
@@ -88,6 +92,7 @@ class BtdfTable:
     eps: np.ndarray
     mueller: np.ndarray | None = None
     metadata: dict = field(default_factory=dict)
+    coherent: np.ndarray | None = None
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -121,6 +126,14 @@ class BtdfTable:
                 raise ValueError("mueller[:, 0, 0] must equal values (the unpolarized BTDF)")
             m.setflags(write=False)
             set_(self, "mueller", m)
+        if self.coherent is not None:
+            c = np.array(self.coherent, dtype=float)
+            if c.shape != shape[:2]:
+                raise ValueError(f"coherent must have shape {shape[:2]}, got {c.shape}")
+            if not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
+                raise ValueError("coherent must be transmissivities in [0, 1] (no NaN)")
+            c.setflags(write=False)
+            set_(self, "coherent", c)
         if not isinstance(self.metadata, dict):
             raise TypeError(f"metadata must be a dict, got {type(self.metadata).__name__}")
 
@@ -211,7 +224,14 @@ class BtdfTable:
 
     def albedo(self) -> np.ndarray:
         """Transmitted fraction ``T`` [-] per wavelength and θi node, ``(n_wl, n_ti)``: the
-        exact integral of the interpolated table over the lower hemisphere."""
+        exact integral of the interpolated table over the lower hemisphere, plus the coherent
+        transmissivity (PO tables; :meth:`incoherent_albedo` without it)."""
+        t = self.incoherent_albedo()
+        return t if self.coherent is None else t + self.coherent
+
+    def incoherent_albedo(self) -> np.ndarray:
+        """The interpolated table's own transmitted fraction ``(n_wl, n_ti)`` [-] (no delta
+        lobe)."""
         w = self.outgoing_weights()
         return np.einsum("witd,td->wi", self.values.astype(float), w)
 
@@ -236,10 +256,18 @@ def build_btdf_table(
     dtype="float64",
     polarized: bool = False,
     memory_limit_bytes: int | None = None,
+    method: str = "go",
+    out_of_range: str = "warn",
     **options,
 ) -> BtdfTable:
-    """The GO BTDF table of a rough lossless dielectric (Walter et al. 2007 with GO's Beckmann
-    slopes; :mod:`emscatter.solvers.kirchhoff.transmission.go`).
+    """The BTDF table of a rough lossless dielectric: ``method="go"`` (default) Walter et al.
+    2007 with GO's Beckmann slopes (:mod:`emscatter.solvers.kirchhoff.transmission.go`),
+    ``"po"`` the Kirchhoff (physical-optics) transmission of
+    :mod:`emscatter.solvers.kirchhoff.transmission.po`, whose coherent transmissivity
+    ``T_F exp(−σ²(k₁cosθi − k₂cosθt)²)`` goes to ``coherent`` (a delta lobe, counted in
+    :meth:`BtdfTable.albedo`). ``out_of_range`` (PO): ``"warn"`` (once per wavelength, naming
+    the θi nodes outside PO's validity), ``"raise"`` or ``"ignore"``; recorded in
+    ``metadata["per_wavelength"]``.
 
     ``surface``: a 2-D isotropic :class:`emscatter.spectra.Roughness`; ``material``: a real
     ``ε`` (> 0, ≠ 1) or anything :func:`emscatter.materials.eps_at` takes (lossless at every
@@ -253,12 +281,26 @@ def build_btdf_table(
     albedo ``T(0°)`` of α = 0.1 errs by 1.1 % on 0.5° θt nodes, 0.3 % on 0.25°, 0.08 % on
     0.125° (the true value 0.960). ``dtype``: ``"float64"`` or ``"float32"`` storage.
     ``memory_limit_bytes``: the stored grid may not exceed it (None: what the process may allocate,
-    :func:`.sizing.memory_limit`). ``options``: ``shadowing`` (True/"correlated", "separable"
-    = Mitsuba's ``roughdielectric``, False), ``slope_variance``, ``k_max``.
+    :func:`.sizing.memory_limit`). ``options`` (GO): ``shadowing`` (True/"correlated",
+    "separable" = Mitsuba's ``roughdielectric``, False), ``slope_variance``, ``k_max``; (PO):
+    ``rtol``, ``max_terms`` of the series.
     """
-    rough = checked_surface(surface, options, "a BTDF table")
+    if method not in ("go", "po"):
+        raise ValueError(f"method must be 'go' or 'po' for a BTDF table, got {method!r}")
+    if out_of_range not in ("warn", "raise", "ignore"):
+        raise ValueError(
+            f"out_of_range must be 'warn', 'raise' or 'ignore' for a table, got {out_of_range!r}"
+        )
+    if method == "po":
+        rough, po_opts = _po_surface(surface, options)
+        options = {}
+    else:
+        rough = checked_surface(surface, options, "a BTDF table")
     if not rough.is_isotropic:
-        raise ValueError("BTDF tables are isotropic (θi, θt, Δφ): got an anisotropic surface")
+        raise ValueError(
+            "build_btdf_table is isotropic (θi, θt, Δφ): got an anisotropic surface; use "
+            "emscatter.brdf.btdf_aniso.build_anisotropic_btdf_table (GO)"
+        )
     if dtype not in ("float64", "float32", np.float64, np.float32):
         raise ValueError(f"dtype must be 'float64' or 'float32', got {dtype!r}")
     dt = np.dtype(dtype)
@@ -309,6 +351,8 @@ def build_btdf_table(
     values = np.empty((wl.size, ti.size, tt.size, pd.size), dtype=dt)
     mueller = np.empty((wl.size, 4, 4, ti.size, tt.size, pd.size), dtype=dt) if polarized else None
     rows = max(1, _CHUNK // (tt.size * pd.size))
+    coherent = np.zeros((wl.size, ti.size)) if method == "po" else None
+    per_wl = []
     for j, lam in enumerate(wl):
         e = material_eps(material, float(lam))
         try:
@@ -316,12 +360,21 @@ def build_btdf_table(
         except ValueError as err:
             raise ValueError(f"material {material!r} at λ = {lam:.6g} m: {err}") from None
         k = 2 * math.pi / lam
+        if method == "po":
+            per_wl.append(_po_validity(rough, eps[j], k, ti, float(lam), out_of_range))
+            coherent[j] = tpo.coherent_transmissivity(rough, eps[j], k, ti).mean(axis=0)
         for lo in range(0, ti.size, rows):
             a, b, c = np.meshgrid(ti[lo : lo + rows], tt, pd, indexing="ij")
             # renderer Δφ → emscatter: φi = π (k̂_i = −wi with φ(wi) = 0), φt = Δφ
-            res = gt.bistatic_transmission(rough, eps[j], k, a, b, c, math.pi, **options)
+            if method == "po":
+                res = tpo.bistatic_transmission(
+                    rough, eps[j], k, a, b, c, math.pi, out_of_range="ignore", **po_opts
+                )  # the slopes of the same spectrum: the plugin samples Beckmann normals
+                slopes = [float(x) for x in slope_variances(rough, None, None, k=k)]
+            else:
+                res = gt.bistatic_transmission(rough, eps[j], k, a, b, c, math.pi, **options)
+                slopes = [float(np.mean(x)) for x in res.info["slope_variance"]]
             values[j, lo : lo + rows] = res.unpolarized() / (4 * math.pi * np.cos(a) * np.cos(b))
-            slopes = [float(np.mean(x)) for x in res.info["slope_variance"]]
             if polarized:  # the facet's Jones matrix as a Mueller matrix (.btdf)
                 jones = gt.transmission_jones(eps[j], a, b, c, math.pi)
                 mm = jones_to_mueller(jones) * (values[j, lo : lo + rows] / _m00(jones))
@@ -334,13 +387,61 @@ def build_btdf_table(
         "source": "Walter, Marschner, Li & Torrance 2007 (EGSR), eqs. 16, 21, 23, 25, 27",
         "shadowing": gt.check_transmission_shadowing(options.get("shadowing", True)),
         "material": material if isinstance(material, (int, float, str)) else repr(material),
-        "units": {"values": "1/sr", "angles": "rad", "wavelengths": "m"},
+        "units": {"values": "1/sr", "angles": "rad", "wavelengths": "m", "coherent": "-"},
         "slope_variance": slopes,  # per direction (s_x, s_y), last wavelength; Beckmann α² = 2s
     }
+    if method == "po":
+        meta.update(
+            solver="kirchhoff-po-transmission",
+            source="Kirchhoff approximation, local Fresnel transmission at the stationary-phase "
+            "facet (emscatter.solvers.kirchhoff.transmission.po)",
+            shadowing=None,
+            coherent="coherent transmissivity T_F exp(-sigma^2 (k1 cos ti - k2 cos tt)^2) "
+            "(delta lobe at the refracted direction, not in values)",
+            per_wavelength=per_wl,
+        )
     return BtdfTable(
         wavelengths=wl, theta_i=ti, theta_t=tt, phi_d=pd, values=values, eps=eps,
-        mueller=mueller, metadata=meta,
+        mueller=mueller, metadata=meta, coherent=coherent,
     )  # fmt: skip
+
+
+_PO_OPTIONS = ("rtol", "max_terms")
+
+
+def _po_surface(surface, options):
+    """The roughness and the series options of a PO BTDF table (clear errors)."""
+    unknown = set(options) - set(_PO_OPTIONS)
+    if unknown:
+        raise ValueError(
+            f"unknown option(s) {sorted(unknown)} for the PO BTDF; allowed: {list(_PO_OPTIONS)}"
+        )
+    return checked_surface(surface, {}, "a BTDF table"), dict(options)
+
+
+def _po_validity(rough, eps, k, theta, lam, out_of_range) -> dict:
+    """PO's validity at the θi nodes for one wavelength: the ``out_of_range`` policy (one
+    warning naming the failing nodes, or a ValueError) and a record for the metadata."""
+    from ..solvers.kirchhoff import po as rpo
+
+    rep_ = rpo.check_validity(rough, k, eps=eps, theta_i=theta)
+    bad = ~np.broadcast_to(np.asarray(rep_.get("angle_valid", True), dtype=bool), theta.shape)
+    if not rep_["valid"] and out_of_range != "ignore":
+        nodes = np.degrees(theta[bad])
+        where = f"θi {nodes.min():.3g}–{nodes.max():.3g}° ({bad.sum()} nodes)" if bad.any() else ""
+        msg = (
+            f"build_btdf_table(method='po') at λ = {lam:.6g} m is outside the Kirchhoff "
+            f"approximation's validity {where}: {'; '.join(rep_['reasons'])}"
+        )
+        if out_of_range == "raise":
+            raise ValueError(msg + " (out_of_range='warn' builds it anyway)")
+        warnings.warn(msg + " (out_of_range='raise' stops, 'ignore' only records)", stacklevel=3)
+    return {
+        "wavelength": lam,
+        "valid": bool(rep_["valid"]),
+        "reasons": list(rep_["reasons"]),
+        "theta_i_out_of_range_deg": np.degrees(theta[bad]).tolist(),
+    }
 
 
 def _m00(jones) -> np.ndarray:
@@ -450,7 +551,8 @@ def cap_energy(brdf: BrdfTable, btdf: BtdfTable, absorption=None) -> tuple[BrdfT
             "scale": per_node.tolist(),
             "min_scale": float(per_node.min()),
         }
-        btdf = btdf.replace(values=values.astype(btdf.values.dtype), metadata=meta)
+        coh = None if btdf.coherent is None else btdf.coherent * per_node  # PO's delta lobe
+        btdf = btdf.replace(values=values.astype(btdf.values.dtype), metadata=meta, coherent=coh)
     else:
         meta["energy"] = {"remedy": "none needed", "remedy_applied": False}
         btdf = btdf.replace(metadata=meta)

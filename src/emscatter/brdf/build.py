@@ -39,12 +39,15 @@ from ..scattering import Scattering
 from ..solvers import select
 from ..spectra import check_roughness
 from . import chunks, frames, grid, sizing
+from .energy import record_albedo
 from .progress import build_progress
 from .progress import tick as _tick
 from .table import FORMAT_VERSION, BrdfTable
-from .transmittance import remedy_with_transmission
+from .transmittance import check_transmission, finish_energy
 
 __all__ = ["build_table", "default_theta", "default_phi_d", "default_phi", "material_eps"]
+
+_record_albedo = record_albedo  # the old private name (brdf.analytic.htsg imports it)
 
 
 def default_theta(n: int) -> np.ndarray:
@@ -233,10 +236,7 @@ def build_table(
     wl = _check_wavelengths(wavelengths)
     if energy not in ("rescale", "off"):
         raise ValueError(f"energy must be 'rescale' or 'off', got {energy!r}")
-    if isinstance(transmission, str) and transmission not in ("auto", "off"):
-        raise ValueError(
-            f"transmission must be 'auto', 'off', a BtdfTable or T per node, got {transmission!r}"
-        )
+    check_transmission(transmission)
     if out_of_range == "nan":
         raise ValueError(
             "out_of_range='nan' cannot build a table (a table holds no NaN); use 'warn' "
@@ -469,11 +469,9 @@ def _build(
         metadata=meta,
         **grid_kw,
     )
-    if energy == "rescale":
-        phi_n = phi_ax if aniso else None
-        args = (rough, setups, theta_ax, phi_n, options, transmission)
-        return remedy_with_transmission(table, *args), reports
-    return _record_albedo(table, "off"), reports
+    phi_n = phi_ax if aniso else None
+    args = (rough, setups, theta_ax, phi_n, options)
+    return finish_energy(table, energy, transmission, *args), reports
 
 
 class _at_wavelength:
@@ -550,18 +548,6 @@ def validity_messages(reports) -> list[str]:
             "or choose another method="
         )
     return out
-
-
-def _record_albedo(table: BrdfTable, remedy: str) -> BrdfTable:
-    """Record the albedo in ``metadata["energy"]`` without changing the values."""
-    alb = table.albedo().total
-    table.metadata["energy"] = {
-        "remedy": remedy,
-        "remedy_applied": False,
-        "max_albedo_before": alb.reshape(alb.shape[0], -1).max(axis=1).tolist(),
-        "albedo_exceeds_one": bool(np.any(alb > 1)),
-    }
-    return table
 
 
 def _adaptive(rough, setups, aniso, tol, floor, out_of_range, options):
@@ -684,4 +670,4 @@ def fill_from_function(brdf, wavelengths, theta, phi, anisotropic: bool, metadat
     table = BrdfTable(
         wavelengths=wl, theta_i=theta, theta_o=theta, values=values, metadata=meta, **grid_kw
     )
-    return _record_albedo(table, "off (analytic model)")
+    return record_albedo(table, "off (analytic model)")

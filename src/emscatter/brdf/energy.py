@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["reciprocal_energy_scale", "apply_energy_remedy", "REMEDY"]
+__all__ = ["reciprocal_energy_scale", "apply_energy_remedy", "record_albedo", "REMEDY"]
 
 REMEDY = (
     "reciprocal separable attenuation f'(wi, wo) = s(wi) f(wi, wo) s(wo), s <= 1 per "
@@ -186,3 +186,16 @@ def apply_energy_remedy(table, *, limit: float = 1.0, transmission=None, absorpt
         "scale": [s.tolist() for s in scales],
     }
     return table.replace(values=values, polarized=pol, metadata=meta)
+
+
+def record_albedo(table, remedy: str):
+    """``table`` with its albedo recorded in ``metadata["energy"]`` (``remedy`` names why no
+    remedy was applied), the values unchanged."""
+    alb = table.albedo().total
+    table.metadata["energy"] = {
+        "remedy": remedy,
+        "remedy_applied": False,
+        "max_albedo_before": alb.reshape(alb.shape[0], -1).max(axis=1).tolist(),
+        "albedo_exceeds_one": bool(np.any(alb > 1)),
+    }
+    return table

@@ -39,7 +39,16 @@ __all__ = ["write_npz", "read_npz", "write_btdf_npz", "read_btdf_npz", "NPZ_FORM
 
 NPZ_FORMAT = "emscatter-brdf"
 BTDF_FORMAT = "emscatter-btdf"
-_BTDF_ARRAYS = ("wavelengths", "theta_i", "theta_t", "phi_d", "values", "eps", "mueller")
+_BTDF_ARRAYS = (
+    "wavelengths",
+    "theta_i",
+    "theta_t",
+    "phi_d",
+    "values",
+    "eps",
+    "mueller",
+    "coherent",
+)
 _ARRAYS = ("wavelengths", "theta_i", "theta_o", "values", "phi_d", "phi_i", "phi_o",
            "coherent", "coherent_polarized", "polarized")  # fmt: skip
 _CHECKSUM = "checksum"
@@ -148,7 +157,7 @@ def _read(path, kind: str, names: tuple) -> tuple[str, dict, dict]:
             "was altered or corrupted after it was written)"
         )
     required = {"format_version", "metadata_json", "wavelengths", "theta_i", "values"}
-    required |= {"theta_o"} if kind == NPZ_FORMAT else set(_BTDF_ARRAYS) - {"mueller"}
+    required |= {"theta_o"} if kind == NPZ_FORMAT else set(_BTDF_ARRAYS) - {"mueller", "coherent"}
     missing = required - set(members)
     if missing:
         raise ValueError(

@@ -38,13 +38,15 @@ import numpy as np
 from scipy import special
 
 from ..solvers.kirchhoff.common import _a, fast_fresnel, slope_variances, smith_lambda
-from .energy import apply_energy_remedy
+from .energy import apply_energy_remedy, record_albedo
 
 __all__ = [
     "go_transmittance",
     "transmission_budget",
     "is_dielectric",
     "remedy_with_transmission",
+    "check_transmission",
+    "finish_energy",
     "N_NODES",
 ]
 
@@ -214,3 +216,20 @@ def remedy_with_transmission(table, rough, setups, theta, phi, options, transmis
     energy["transmission_clipped"] = int(clipped.sum())
     out.metadata["energy"] = energy
     return out
+
+
+def check_transmission(transmission) -> None:
+    """Refuse a ``transmission=`` string other than ``"auto"`` / ``"off"`` (arrays and
+    :class:`~.btdf_table.BtdfTable` objects are checked where they are used)."""
+    if isinstance(transmission, str) and transmission not in ("auto", "off"):
+        raise ValueError(
+            f"transmission must be 'auto', 'off', a BtdfTable or T per node, got {transmission!r}"
+        )
+
+
+def finish_energy(table, energy, transmission, rough, setups, theta, phi, options):
+    """The built table after its energy step: ``energy="rescale"`` the remedy capped at
+    ``1 − T`` (:func:`remedy_with_transmission`), ``"off"`` only the albedo recorded."""
+    if energy == "rescale":
+        return remedy_with_transmission(table, rough, setups, theta, phi, options, transmission)
+    return record_albedo(table, "off")

@@ -188,7 +188,7 @@ def _bsdf_class(mi):
             sx, sy = bt.metadata["slope_variance"]
             self._alpha = math.sqrt(sx + sy)  # Beckmann α² = 2s (isotropic: s = (sx + sy)/2)
             lum = RGB_LUMINANCE @ spectrum_to_rgb_weights(bt.wavelengths)
-            t_alb = lum @ bt.albedo()
+            t_alb = lum @ bt.incoherent_albedo()  # what the lobe holds (PO: no delta lobe)
             r_alb = np.interp(bt.theta_i, s["theta_r"], lum @ s["r_albedo"])
             p_t = t_alb / np.maximum(t_alb + r_alb, 1e-12)
             self._pt_out = tex(mi.Texture1f, p_t[:, None])
