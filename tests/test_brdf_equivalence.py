@@ -69,3 +69,12 @@ def test_seed_section_makes_the_fit_non_unique():
     assert e2 > 10 * e1
     with pytest.raises(ValueError, match="phi"):
         E.ward_section_exponent(0.1, 0.8, phi=float("nan"))
+
+
+def test_seed_criterion_isotropic_limit():
+    """m_x = m_y: Ward is Beckmann at every φ, the seed's criterion gives n_u = n_v = the Blinn
+    exponent of that m (the isotropic equivalence, seed: m = 0.32 → n_B = 17)."""
+    eq = E.ashikhmin_from_ward(0.32, 0.32, ratio="seed")
+    nb = E.blinn_from_beckmann(0.32)
+    assert eq.value == pytest.approx((nb.value, nb.value), rel=1e-6)
+    assert eq.error == pytest.approx(nb.error, rel=1e-6)
