@@ -1,7 +1,9 @@
 """Mitsuba evaluations for tests/test_render_dielectric_dispersive.py in a fresh interpreter
 (Dr.Jit variants are per process): ``python tests/dielectric_dispersive_worker.py JSON`` with
 ``{"v": [[x, y, z], ...] (towards the viewer, Mitsuba's si.wi), "l": [...] (towards the
-light), "modes": ["radiance", "importance"] (default both), "table_nm": [...] (the tables'
+light), "modes": ["radiance", "importance"] (default both), "variant" (default
+``llvm_ad_spectral``; ``llvm_ad_spectral_polarized``: Mueller tables, the (0, 0) entries
+compared), "table_nm": [...] (the tables'
 wavelengths), "eval_nm": [...] (wavelengths to evaluate at, all four spectral lanes at one
 wavelength)}``.
 
@@ -34,9 +36,10 @@ def bk7_eps(wavelength: float) -> float:
     return 1.0 + sum(b * x / (x - c) for b, c in zip(B, C, strict=True))
 
 
-def tables(n_theta: int, wavelengths):
+def tables(n_theta: int, wavelengths, polarized: bool = False):
     from emscatter.brdf import build_table
     from emscatter.brdf.btdf_table import build_btdf_table
+    from emscatter.brdf.mueller import build_mueller_table
     from emscatter.spectra import GaussianCorrelation
 
     wl = list(wavelengths)
@@ -44,13 +47,16 @@ def tables(n_theta: int, wavelengths):
     surf = GaussianCorrelation(sigma=0.15e-6, length=1e-6)
     opts = {"shadowing": "separable", "slope_variance": (s2, s2)}
     res = (n_theta, 2 * n_theta + 1)
+    build = build_mueller_table if polarized else build_table
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        out = build_table(surf, bk7_eps, wl, method="go", resolution=res, energy="off", **opts)
-        inner = build_table(
+        out = build(surf, bk7_eps, wl, method="go", resolution=res, energy="off", **opts)
+        inner = build(
             surf, lambda w: 1.0 / bk7_eps(w), wl, method="go", resolution=res, energy="off", **opts
         )
-    bt = build_btdf_table(surf, bk7_eps, wl, n_theta=n_theta, n_phi=2 * n_theta + 1, **opts)
+        bt = build_btdf_table(
+            surf, bk7_eps, wl, n_theta=n_theta, n_phi=2 * n_theta + 1, polarized=polarized, **opts
+        )
     return out, bt, inner
 
 
@@ -59,10 +65,17 @@ def main(arg: str) -> None:
     import mitsuba as mi
 
     args = json.loads(arg)
-    mi.set_variant("llvm_ad_spectral")
+    variant = args.get("variant", "llvm_ad_spectral")
+    mi.set_variant(variant)
+    pol = "polarized" in variant
     from emscatter.render import dielectric as em_d
 
-    out, bt, inner = tables(int(args.get("n_theta", 90)), [x * 1e-9 for x in args["table_nm"]])
+    wls = [x * 1e-9 for x in args["table_nm"]]
+    out, bt, inner = tables(int(args.get("n_theta", 90)), wls, pol)
+
+    def m00(val):  # polarized: the Mueller matrix's (0, 0) entry (frame-invariant), lane 0
+        return np.array(val[0, 0][0] if pol else val[0], dtype=float).tolist()
+
     em = mi.load_dict(em_d.bsdf_dict(out, bt, inner))
     v = np.asarray(args["v"], dtype=float)
     lt = np.asarray(args["l"], dtype=float)
@@ -82,9 +95,9 @@ def main(arg: str) -> None:
                                "alpha": ALPHA, "int_ior": n, "ext_ior": 1.0,
                                "sample_visible": False})  # fmt: skip
             lanes = (mi.Float(np.full(v.shape[0], nm)) for _ in range(4))
-            si.wavelengths = mi.Spectrum(*lanes)
-            res["em"].append(np.array(em.eval(ctx, si, wo)[0], dtype=float).tolist())
-            res["rd"].append(np.array(rd.eval(ctx, si, wo)[0], dtype=float).tolist())
+            si.wavelengths = mi.UnpolarizedSpectrum(*lanes)
+            res["em"].append(m00(em.eval(ctx, si, wo)))
+            res["rd"].append(m00(rd.eval(ctx, si, wo)))
             res["n"].append(n)
         out_all[mode] = res
     print(json.dumps(out_all))

@@ -46,9 +46,9 @@ wavelength (N-BK7 over 400–700 nm: 1.3 % error at 400 nm with the mean ``ε``,
 interpolation error with this rule; ``tests/test_render_dielectric_dispersive.py``). The
 sampling's refraction frame (Walter's normals refracted at ``η``) takes the mean ``ε``: its
 ``pdf`` is that density exactly, so this costs variance, not bias. RGB and mono variants use
-the mean ``ε`` throughout (one index per path), and so do the ``*_polarized`` variants
-(:mod:`.dielectric_polarized` keeps the mean ``ε`` in its ``1/ε``). The lobe probabilities
-weigh the wavelengths by their luminance.
+the mean ``ε`` throughout (one index per path); ``*_spectral_polarized`` takes ``1/ε`` per
+wavelength as here (:mod:`.dielectric_polarized`). The lobe probabilities weigh the
+wavelengths by their luminance.
 """
 
 from __future__ import annotations
