@@ -44,3 +44,37 @@ def test_ward_ashikhmin():
     ref = E.ward_shape(g, p, 0.1, 0.8)
     seed_err = E.fit_error(ref, E.ashikhmin_shape(g, p, 187, 10))
     assert free.error < fixed.error < seed_err
+
+
+def test_seed_section_makes_the_fit_non_unique():
+    """Seed §3.2.2: 'la solution trouvée n'est pas unique' — on the φ = π/4 section every pair
+    with n_u + n_v = 2N fits equally well; both printed pairs (Figs. 3.8, 3.9) are within 2 %
+    of that line and fit the section to rms < 2e-3, while on the full (γ, φ) grid they differ
+    by ×1.7 (0.12 and 0.21) — only a 1D comparison makes them both fits."""
+    sec = E.ward_section_exponent(0.1, 0.8)
+    # Ward on the diagonal is a Beckmann lobe with 1/m² = (1/m_x² + 1/m_y²)/2
+    m45 = (0.5 * (1 / 0.1**2 + 1 / 0.8**2)) ** -0.5
+    assert sec.value == pytest.approx(E.blinn_from_beckmann(m45).value, rel=1e-6)
+    assert sec.value == pytest.approx(98.85, rel=1e-3)
+    g = E._GAMMA
+    ref = E.ward_shape(g, E.SEED_SECTION_PHI, 0.1, 0.8)
+    for nu, nv in ((10, 187), (187, 10), (100, 100), (175.7, 22.0)):
+        assert E.fit_error(ref, E.ashikhmin_shape(g, E.SEED_SECTION_PHI, nu, nv)) < 2e-3
+    full = [E.ward_ashikhmin_grid_error(0.1, 0.8, *p) for p in ((187, 10), (100, 100))]
+    assert full[1] > 1.5 * full[0] > 0.15
+    # a section off the diagonal separates u and v: (187, 10) and (10, 187) differ there
+    r0 = E.ward_shape(g, 0.3, 0.1, 0.8)
+    e1 = E.fit_error(r0, E.ashikhmin_shape(g, 0.3, 187, 10))
+    e2 = E.fit_error(r0, E.ashikhmin_shape(g, 0.3, 10, 187))
+    assert e2 > 10 * e1
+    with pytest.raises(ValueError, match="phi"):
+        E.ward_section_exponent(0.1, 0.8, phi=float("nan"))
+
+
+def test_seed_criterion_isotropic_limit():
+    """m_x = m_y: Ward is Beckmann at every φ, the seed's criterion gives n_u = n_v = the Blinn
+    exponent of that m (the isotropic equivalence, seed: m = 0.32 → n_B = 17)."""
+    eq = E.ashikhmin_from_ward(0.32, 0.32, ratio="seed")
+    nb = E.blinn_from_beckmann(0.32)
+    assert eq.value == pytest.approx((nb.value, nb.value), rel=1e-6)
+    assert eq.error == pytest.approx(nb.error, rel=1e-6)

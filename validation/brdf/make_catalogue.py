@@ -170,8 +170,8 @@ def main() -> int:
         "|---|---|---|",
     ]
     for label, ratio in (
-        ("the seed's, as stated: exponents in the ratio m_x/m_y (its axes) — `ratio='seed'`",
-         "seed"),
+        ("the seed's, as stated: section φ = π/4, exponents in the ratio m_x/m_y (its axes) — "
+         "`ratio='seed'` [rms on the section]", "seed"),
         ("curvature at γ = 0, n_u/n_v = (m_y/m_x)² — `ratio='slope'` (default)", "slope"),
         ("free two-parameter fit — `ratio=None`", None),
     ):  # fmt: skip
@@ -179,9 +179,9 @@ def main() -> int:
         lines.append(f"| {label} | ({eq.value[0]:.1f}, {eq.value[1]:.2f}) | {eq.error:.4f} |")
     lines += [
         "",
-        "The seed's Fig. 3.8 pair (10, 187) is in its own axes (n_u with m_y); its ratio 0.053 is",
-        "neither m_x/m_y = 0.125 nor (m_x/m_y)² = 0.016. The stated criterion reproduces its",
-        "small exponent (11.1 against 10) but not the large one (89 against 187).",
+        "The seed's Fig. 3.8 pair (10, 187) is in its own axes (n_u with m_y). Its sum (197) is",
+        "the π/4 section's 2N = 197.7; its ratio 0.053 is neither m_x/m_y = 0.125 nor",
+        "(m_x/m_y)² = 0.016 (see `equivalences.md`).",
         "",
         "## Reciprocity and directional albedo over each model's parameter range",
         "",

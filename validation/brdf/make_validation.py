@@ -19,7 +19,7 @@ import numpy as np
 
 from emscatter.brdf import build_table
 from emscatter.brdf.analytic import equivalence as E
-from emscatter.io import save_figure, write_csv
+from emscatter.io import atomic_path, save_figure, write_csv
 from emscatter.spectra import GaussianCorrelation
 
 HERE = Path(__file__).resolve().parent
@@ -149,19 +149,39 @@ def equivalences():
     ref = E.ward_shape(g, p, 0.1, 0.8)
     seed_err = E.fit_error(ref, E.ashikhmin_shape(g, p, 187, 10))
     seed100 = E.fit_error(ref, E.ashikhmin_shape(g, p, 100, 100))
+    ws = E.ashikhmin_from_ward(0.1, 0.8, ratio="seed")
+    sec = E.ward_section_exponent(0.1, 0.8)
+    gs = E._GAMMA
+    sref = E.ward_shape(gs, E.SEED_SECTION_PHI, 0.1, 0.8)
+
+    def sec_err(nu, nv):
+        return E.fit_error(sref, E.ashikhmin_shape(gs, E.SEED_SECTION_PHI, nu, nv))
+
+    r_seed = 187 / 10
     rows = [
         ("Beckmann m = 0.32 → Phong n", "4 (Fig. 3.4)", f"{b32p.value:.2f}", b32p.error),
         ("Beckmann m = 0.32 → Blinn n_B", "17 (Fig. 3.6)", f"{b32b.value:.2f}", b32b.error),
         ("Phong n = 1 → Beckmann m_max", "0.51 (Fig. 3.5)", f"{p1.value:.3f}", p1.error),
         ("Blinn n_B = 4 → Beckmann m", "0.54 (Fig. 3.7, 'not a good approximation')",
          f"{n4.value:.3f}", n4.error),
-        ("Ward (0.1, 0.8) → Ashikhmin (n_u, n_v), n_u/n_v = (m_y/m_x)²",
-         "fixed ratio (criterion uses m_x/m_y), pair not printed",
-         f"({wa.value[0]:.1f}, {wa.value[1]:.2f})", wa.error),
-        ("Ward (0.1, 0.8) → Ashikhmin, free fit", "(10, 187) in Fig. 3.8 [u ↔ v swapped]",
+        ("Ward (0.1, 0.8), section φ = π/4 → n_u + n_v = 2N [section rms]",
+         "10 + 187 = 197 (Fig. 3.8), 100 + 100 = 200 (Fig. 3.9)",
+         f"{2 * sec.value:.1f}", sec.error),
+        ("Ward (0.1, 0.8) → Ashikhmin, the seed's criterion (section π/4, n_u/n_v = m_y/m_x) "
+         "[section rms]", "(10, 187) (Fig. 3.8, its axes: n_u with m_y)",
+         f"({ws.value[0]:.1f}, {ws.value[1]:.2f})", ws.error),
+        ("  seed's pair (187, 10) in our axes [section rms]", "Fig. 3.8", "—",
+         sec_err(187, 10)),
+        ("  seed's pair (100, 100) [section rms]", "Fig. 3.9", "—", sec_err(100, 100)),
+        ("  the seed's criterion's pair on the full (γ, φ) grid", "—",
+         f"({ws.value[0]:.1f}, {ws.value[1]:.2f})",
+         E.ward_ashikhmin_grid_error(0.1, 0.8, *ws.value)),
+        ("Ward (0.1, 0.8) → Ashikhmin (n_u, n_v), n_u/n_v = (m_y/m_x)² (full grid)",
+         "—", f"({wa.value[0]:.1f}, {wa.value[1]:.2f})", wa.error),
+        ("Ward (0.1, 0.8) → Ashikhmin, free fit (full grid)", "—",
          f"({wf.value[0]:.1f}, {wf.value[1]:.2f})", wf.error),
-        ("  seed's pair (n_u, n_v) = (187, 10) in our axes", "Fig. 3.8", "—", seed_err),
-        ("  seed's pair (100, 100)", "Fig. 3.9", "—", seed100),
+        ("  seed's pair (187, 10) in our axes (full grid)", "Fig. 3.8", "—", seed_err),
+        ("  seed's pair (100, 100) (full grid)", "Fig. 3.9", "—", seed100),
     ]  # fmt: skip
     write_csv(
         HERE / "equivalences.csv",
@@ -187,18 +207,39 @@ def equivalences():
         f"{E.fit_error(E.beckmann_shape(E._GAMMA, 0.54), E.blinn_shape(E._GAMMA, 4)):.4f} against",
         f"{n4.error:.4f} at the optimum), as the seed says ('clearly not a good approximation').",
         "The seed's worked example of eq. 3.1 prints m = 2·0.2/0.8 = 0.32; the arithmetic gives",
-        "0.5 (its figures then use m = 0.32, as here). In Fig. 3.8 the pair (10, 187) matches our",
-        "free fit with the u and v axes exchanged (n_u along x pairs with m_x here).",
+        "0.5 (its figures then use m = 0.32, as here).",
+        "",
+        "**Ward ↔ Ashikhmin, the seed's criterion as it states it** (`ratio='seed'`).",
+        "The seed's figures are curves of γ alone and it finds the fit 'not unique':",
+        "(10, 187) in Fig. 3.8 and (100, 100) in Fig. 3.9 both fit. On the full (γ, φ) grid",
+        f"they do not (rms {seed_err:.3f} and {seed100:.3f}, against {wf.error:.3f} at the free",
+        "optimum); on one section they do, and the one section on which both printed pairs fit",
+        "is the diagonal φ = π/4, where Ashikhmin's exponent is (n_u + n_v)/2 and Ward is a",
+        "Beckmann lobe of 1/m² = (1/m_x² + 1/m_y²)/2: the best single exponent is",
+        f"N = {sec.value:.2f}, so n_u + n_v = {2 * sec.value:.1f}; the seed's pairs sum to 197",
+        f"(−{100 * (1 - 197 / (2 * sec.value)):.1f} %) and 200",
+        f"(+{100 * (200 / (2 * sec.value) - 1):.1f} %), with section rms",
+        f"{sec_err(187, 10):.4f} and {sec_err(100, 100):.4f} against {sec.error:.4f} at the",
+        "line (peak = 1). The section cannot tell u from v (cos²π/4 = sin²π/4), which is why",
+        "the seed's pair has n_u paired with m_y without showing it. The section fixes the sum",
+        "only; the seed then keeps 'a constant ratio between the two parameters' using",
+        f"m_x/m_y: n_u/n_v = m_y/m_x = 8 in our axes gives ({ws.value[0]:.1f}, {ws.value[1]:.2f}).",
+        f"The seed's own split 187/10 = {r_seed:.1f} is",
+        "neither m_y/m_x = 8 nor (m_y/m_x)² = 64 (it is (m_y/m_x)^"
+        f"{np.log(r_seed) / np.log(8.0):.2f}), so the seed's sum follows from its stated",
+        "criterion and its split does not. The text introduces the ratio after both figures, as",
+        "the remedy for the non-uniqueness, so Fig. 3.8's pair need not be the criterion's.",
         "",
         "![distributions](equivalences.png)",
         "",
     ]
-    (HERE / "equivalences.md").write_text("\n".join(lines))
+    with atomic_path(HERE / "equivalences.md") as tmp:
+        tmp.write_text("\n".join(lines))
     import matplotlib.pyplot as plt
 
     gam = E._GAMMA
     deg = np.degrees(gam)
-    fig, axs = plt.subplots(1, 3, figsize=(11, 3.3))
+    fig, axs = plt.subplots(1, 4, figsize=(14.5, 3.3))
     axs[0].plot(deg, E.beckmann_shape(gam, 0.32), label="Beckmann m = 0.32")
     axs[0].plot(deg, E.phong_shape(gam, b32p.value), "--", label=f"Phong n = {b32p.value:.2f}")
     axs[0].plot(deg, E.blinn_shape(gam, b32b.value), ":", label=f"Blinn n_B = {b32b.value:.1f}")
@@ -210,9 +251,16 @@ def equivalences():
     axs[2].plot(deg, E.beckmann_shape(gam, n4.value), label=f"Beckmann m = {n4.value:.3f}")
     axs[2].plot(deg, E.beckmann_shape(gam, 0.54), lw=0.8, label="Beckmann m = 0.54 (seed)")
     axs[2].set_title("Fig. 3.7")
+    ph = E.SEED_SECTION_PHI
+    axs[3].plot(deg, E.ward_shape(gam, ph, 0.1, 0.8), label="Ward (0.1, 0.8), φ = π/4")
+    axs[3].plot(deg, E.ashikhmin_shape(gam, ph, 10, 187), "--", label="AS (10, 187) (Fig. 3.8)")
+    axs[3].plot(deg, E.ashikhmin_shape(gam, ph, 100, 100), ":", label="AS (100, 100) (Fig. 3.9)")
+    axs[3].plot(deg, E.ashikhmin_shape(gam, ph, *ws.value), "-.", lw=0.8,
+                label=f"AS ({ws.value[0]:.1f}, {ws.value[1]:.1f}) (criterion)")  # fmt: skip
+    axs[3].set_title("Figs. 3.8–3.9 (section φ = π/4)")
     for ax in axs:
         ax.set_xlabel("γ (half angle) [deg]")
-        ax.set_xlim(0, 70)
+        ax.set_xlim(0, 70 if ax is not axs[3] else 25)
         ax.legend(fontsize=7)
     axs[0].set_ylabel("distribution at level 1 for γ = 0")
     save_figure(fig, HERE / "equivalences.png")

@@ -40,9 +40,15 @@ slope variance (``α² = 2s``); ``pdf`` is that density exactly, times the lobe 
 Spectral variants: the BTDF is kept per table wavelength (one texture channel each) and
 interpolated linearly to the sampled wavelengths, flat beyond the table's range — the
 ``"emscatter"`` plugin's spectral rule (:mod:`.mitsuba`), which the two reflection lobes use.
-The refraction frame and the ``1/ε`` radiance factor take the mean ``ε`` of the table's
-wavelengths (as in RGB): a dispersive glass is exact at its mean index only; the lobe
-probabilities weigh the wavelengths by their luminance.
+The ``1/ε`` radiance factor is taken per sampled wavelength (``1/ε`` of the table's
+wavelengths by the same hat functions), so a dispersive glass is exact at every table
+wavelength (N-BK7 over 400–700 nm: 1.3 % error at 400 nm with the mean ``ε``, the table's
+interpolation error with this rule; ``tests/test_render_dielectric_dispersive.py``). The
+sampling's refraction frame (Walter's normals refracted at ``η``) takes the mean ``ε``: its
+``pdf`` is that density exactly, so this costs variance, not bias. RGB and mono variants use
+the mean ``ε`` throughout (one index per path); ``*_spectral_polarized`` takes ``1/ε`` per
+wavelength as here (:mod:`.dielectric_polarized`). The lobe probabilities weigh the
+wavelengths by their luminance.
 """
 
 from __future__ import annotations
@@ -184,6 +190,7 @@ def _bsdf_class(mi):
             self._tex = tex(mi.Texture3f, np.transpose(vals, (0, 1, 2, 3)))
             self._ax = [Axis.of(a) for a in bt.grid_axes]
             self._eps = float(np.mean(bt.eps))
+            self._inv_eps_k = [float(x) for x in 1.0 / np.asarray(bt.eps, dtype=float)]
             self._eta = math.sqrt(self._eps)
             sx, sy = bt.metadata["slope_variance"]
             self._alpha = math.sqrt(sx + sy)  # Beckmann α² = 2s (isotropic: s = (sx + sy)/2)
@@ -223,6 +230,13 @@ def _bsdf_class(mi):
                 acc += dr.clip(w, 0.0, 1.0) * chans[k]
             return acc
 
+        def _inv_eps(self, si, kind=None):
+            """``1/ε`` at the sampled wavelengths (spectral: hat functions over the table's
+            wavelengths, as ``_spec``); the mean ``ε``'s otherwise."""
+            if channels != "spectral":
+                return 1.0 / self._eps
+            return self._spec(self._inv_eps_k, si, kind)
+
         def _ft(self, a, b, active, si):
             """Table BTDF f_t(a → b), ``a`` above, ``b`` below (no cosine)."""
             ti, tt = theta(a.z), theta(b.z)
@@ -253,9 +267,8 @@ def _bsdf_class(mi):
             b = dr.select(out, wo, v)
             val = self._ft(a, b, active, si) * dr.abs(wo.z)
             radiance = ctx.mode == mi.TransportMode.Radiance
-            scale = dr.select(
-                out, 1.0 / self._eps if radiance else 1.0, 1.0 if radiance else 1.0 / self._eps
-            )
+            inv = self._inv_eps(si)
+            scale = dr.select(out, inv if radiance else 1.0, 1.0 if radiance else inv)
             return val * scale
 
         def eval(self, ctx, si, wo, active=True):

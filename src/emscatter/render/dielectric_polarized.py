@@ -172,8 +172,11 @@ def polarized_dielectric_class(mi, base, coord, theta, sets):
             m = dr.select(from_out, m_fwd, m_r)
             out = si.wi.z > 0
             rad = ctx.mode == radiance
-            scale = dr.select(out, 1.0 / self._eps if rad else 1.0, 1.0 if rad else 1.0 / self._eps)
-            return m * (dr.abs(wo.z) * scale)
+            inv = self._inv_eps(si, mi.UnpolarizedSpectrum)  # per sampled λ when spectral
+            scale = dr.select(out, inv if rad else 1.0, 1.0 if rad else inv)
+            if isinstance(inv, float):
+                return m * (dr.abs(wo.z) * scale)
+            return m * mi.Spectrum(dr.abs(wo.z) * scale)  # M · diag(s(λ)): each entry × s(λ)
 
         def _inner_mueller(self, m, ctx, si, wo):
             """The inner plugin's matrix (mirrored directions) in Mitsuba's true bases."""

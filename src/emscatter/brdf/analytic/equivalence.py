@@ -21,10 +21,19 @@ the seed's values: ``m = 0.32 → n = 3.9 ≈ 4``, ``n_B = 17.0``; ``n = 1 → m
 flat there) — see ``validation/brdf/equivalences.md``.
 
 Ward ↔ Ashikhmin is not unique (the seed's Figs. 3.8–3.9 show two fits); the seed fixes the
-ratio of the exponents "with a criterion using ``m_x/m_y``". Here ``n_u/n_v = (m_y/m_x)²``,
-the ratio of the exponents that match the two lobes' curvatures at ``γ = 0`` (``n ≈ 2/m²``), or
-a free two-parameter fit with ``ratio=None``. ``n_u`` is the exponent along the tangent ``x``
-(``φ = 0``), paired with ``m_x``.
+ratio of the exponents "with a criterion using ``m_x/m_y``". ``ratio="seed"`` is that criterion
+as the seed states and draws it: its Figs. 3.3–3.9 are curves of ``γ`` alone, and the one
+section of the anisotropic pair on which both printed pairs (10, 187) and (100, 100) fit
+equally well — the non-uniqueness the seed reports — is the diagonal ``φ = π/4``, where the
+Ashikhmin exponent is ``(n_u + n_v)/2`` and Ward is a Beckmann lobe of
+``1/m² = (1/m_x² + 1/m_y²)/2`` (:func:`ward_section_exponent`; (0.1, 0.8): ``n_u + n_v =
+197.7``, the seed's pairs sum to 197 and 200). The section fixes the sum only; the seed's
+ratio then splits it, ``n_u/n_v = m_x/m_y`` in the seed's axes (its Fig. 3.8 pairs ``n_u``
+with ``m_y``), i.e. ``n_u/n_v = m_y/m_x`` here. ``ratio="slope"`` (default) fixes
+``n_u/n_v = (m_y/m_x)²``, the ratio of the exponents that match the two lobes' curvatures at
+``γ = 0`` (``n ≈ 2/m²``), fitted on the full ``(γ, φ)`` grid; ``ratio=None`` a free
+two-parameter fit on that grid. ``n_u`` is the exponent along the tangent ``x`` (``φ = 0``),
+paired with ``m_x``.
 """
 
 from __future__ import annotations
@@ -51,6 +60,10 @@ __all__ = [
     "blinn_from_beckmann",
     "beckmann_from_blinn",
     "ashikhmin_from_ward",
+    "ward_section_exponent",
+    "ward_ashikhmin_grid_error",
+    "SEED_CRITERION",
+    "SEED_SECTION_PHI",
     "fit_error",
 ]
 
@@ -59,6 +72,15 @@ FIT_CRITERION = (
     "1/(4 m^2) level correction), on a uniform grid of the half angle gamma in [0, pi/2) "
     "(x phi in [0, 2 pi) for Ward-Ashikhmin); error = rms difference on that grid"
 )
+
+SEED_CRITERION = (
+    "the seed's section 3.2.2 for Ward-Ashikhmin: least squares on the section phi = pi/4 "
+    "(both at level 1 for gamma = 0, uniform gamma grid in [0, pi/2)), which fixes "
+    "n_u + n_v; split n_u/n_v = m_y/m_x (n_u along x); error = rms on that section"
+)
+
+SEED_SECTION_PHI = 0.25 * math.pi
+"""Azimuth [rad] of the section on which the seed compares Ward and Ashikhmin (Figs. 3.8–3.9)."""
 
 _GAMMA = np.linspace(0.0, 0.5 * math.pi, 2001)[:-1]
 _PHI = np.linspace(0.0, 2 * math.pi, 181)[:-1]
@@ -162,18 +184,40 @@ def beckmann_from_blinn(n: float) -> Equivalence:
     return _equivalent(lambda g: blinn_shape(g, n), beckmann_shape, 1e-3, 10.0)
 
 
+def ward_section_exponent(mx: float, my: float, phi: float = SEED_SECTION_PHI) -> Equivalence:
+    """The single Ashikhmin/Blinn exponent ``N = n_u cos²φ + n_v sin²φ`` that best fits the
+    section ``φ`` [rad] of Ward ``(m_x, m_y)`` (Table 3.1 × 4m², level 1 at ``γ = 0``), by the
+    module's criterion on the ``γ`` grid. Every pair on the line ``n_u cos²φ + n_v sin²φ = N``
+    fits that section equally well (the seed's §3.2.2 non-uniqueness)."""
+    mx = check_positive("mx", mx)
+    my = check_positive("my", my)
+    phi = float(phi)
+    if not math.isfinite(phi):
+        raise ValueError(f"phi must be a finite angle in radians, got {phi!r}")
+    return _equivalent(lambda g: ward_shape(g, phi, mx, my), blinn_shape, 1e-3, 1e6)
+
+
 def ashikhmin_from_ward(mx: float, my: float, *, ratio: str | float | None = "slope"):
     """Ashikhmin–Shirley ``(n_u, n_v)`` equivalent to Ward ``(m_x, m_y)``.
 
-    ``ratio="slope"`` fixes ``n_u/n_v = (m_y/m_x)²`` (module docstring); ``ratio="seed"`` the
-    seed's criterion as it states it, the exponents in the ratio of the slopes ("notre critère
-    utilise le rapport m_x/m_y", §3.2.2): ``n_u/n_v = m_x/m_y`` in the seed's axes, whose
-    Fig. 3.8 pairs ``n_u`` with ``m_y`` — so ``n_u/n_v = m_y/m_x`` here (``n_u`` along ``x``,
-    with ``m_x``); a number fixes ``n_u/n_v`` to it, ``None`` fits both freely. Seed example:
-    ``(0.1, 0.8)``.
+    ``ratio="seed"``: the seed's §3.2.2 criterion as it states it (module docstring) — fit on
+    the section ``φ = π/4`` (:func:`ward_section_exponent`, which fixes ``n_u + n_v = 2N``),
+    the exponents split in the ratio of the slopes, ``n_u/n_v = m_y/m_x`` in our axes (the
+    seed's ``m_x/m_y`` with its ``n_u`` along ``y``); ``error`` is the rms on that section.
+    Seed example ``(0.1, 0.8)`` → ``(175.7, 22.0)``; the seed prints (10, 187), same sum,
+    other split. ``ratio="slope"`` fixes ``n_u/n_v = (m_y/m_x)²`` and a number fixes
+    ``n_u/n_v`` to it, both fitted on the ``(γ, φ)`` grid; ``None`` fits both freely there.
     """
     mx = check_positive("mx", mx)
     my = check_positive("my", my)
+    if isinstance(ratio, str) and ratio not in ("slope", "seed"):
+        raise ValueError(f"ratio must be 'slope', 'seed', a number > 0 or None, got {ratio!r}")
+    if ratio == "seed":
+        sec = ward_section_exponent(mx, my)
+        r = my / mx
+        c2, s2 = math.cos(SEED_SECTION_PHI) ** 2, math.sin(SEED_SECTION_PHI) ** 2
+        nv = sec.value / (r * c2 + s2)
+        return Equivalence((r * nv, nv), sec.error, SEED_CRITERION)
     g, p = np.meshgrid(_GAMMA[::4], _PHI, indexing="ij")
     ref = ward_shape(g, p, mx, my)
 
@@ -190,13 +234,13 @@ def ashikhmin_from_ward(mx: float, my: float, *, ratio: str | float | None = "sl
         )
         nu, nv = (float(v) for v in np.exp(res.x))
         return Equivalence((nu, nv), err(nu, nv))
-    if isinstance(ratio, str) and ratio not in ("slope", "seed"):
-        raise ValueError(f"ratio must be 'slope', 'seed', a number > 0 or None, got {ratio!r}")
-    if ratio == "slope":
-        r = (my / mx) ** 2
-    elif ratio == "seed":
-        r = my / mx
-    else:
-        r = check_positive("ratio", ratio)
+    r = (my / mx) ** 2 if ratio == "slope" else check_positive("ratio", ratio)
     nv = _fit_scalar(lambda nv: err(r * nv, nv), 1e-4, 1e5)
     return Equivalence((r * nv, nv), err(r * nv, nv))
+
+
+def ward_ashikhmin_grid_error(mx: float, my: float, nu: float, nv: float) -> float:
+    """rms difference of Ward ``(m_x, m_y)`` and Ashikhmin ``(n_u, n_v)`` (level 1 at ``γ = 0``)
+    on the full ``(γ, φ)`` grid of the module's criterion (peak = 1)."""
+    g, p = np.meshgrid(_GAMMA[::4], _PHI, indexing="ij")
+    return fit_error(ward_shape(g, p, mx, my), ashikhmin_shape(g, p, nu, nv))

@@ -214,6 +214,42 @@ def htsg(
     rtol = check_in_range("rtol", rtol, 0.0, 1.0)
     if isinstance(max_terms, bool) or not isinstance(max_terms, int) or max_terms < 1:
         raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
+    return _directional_diffuse(
+        wi,
+        wo,
+        lam,
+        s0,
+        t,
+        t,
+        eps,
+        shadowing=shadowing,
+        effective_roughness=effective_roughness,
+        rtol=rtol,
+        max_terms=max_terms,
+        a_ud=a_ud,
+    )
+
+
+def _directional_diffuse(
+    wi,
+    wo,
+    lam: float,
+    s0: float,
+    tau_x: float,
+    tau_y: float,
+    eps,
+    *,
+    shadowing: bool,
+    effective_roughness: bool,
+    rtol: float,
+    max_terms: int,
+    a_ud: float = 0.0,
+) -> np.ndarray:
+    """The Kirchhoff series BRDF shared by :func:`htsg` and :func:`~.stam.stam` [1/sr] (module
+    docstring), inputs already checked: ``|F(wi·h)|² G S D/(π cosθi cosθo) + a_ud/π`` with
+    ``D = k²τ_xτ_y/16 Σ_m g^m e^{−g}/(m! m) exp(−k²(τ_x²v̂_x² + τ_y²v̂_y²)/(4m))`` — HTSG's
+    ``D`` for ``τ_x = τ_y = τ``, Stam's anisotropic noise otherwise (``S`` and the effective
+    roughness are HTSG's isotropic ones, used with ``τ_x``)."""
     wi, wo, up = _upper(wi, wo)
     shape = up.shape
     wi, wo, upf = wi.reshape(-1, 3), wo.reshape(-1, 3), up.reshape(-1)
@@ -222,20 +258,19 @@ def htsg(
     v = wi + wo  # v̂ = k̂_r − k̂_i
     vz = v[:, 2]
     vv = np.sum(v * v, axis=-1)
-    vxy2 = v[:, 0] ** 2 + v[:, 1] ** 2
     cos_l = np.clip(0.5 * np.sqrt(vv), 0.0, 1.0)  # wi·h
     if effective_roughness:
-        sig = htsg_effective_roughness(ci, co, s0, t)
+        sig = htsg_effective_roughness(ci, co, s0, tau_x)
     else:
         sig = np.full(ci.shape, s0)
     g = np.where(upf, (k * sig * vz) ** 2, 0.0)
-    a = 0.25 * vxy2 * (k * t) ** 2
+    a = 0.25 * k * k * ((tau_x * v[:, 0]) ** 2 + (tau_y * v[:, 1]) ** 2)
     series = _series(g, a, rtol, max_terms)
-    d = (k * t) ** 2 / 16.0 * series
+    d = k * k * tau_x * tau_y / 16.0 * series
     geo = np.where(upf, vv * vv / np.where(upf, vz * vz, 1.0), 0.0)
     f = fresnel_unpolarized(eps, cos_l)
     if shadowing:
-        f = f * htsg_shadowing(ci, s0, t) * htsg_shadowing(co, s0, t)
+        f = f * htsg_shadowing(ci, s0, tau_x) * htsg_shadowing(co, s0, tau_x)
     den = math.pi * np.where(upf, ci * co, 1.0)
     out = np.where(upf, f * geo * d / den + a_ud / math.pi, 0.0)
     return out.reshape(shape)

@@ -42,8 +42,8 @@ import math
 
 import numpy as np
 
-from emscatter.brdf.analytic import _upper, fresnel_unpolarized
-from emscatter.brdf.analytic.htsg import _check_surface, _eps, _series
+from emscatter.brdf.analytic import fresnel_unpolarized
+from emscatter.brdf.analytic.htsg import _check_surface, _directional_diffuse, _eps
 from emscatter.conventions import check_in_range, check_positive
 
 __all__ = ["stam", "stam_specular", "stam_equivalent_beckmann"]
@@ -71,20 +71,21 @@ def stam(
     rtol = check_in_range("rtol", rtol, 0.0, 1.0)
     if isinstance(max_terms, bool) or not isinstance(max_terms, int) or max_terms < 1:
         raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
-    wi, wo, up = _upper(wi, wo)
-    shape = up.shape
-    wi, wo, upf = wi.reshape(-1, 3), wo.reshape(-1, 3), up.reshape(-1)
-    k = 2.0 * math.pi / lam
-    ci, co = wi[:, 2], wo[:, 2]
-    u, v, w = (wi + wo).T
-    g = np.where(upf, (k * s * w) ** 2, 0.0)
-    a = 0.25 * k * k * ((tx * u) ** 2 + (ty * v) ** 2)
-    p2 = math.pi * tx * ty * _series(g, a, rtol, max_terms)  # ⟨|P|²⟩/A, incoherent
-    geo = (1.0 + np.sum(wi * wo, axis=-1)) ** 2 / np.where(upf, ci * co, 1.0)
-    cos_l = np.clip(0.5 * np.sqrt(u * u + v * v + w * w), 0.0, 1.0)
-    f2 = fresnel_unpolarized(eps, cos_l)
-    out = k * k * f2 * geo * p2 / (4.0 * math.pi**2 * np.where(upf, w * w, 1.0))
-    return np.where(upf, out, 0.0).reshape(shape)
+    # Stam's k²F²G⟨|P|²⟩/(4π²A w²) is HTSG's |F|² G D/(π cosθi cosθo) term by term (module
+    # docstring): HTSG's series without its shadowing and effective roughness
+    return _directional_diffuse(
+        wi,
+        wo,
+        lam,
+        s,
+        tx,
+        ty,
+        eps,
+        shadowing=False,
+        effective_roughness=False,
+        rtol=rtol,
+        max_terms=max_terms,
+    )
 
 
 def stam_specular(theta_i, wavelength: float, sigma: float, n=1.5) -> np.ndarray:
