@@ -47,7 +47,6 @@ from .transmittance import check_transmission, finish_energy
 
 __all__ = ["build_table", "default_theta", "default_phi_d", "default_phi", "material_eps"]
 
-_record_albedo = record_albedo  # the old private name (brdf.analytic.htsg imports it)
 
 
 def default_theta(n: int) -> np.ndarray:

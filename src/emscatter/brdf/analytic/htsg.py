@@ -355,7 +355,7 @@ def htsg_table(
     from dataclasses import replace
 
     from emscatter.brdf.analytic import table_from_function
-    from emscatter.brdf.build import _record_albedo
+    from emscatter.brdf.energy import record_albedo
 
     spec_opts = {k: options[k] for k in ("shadowing", "effective_roughness") if k in options}
     table = table_from_function(
@@ -377,4 +377,4 @@ def htsg_table(
     meta = dict(table.metadata)
     meta["coherent"] = "HTSG specular |F|^2 exp(-g) S^2"
     table = replace(table, coherent=coh, metadata=meta)
-    return _record_albedo(table, "off (analytic model)")
+    return record_albedo(table, "off (analytic model)")
