@@ -328,7 +328,8 @@ def bistatic(
     crosspol_order : Gauss–Legendre nodes per graded segment of its 2-D integral (8: ≲ 1e-2
         relative, 12: ≲ 1e-3).
     threads : worker threads of the compiled exact-backscatter kernel (default: the CPU count,
-        at most 8; used from 512 backscatter angles on; results do not depend on it).
+        at most 8; used from 2 × ``compiled.BACK_MIN_CHUNK`` = 4096 backscatter angles on;
+        results do not depend on it).
 
     Returns
     -------
