@@ -469,7 +469,7 @@ def _options(rtol, max_terms, fresnel, complementary, first_order, reciprocal, s
     args = (rtol, max_terms, fresnel, complementary, first_order, reciprocal, shadowing,
             crosspol, crosspol_order, coherent, threads)  # fmt: skip
     try:
-        key = tuple((type(a), a) for a in args)
+        key = (*args, *map(type, args))
         hit = _OPTION_MEMO.get(key)
     except TypeError:  # an unhashable value (e.g. an array): check it every time
         key = hit = None
