@@ -184,3 +184,26 @@ def test_option_memory_refuses_what_the_checks_refuse():
     assert np.array_equal(arr.sigma0, plain.sigma0)  # an unhashable option: checked each call
     with pytest.raises(TypeError):
         iem.bistatic.checked(rough, 15 + 2j, K, th, th, ps, pi_, colour=1, **kw)
+
+
+def test_auto_backscatter_keeps_the_cross_pol_memory():
+    """``method="auto"`` on an IEM regime: the entry's signature still says it takes
+    ``crosspol``, so the API runs the co-pol path (``crosspol=False``, the fast one) and adds
+    the multiple-scattering hv from :mod:`emscatter.solvers.auto_crosspol`, as before."""
+    from emscatter import api
+    from emscatter.solvers import auto_crosspol
+
+    rough = ExponentialCorrelation(0.5 / K, 3.3 / K)
+    theta = np.radians([20.0, 40.0])
+    res = em.backscatter(rough, 15 + 2j, frequency=FREQ, theta_i=theta, out_of_range="ignore")
+    assert res.method == "iem"
+    assert res.info["crosspol"] == "multiple scattering (backscatter; solvers.auto_crosspol)"
+    entry = api._solver_entry(em.solvers.get("iem"))
+    assert api._takes(entry, "crosspol") and api._takes(entry, "monostatic")
+    ps, pi_ = np.asarray(math.pi), np.asarray(0.0)
+    co = iem.bistatic(rough, 15 + 2j, K, theta, theta, ps, pi_, coherent=False, crosspol=False)
+    hv, _ = auto_crosspol.supplement(auto_crosspol.IEM_BACKSCATTER, rough, 15 + 2j, K, theta,
+                                     theta, ps, pi_)  # fmt: skip
+    assert np.array_equal(res.sigma0[0, 0], co.sigma0[0, 0])
+    assert np.array_equal(res.sigma0[1, 1], co.sigma0[1, 1])
+    assert np.array_equal(res.sigma0[0, 1], co.sigma0[0, 1] + hv) and np.all(hv > 0)

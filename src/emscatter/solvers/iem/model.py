@@ -519,11 +519,20 @@ def _check_options(rtol, max_terms, fresnel, complementary, first_order, recipro
 
 
 bistatic.checked = _api_checked  # the API's entry for inputs it has checked
+_SIGNATURE = inspect.signature(bistatic)
 _DEFAULTS = {
     p.name: p.default
-    for p in inspect.signature(bistatic).parameters.values()
+    for p in _SIGNATURE.parameters.values()
     if p.kind is inspect.Parameter.KEYWORD_ONLY
 }
+# the entry's signature is bistatic's plus ``monostatic`` (the API reads which options a
+# solver entry takes from it: ``crosspol``, ``coherent``, ``monostatic``)
+_api_checked.__signature__ = _SIGNATURE.replace(
+    parameters=[
+        *_SIGNATURE.parameters.values(),
+        inspect.Parameter("monostatic", inspect.Parameter.KEYWORD_ONLY, default=False),
+    ]
+)
 
 
 def _all_backscatter(loc) -> bool:
