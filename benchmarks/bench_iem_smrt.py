@@ -32,9 +32,14 @@ fit in ``--round-seconds`` (at least 3) back to back, the contenders' order rota
 to round; a contender's round time is the median of its calls. The ratio SMRT / emscatter is
 taken per round (the two timings seconds apart, the same machine state: this shared 2-core
 machine's speed drifts ×1.5–2 within minutes) and reported as the median over rounds with its
-range. numba's threads: the default (the backscatter kernel splits from 512 angles on) and,
-at 1000 angles, ``threads=1`` beside it (SMRT is single-threaded numpy; BLAS threads are set
-to 1). Agreement: the 1992 configuration against converged SMRT, max relative difference.
+range. numba's threads: the default (the backscatter kernel splits over threads from
+2 × ``BACK_MIN_CHUNK`` = 4096 angles on, so every size here runs on one thread) and, at a
+size that splits, ``threads=1`` beside it (SMRT is single-threaded numpy; BLAS threads are set
+to 1). The API's backscatter goes through the IEM's monostatic fast path
+(``iem.bistatic.checked(..., monostatic=True)``); the "solver only" contender is the general
+``bistatic`` (geometry, backscatter chunk), so the paired difference
+``api_overhead_us_median_min_max`` is the API's cost minus what the fast path saves (it can
+be negative). Agreement: the 1992 configuration against converged SMRT, max relative difference.
 """
 
 from __future__ import annotations
@@ -114,6 +119,7 @@ def main(argv=None) -> dict:
     from smrt.interface.iem_fung92 import IEM_Fung92
 
     import emscatter as em
+    from emscatter.solvers.iem import compiled as iem_jit
 
     k = 2 * math.pi * FREQ / C
     rows = []
@@ -154,7 +160,7 @@ def main(argv=None) -> dict:
                 "smrt_converged": smrt(smrt_conv),
                 "smrt_10_terms": smrt(smrt_10),
             }
-            if n >= 512:
+            if n >= 2 * getattr(iem_jit, "BACK_MIN_CHUNK", 256):
                 fns["emscatter_fung92_one_thread"] = ems(threads=1, **FUNG92)
                 fns["emscatter_default_one_thread"] = ems(threads=1)
             for f in fns.values():  # warm: compile, first-call costs

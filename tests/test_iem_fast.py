@@ -118,15 +118,17 @@ def test_backscatter_equals_numpy_reference(rough, monkeypatch):
 def test_lanes_and_threads_leave_every_geometry_alone(rough, eps):
     """The kernel walks blocks of LANES geometries in lockstep and splits large calls over
     threads: each geometry's σ⁰ is bit for bit what a call with that geometry alone gives
-    (1037 angles: blocks and thread chunks of odd sizes; the last case mixes fast and
-    log-space lanes within blocks)."""
-    th = np.radians(np.linspace(0.0, 80.0, 1037))
+    (2 × BACK_MIN_CHUNK + 37 angles: blocks and thread chunks of odd sizes; the last case
+    mixes fast and log-space lanes within blocks)."""
+    from emscatter.solvers.iem.compiled import BACK_MIN_CHUNK
+
+    th = np.radians(np.linspace(0.0, 80.0, 2 * BACK_MIN_CHUNK + 37))
     one = iem.bistatic(rough, eps, 1.0, th, th, math.pi, coherent=False, crosspol=False,
                        threads=1).sigma0  # fmt: skip
     two = iem.bistatic(rough, eps, 1.0, th, th, math.pi, coherent=False, crosspol=False,
                        threads=2).sigma0  # fmt: skip
     assert np.array_equal(one, two)
-    for t in th[::97]:
+    for t in th[::397]:
         alone = iem.bistatic(rough, eps, 1.0, t, t, math.pi, coherent=False, crosspol=False)
         i = int(np.flatnonzero(th == t)[0])
         assert np.array_equal(alone.sigma0[..., 0] if alone.sigma0.ndim == 3 else alone.sigma0,

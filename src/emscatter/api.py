@@ -306,7 +306,8 @@ def _bistatic_checked(
     one_k = type(k) is float  # (frequency_groups' None, without building its arguments)
     spec = None if one_k else frequency_groups(k, eps, theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
     if spec is None:  # one frequency: the solver sees the caller's shapes
-        check_broadcast(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
+        if not (monostatic and np.ndim(pi_) == 0):  # (θs is θi and one φi: nothing to check)
+            check_broadcast(theta_i=ti, theta_s=ts, phi_s=ps, phi_i=pi_)
         e = eps_at(eps, k)
         return _bistatic_one(rough, e, k, angles, method, out_of_range, options, monostatic)
     shape, k_b, groups = spec

@@ -26,8 +26,80 @@ from emscatter.solvers.iem.validity import (  # noqa: F401 (re-exported: the sol
     check_validity,
     nominal_rms_slope,
 )
+from emscatter.solvers.kirchhoff.common import Local
+from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 
 __all__: list[str] = []
+
+_SPEC_CODES = {  # iem_jit.spectrum_code by exact type (a subclass takes the general path)
+    ExponentialCorrelation: iem_jit.EXPONENTIAL,
+    GaussianCorrelation: iem_jit.GAUSSIAN,
+}
+
+
+def monostatic(rough, eps, k, ti, ps, pi_, opt, slope, shadow_mode):
+    """Exact backscatter for the public API's checked inputs — ``ti`` a float array of θi
+    [rad] in [0, π/2] (θs = θi), ``ps, pi_`` the azimuths φs = φi + π and φi [rad] (0-d),
+    ``eps`` "pec" or one complex permittivity (0-d) — without the general geometry:
+    ``(σ⁰ (2, 2, n) flat, 0, log precision)``, the values of :func:`_backscatter` on
+    :meth:`~emscatter.solvers.kirchhoff.common.Geometry.backscatter_chunk` bit for bit (the
+    same formulas on the same numbers: ``sinθ, cosθ`` by ``_trig``,
+    ``Δφ = φs − φi``, the lateral ``q`` of ``_lateral_q``), compiled end to end. ``None``
+    where this path does not cover the call (numpy kernels, a power-law or measured
+    spectrum, an array ε or φi, anisotropic shadowing slopes): the caller takes the general
+    one."""
+    pec = isinstance(eps, str)
+    if np.ndim(pi_) or np.ndim(ps) or not (pec or np.ndim(eps) == 0):
+        return None
+    spec = _SPEC_CODES.get(type(rough)) if iem_jit.enabled() else None
+    if spec is None or (shadow_mode is not None and slope[0] != slope[1]):
+        return None
+    ti_f = ti.reshape(-1)
+    n = ti_f.size
+    si = np.sin(ti_f)
+    ci = np.sqrt((1.0 - si) * (1.0 + si))  # kirchhoff.common._trig
+    zero = float(pi_) == 0.0
+    dphi = ps if (zero and math.copysign(1.0, float(pi_)) > 0) else ps - pi_
+    cd, sd = np.cos(dphi), np.sin(dphi)
+    qxp = si * cd - si  # Geometry._lateral_q with θs = θi
+    qyp = si * sd
+    if zero or rough.dimension == 1:
+        qx, qy = qxp, qyp
+    else:
+        cpi, spi = np.cos(pi_), np.sin(pi_)
+        qx, qy = qxp * cpi - qyp * spi, qxp * spi + qyp * cpi
+    if opt.threads > 1 and n >= 2 * iem_jit.BACK_MIN_CHUNK:  # threads: the general wrapper
+        loc = Local()
+        loc.n, loc.si, loc.ci, loc.ss, loc.cs = n, si, ci, si, ci
+        loc.cd, loc.sd, loc.qx, loc.qy, loc.eps, loc.phi_i, loc.phi_s = cd, sd, qx, qy, eps, pi_, ps
+        return _compiled(rough, eps, k, loc, opt, slope, shadow_mode, spec)
+    kl = k * rough.length  # amplitudes._spectral_args
+    if rough.dimension == 2:
+        kly = k * rough.length_y
+        K = np.sqrt((qx * kl) ** 2 + (qy * kly) ** 2)
+        pref = np.full(n, math.log(math.pi * kl * kly))
+    else:
+        K = np.abs(qx) * kl
+        pref = np.full(n, math.log(0.5 * math.pi * k * rough.length))
+    code, s_slope, psi = 0, 0.0, iem_jit.NO_PSI  # shadowing._back_shadow_args, θs = θi
+    if shadow_mode == "height-correlated":
+        code, s_slope = 2, float(slope[0])
+    elif shadow_mode is not None:
+        psi = np.abs(np.mod(ps - pi_ - math.pi + math.pi, 2 * math.pi) - math.pi)
+        code, s_slope, psi = 1, float(slope[0]), np.full(n, float(psi))
+    sig = np.zeros((2, 2, n))
+    out_e = np.ones(n)
+    ks = k * rough.sigma
+    st = iem_jit.back_kernel()(
+        si, ci, complex(1.0 if pec else eps), pec, ks, K, pref, spec, rough.dimension,
+        opt.fresnel == "transition", math.log(opt.rtol), opt.max_terms, True, code, s_slope,
+        psi, sig[0, 0], sig[1, 1], out_e, np.empty(n, dtype=np.bool_),
+        opt.complementary == "aiem", opt.complementary == "aiem-faded",
+        opt.complementary == "fung92",
+    )  # fmt: skip
+    if st:
+        raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
+    return sig, 0.0, float(np.max(np.log(out_e))) if n else -np.inf
 
 
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
@@ -44,23 +116,7 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     pec = is_pec(eps)
     spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
     if spec is not None and (pec or np.ndim(eps) == 0):  # compiled, end to end
-        K, pref = _spectral_args(rough, k, loc, n)
-        shadow = _back_shadow_args(shadow_mode, loc, slope)
-        if shadow[0] < 0:
-            pref = pref + np.log(iem_jit.flat_n(_shadowing(shadow_mode, loc, slope), n))  # > 0
-            shadow = (0, 0.0, shadow[2])
-        s_hh, s_vv, lp, status = iem_jit.backscatter(
-            iem_jit.flat_n(loc.si, n), iem_jit.flat_n(loc.ci, n), eps, ks, K, pref, spec,
-            rough.dimension,
-            transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
-            shadow=shadow, threads=opt.threads, lower_q2=opt.complementary == "aiem",
-            fade=opt.complementary == "aiem-faded", fung92=f92,
-        )  # fmt: skip
-        if status:
-            raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
-        sig = np.zeros((2, 2, n))
-        sig[0, 0], sig[1, 1] = s_hh, s_vv
-        return sig, 0.0, float(np.max(lp)) if n else -np.inf
+        return _compiled(rough, eps, k, loc, opt, slope, shadow_mode, spec)
     K, pref = _spectral_args(rough, k, loc, n)
     shadow = _shadowing(shadow_mode, loc, slope)
     with np.errstate(divide="ignore"):
@@ -146,6 +202,30 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     sig = np.zeros((2, 2, n))
     sig[0, 0], sig[1, 1] = s
     return sig, 0.0, float(np.max(log_prec)) if n else -np.inf
+
+
+def _compiled(rough, eps, k, loc, opt, slope, shadow_mode, spec):
+    """:func:`_backscatter`'s compiled branch (one ε, a covered spectrum ``spec``):
+    ``(σ⁰ (2, 2, n), 0, log precision)``."""
+    n = loc.n
+    ks = k * rough.sigma
+    K, pref = _spectral_args(rough, k, loc, n)
+    shadow = _back_shadow_args(shadow_mode, loc, slope)
+    if shadow[0] < 0:
+        pref = pref + np.log(iem_jit.flat_n(_shadowing(shadow_mode, loc, slope), n))  # > 0
+        shadow = (0, 0.0, shadow[2])
+    s_hh, s_vv, lp, status = iem_jit.backscatter(
+        iem_jit.flat_n(loc.si, n), iem_jit.flat_n(loc.ci, n), eps, ks, K, pref, spec,
+        rough.dimension,
+        transition=opt.fresnel == "transition", rtol=opt.rtol, max_terms=opt.max_terms,
+        shadow=shadow, threads=opt.threads, lower_q2=opt.complementary == "aiem",
+        fade=opt.complementary == "aiem-faded", fung92=opt.complementary == "fung92",
+    )  # fmt: skip
+    if status:
+        raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
+    sig = np.zeros((2, 2, n))
+    sig[0, 0], sig[1, 1] = s_hh, s_vv
+    return sig, 0.0, float(np.max(lp)) if n else -np.inf
 
 
 def _table_sum(table, log_c2):

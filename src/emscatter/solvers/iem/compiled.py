@@ -123,9 +123,21 @@ def flat_n(v, n: int) -> np.ndarray:
     return np.full(n, float(a)) if a.ndim == 0 else np.ascontiguousarray(np.broadcast_to(a, (n,)))
 
 
-#: Fewest geometries per thread of the exact-backscatter kernel (~0.3–0.6 µs each: below
-#: this a second thread costs more than it saves).
-BACK_MIN_CHUNK = 256
+NO_PSI = np.zeros(1)  # the kernel's ψ argument when the shadowing is not direction-correlated
+
+
+def back_kernel():
+    """The compiled exact-backscatter kernel itself (``kernels.lanes.back_kernel``; its
+    arguments are those :func:`backscatter` passes)."""
+    return _build()[2]
+
+
+#: Fewest geometries per thread of the exact-backscatter kernel. One geometry costs
+#: ~0.1–0.5 µs (kσ 0.1–2.5, the 1992 and default models), and handing a chunk to a worker
+#: thread costs tens of µs on an idle machine and up to milliseconds on a loaded one (the
+#: worker waits for a core: measured ×0.1–0.7 at 1000 angles with 2 threads under load 8 on
+#: 2 cores): a call splits only from 2 × 2048 angles on, ≳ 0.4 ms of work per thread.
+BACK_MIN_CHUNK = 2048
 
 
 def backscatter(
@@ -168,23 +180,28 @@ def backscatter(
     n = si.size
     pec = isinstance(eps, str)
     si, cs, K, pref = flat_n(si, n), flat_n(cs, n), flat_n(K, n), flat_n(pref, n)
-    psi = flat_n(shadow[2], n) if shadow[0] == 1 else np.zeros(1)
+    psi = flat_n(shadow[2], n) if shadow[0] == 1 else NO_PSI
     out_hh, out_vv, out_e = np.empty(n), np.empty(n), np.ones(n)
     out_fast = np.empty(n, dtype=np.bool_)
     e = complex(1.0 if pec else eps)
     code, slope, log_rtol = int(shadow[0]), float(shadow[1]), math.log(rtol)
-    status = [0]
+    flags = (bool(transition), log_rtol, int(max_terms), bool(fast), code, slope)
+    tail = (bool(lower_q2), bool(fade), bool(fung92))
+    if threads <= 1 or n < 2 * BACK_MIN_CHUNK:  # one chunk: a plain call (µs matter here)
+        status = [back_kernel(si, cs, e, pec, float(ks), K, pref, int(spec), int(dim), *flags,
+                              psi, out_hh, out_vv, out_e, out_fast, *tail)]  # fmt: skip
+    else:
+        status = [0]
 
-    def part(a: int, b: int) -> None:
-        st = back_kernel(
-            si[a:b], cs[a:b], e, pec, float(ks), K[a:b], pref[a:b], int(spec), int(dim),
-            bool(transition), log_rtol, int(max_terms), bool(fast), code, slope,
-            psi[a:b] if code == 1 else psi, out_hh[a:b], out_vv[a:b], out_e[a:b], out_fast[a:b],
-            bool(lower_q2), bool(fade), bool(fung92),
-        )  # fmt: skip
-        status.append(st)
+        def part(a: int, b: int) -> None:
+            st = back_kernel(
+                si[a:b], cs[a:b], e, pec, float(ks), K[a:b], pref[a:b], int(spec), int(dim),
+                *flags, psi[a:b] if code == 1 else psi, out_hh[a:b], out_vv[a:b], out_e[a:b],
+                out_fast[a:b], *tail,
+            )  # fmt: skip
+            status.append(st)
 
-    run_split(part, n, threads, BACK_MIN_CHUNK)
+        run_split(part, n, threads, BACK_MIN_CHUNK)
     log_e = np.log(out_e)  # out_e ≥ 1
     if report:
         return out_hh, out_vv, log_e, max(status), out_fast

@@ -152,6 +152,7 @@ conductors) it can create energy — the validity report flags those angles.
 
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
@@ -159,6 +160,7 @@ import numpy as np
 from emscatter.conventions import check_positive
 from emscatter.fresnel import is_pec
 from emscatter.scattering import Scattering
+from emscatter.solvers.iem import backscatter_path as back_path
 from emscatter.solvers.iem.amplitudes import (
     _amplitudes,
     _Options,
@@ -175,6 +177,7 @@ from emscatter.solvers.iem.validity import (  # noqa: F401 (re-exported: the sol
     nominal_rms_slope,
 )
 from emscatter.solvers.kirchhoff.common import (
+    _broadcast,
     check_roughness,
     coherent_local,
     geometry,
@@ -325,7 +328,8 @@ def bistatic(
     crosspol_order : Gauss–Legendre nodes per graded segment of its 2-D integral (8: ≲ 1e-2
         relative, 12: ≲ 1e-3).
     threads : worker threads of the compiled exact-backscatter kernel (default: the CPU count,
-        at most 8; used from 512 backscatter angles on; results do not depend on it).
+        at most 8; used from 2 × ``compiled.BACK_MIN_CHUNK`` = 4096 backscatter angles on;
+        results do not depend on it).
 
     Returns
     -------
@@ -334,6 +338,154 @@ def bistatic(
     """
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
+    opt, shadow_mode = _options(
+        rtol, max_terms, fresnel, complementary, first_order, reciprocal, shadowing, crosspol,
+        crosspol_order, coherent, threads,
+    )  # fmt: skip
+    rtol = opt.rtol
+    log_w = log_nfold(rough)
+    slope = _slope(rough, rms_slope)
+    dim = rough.dimension
+    g = geometry(theta_i, theta_s, phi_s, phi_i, eps, dim)
+    sig = np.empty((2, 2, g.size))
+    nonrec, prec = 0.0, -np.inf
+    block = 1 << 14
+    back = g.backscatter_chunk(_BACK_TOL) if g.size <= block else None  # the common case, lean
+    for st in range(0, g.size, block):
+        sl = slice(st, st + block)
+        loc = back if back is not None else g.chunk(sl, signed_azimuth=True)
+        res = None
+        if back is not None or _all_backscatter(loc):
+            res = _backscatter(rough, loc.eps, k, loc, opt, slope, shadow_mode, log_w)
+        if res is None:
+            res = _single(rough, loc.eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w)
+        s, nr, pr = res
+        sig[:, :, sl] = s
+        nonrec, prec = max(nonrec, nr), max(prec, pr)
+    if dim == 1:
+        sig[0, 1] = sig[1, 0] = 0.0
+    elif crosspol and g.size:
+        _add_crosspol(sig, rough, g, k, slope, int(crosspol_order))
+    sig = sig.reshape(2, 2, *g.shape)
+    if coherent:
+        coh = coherent_local(g.chunk(), rough.sigma, k).reshape(2, *g.shape)
+    else:
+        coh = np.full((2, *g.shape), np.nan)
+    info = _info(opt, reciprocal, shadow_mode, slope, crosspol and dim == 2, nonrec, prec, coherent)
+    return Scattering(
+        sigma0=sig,
+        coherent=coh,
+        method="iem",
+        theta_i=g.theta_i,
+        theta_s=g.theta_s,
+        phi_s=g.phi_s,
+        phi_i=g.phi_i,
+        k=k,
+        dimension=dim,
+        info=info,
+    )
+
+
+def _info(opt, reciprocal, shadow_mode, slope, crosspol, nonrec, prec, coherent) -> dict:
+    """The result's ``info`` (:func:`bistatic`'s Returns)."""
+    return {
+        "model": _MODEL_NAMES[opt.complementary],
+        "rtol": opt.rtol,
+        "fresnel": opt.fresnel,
+        "complementary": opt.complementary,
+        "first_order": opt.first_order,
+        "reciprocal": bool(reciprocal),
+        "shadowing": shadow_mode or "none",
+        "rms_slope": slope,
+        "crosspol": "multiple scattering (bistatic, reciprocal)" if crosspol else "none",
+        "nonreciprocity": nonrec,
+        "precision": float(1e-16 * math.exp(min(prec, 700.0))),
+        "coherent": "Kirchhoff |R(θi)|² exp(−(2kσ cosθi)²)"
+        if coherent
+        else "not computed (coherent=False)",  # fmt: skip
+    }
+
+
+def _api_checked(roughness, eps, k, theta_i, theta_s, phi_s, phi_i=0.0, *, monostatic=False,
+                 **options) -> Scattering:  # fmt: skip
+    """The public API's entry (``bistatic.checked``): :func:`bistatic` for inputs the API has
+    checked (a Roughness, ``k`` a float > 0 [rad/m], float angle arrays in range [rad],
+    ``eps`` "pec" or complex). ``monostatic``: the caller guarantees ``theta_s is theta_i``
+    and ``φs = φi + π``; the exact-backscatter call then skips the general geometry
+    (:func:`emscatter.solvers.iem.backscatter_path.monostatic`, same values bit for bit)
+    where that path covers it (compiled kernels, Gaussian or exponential spectrum, one ε and
+    one φi, ``coherent=False``, no multiple-scattering cross-pol on a 2-D surface), else
+    it is :func:`bistatic` itself."""
+    if monostatic:
+        res = _monostatic(roughness, eps, k, theta_i, phi_s, phi_i, options)
+        if res is not None:
+            return res
+    return bistatic(roughness, eps, k, theta_i, theta_s, phi_s, phi_i, **options)
+
+
+def _monostatic(rough, eps, k, ti, ps, pi_, options) -> Scattering | None:
+    """:func:`_api_checked`'s backscatter path, or None where it does not cover the call."""
+    unknown = options.keys() - _DEFAULTS.keys()
+    if unknown:  # bistatic raises the usual TypeError
+        return None
+    o = {**_DEFAULTS, **options}
+    opt, shadow_mode = _options(
+        o["rtol"], o["max_terms"], o["fresnel"], o["complementary"], o["first_order"],
+        o["reciprocal"], o["shadowing"], o["crosspol"], o["crosspol_order"], o["coherent"],
+        o["threads"],
+    )  # fmt: skip
+    dim = rough.dimension
+    if o["coherent"] or (o["crosspol"] and dim == 2) or not isinstance(ti, np.ndarray):
+        return None
+    slope = _slope(rough, o["rms_slope"])
+    res = back_path.monostatic(rough, eps, k, ti, ps, pi_, opt, slope, shadow_mode)
+    if res is None:
+        return None
+    sig, nonrec, prec = res
+    shape = ti.shape
+    info = _info(opt, o["reciprocal"], shadow_mode, slope, False, nonrec, prec, False)
+    theta = _broadcast(ti, shape)
+    return Scattering._of(
+        sigma0=sig.reshape(2, 2, *shape),
+        coherent=np.full((2, *shape), np.nan),
+        method="iem",
+        theta_i=theta,
+        theta_s=theta,
+        phi_s=_broadcast(np.asarray(ps, dtype=float), shape),
+        phi_i=_broadcast(np.asarray(pi_, dtype=float), shape),
+        k=k,
+        dimension=dim,
+        info=info,
+    )
+
+
+def _options(rtol, max_terms, fresnel, complementary, first_order, reciprocal, shadowing,
+             crosspol, crosspol_order, coherent, threads):  # fmt: skip
+    """The checked options ``(opt, shadow_mode)`` of :func:`bistatic` (ValueError naming the
+    option otherwise). Remembered per distinct argument tuple (values and their types, so
+    that e.g. ``shadowing=1`` is still refused after ``shadowing=True``): a call with the
+    options of an earlier call pays a dictionary lookup, not the checks (a fixed cost of
+    each call, which matters at a few angles). ``opt`` is shared: read, never written."""
+    args = (rtol, max_terms, fresnel, complementary, first_order, reciprocal, shadowing,
+            crosspol, crosspol_order, coherent, threads)  # fmt: skip
+    try:
+        key = (*args, *map(type, args))
+        hit = _OPTION_MEMO.get(key)
+    except TypeError:  # an unhashable value (e.g. an array): check it every time
+        key = hit = None
+    if hit is None:
+        hit = _check_options(*args)
+        if key is not None and len(_OPTION_MEMO) < 256:
+            _OPTION_MEMO[key] = hit
+    return hit
+
+
+_OPTION_MEMO: dict = {}
+
+
+def _check_options(rtol, max_terms, fresnel, complementary, first_order, reciprocal, shadowing,
+                   crosspol, crosspol_order, coherent, threads):  # fmt: skip
+    """:func:`_options` without the memory."""
     rtol = check_positive("rtol", rtol)
     if not rtol < 1:
         raise ValueError(f"rtol must be in (0, 1), got {rtol!r}")
@@ -363,64 +515,24 @@ def bistatic(
         or not (2 <= crosspol_order <= 64)
     ):
         raise ValueError(f"crosspol_order must be an integer in [2, 64], got {crosspol_order!r}")
-    log_w = log_nfold(rough)
-    slope = _slope(rough, rms_slope)
-    dim = rough.dimension
-    g = geometry(theta_i, theta_s, phi_s, phi_i, eps, dim)
-    sig = np.empty((2, 2, g.size))
-    nonrec, prec = 0.0, -np.inf
-    block = 1 << 14
-    back = g.backscatter_chunk(_BACK_TOL) if g.size <= block else None  # the common case, lean
-    for st in range(0, g.size, block):
-        sl = slice(st, st + block)
-        loc = back if back is not None else g.chunk(sl, signed_azimuth=True)
-        res = None
-        if back is not None or _all_backscatter(loc):
-            res = _backscatter(rough, loc.eps, k, loc, opt, slope, shadow_mode, log_w)
-        if res is None:
-            res = _single(rough, loc.eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w)
-        s, nr, pr = res
-        sig[:, :, sl] = s
-        nonrec, prec = max(nonrec, nr), max(prec, pr)
-    if dim == 1:
-        sig[0, 1] = sig[1, 0] = 0.0
-    elif crosspol and g.size:
-        _add_crosspol(sig, rough, g, k, slope, int(crosspol_order))
-    sig = sig.reshape(2, 2, *g.shape)
-    if coherent:
-        coh = coherent_local(g.chunk(), rough.sigma, k).reshape(2, *g.shape)
-    else:
-        coh = np.full((2, *g.shape), np.nan)
-    info = {
-        "model": _MODEL_NAMES[opt.complementary],
-        "rtol": rtol,
-        "fresnel": opt.fresnel,
-        "complementary": opt.complementary,
-        "first_order": opt.first_order,
-        "reciprocal": bool(reciprocal),
-        "shadowing": shadow_mode or "none",
-        "rms_slope": slope,
-        "crosspol": "multiple scattering (bistatic, reciprocal)"
-        if crosspol and dim == 2
-        else "none",
-        "nonreciprocity": nonrec,
-        "precision": float(1e-16 * math.exp(min(prec, 700.0))),
-        "coherent": "Kirchhoff |R(θi)|² exp(−(2kσ cosθi)²)"
-        if coherent
-        else "not computed (coherent=False)",  # fmt: skip
-    }
-    return Scattering(
-        sigma0=sig,
-        coherent=coh,
-        method="iem",
-        theta_i=g.theta_i,
-        theta_s=g.theta_s,
-        phi_s=g.phi_s,
-        phi_i=g.phi_i,
-        k=k,
-        dimension=dim,
-        info=info,
-    )
+    return opt, shadow_mode
+
+
+bistatic.checked = _api_checked  # the API's entry for inputs it has checked
+_SIGNATURE = inspect.signature(bistatic)
+_DEFAULTS = {
+    p.name: p.default
+    for p in _SIGNATURE.parameters.values()
+    if p.kind is inspect.Parameter.KEYWORD_ONLY
+}
+# the entry's signature is bistatic's plus ``monostatic`` (the API reads which options a
+# solver entry takes from it: ``crosspol``, ``coherent``, ``monostatic``)
+_api_checked.__signature__ = _SIGNATURE.replace(
+    parameters=[
+        *_SIGNATURE.parameters.values(),
+        inspect.Parameter("monostatic", inspect.Parameter.KEYWORD_ONLY, default=False),
+    ]
+)
 
 
 def _all_backscatter(loc) -> bool:
