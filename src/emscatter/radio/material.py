@@ -22,6 +22,21 @@ Per ray, at the scene frequency and the ray's incidence angle:
 * **diffraction** uses Sionna's own UTD wedge coefficients with the flat slab of the medium
   (roughness does not enter the wedge).
 
+**Diffuse transmission** (``transmission="diffuse"``, opt-in; isotropic rough slabs): the
+tables of :mod:`emscatter.radio.transmission_tables` (from
+:func:`emscatter.radio.slab_diffuse.diffuse_transmission`: GO faces, radiative transport inside)
+add a diffuse event into the back hemisphere (a ``DIFFUSE`` event whose direction is uniform on
+the back hemisphere, Jones matrix ``√(T_p Ω / 2)`` into each scattered polarization: the light
+that crossed the slab is unpolarized) and the internal light that leaves through the front face
+to the diffuse reflection, so that ``R_coh + R_diff + T_coh + T_diff + A = 1`` per incidence.
+RadioMapSolver follows it (it spawns the next ray along the sampled direction, either side);
+Sionna's PathSolver connects diffuse events only to receivers on the incident side and cannot
+carry it: there the material samples as with ``"coherent"`` and warns
+(:class:`~emscatter.radio.transmission_tables.DiffuseTransmissionWarning`). Off by default: a
+diffuse event through every wall costs RadioMapSolver rays (its share of the samples) and the
+tables a ``slab_diffuse`` build (~4 s per material and frequency); the default keeps every
+existing result. Flat materials ignore it (the flat limit is Sionna's slab).
+
 **Anisotropic roughness** (walls with a texture direction, ``texture_direction=``): the
 tables get the incidence-azimuth axis and the lobe lookup works in the texture frame of each hit
 (:mod:`emscatter.radio.texture`, Dr.Jit side in :mod:`emscatter.radio.texture_jit`).
@@ -43,6 +58,7 @@ face), which saves the slab arithmetic per ray; flat materials always keep Sionn
 from __future__ import annotations
 
 import math
+import warnings
 
 import drjit as dr
 import mitsuba as mi
@@ -66,7 +82,7 @@ from sionna.rt.utils import (
 
 from .. import solvers
 from .convention import sionna_permittivity
-from .material_slice import _parse_props, _Slice
+from .material_slice import _parse_props, _Slice, transmission_lobe
 from .medium import check_thickness, resolve_medium
 from .tables import TableOptions, build_tables, check_policy, check_surface
 from .texture import build_textured_tables, check_direction, check_textured_surface
@@ -79,6 +95,7 @@ from .texture_jit import (
     textured_lookup,
     to_texture_frame,
 )
+from .transmission_tables import DiffuseTransmissionWarning, build_transmission_tables
 
 __all__ = ["EmscatterRadioMaterial", "PLUGIN_NAME"]
 
@@ -109,6 +126,9 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         roughness (then the textured tables are used: a check of the textured path); projected
         onto each hit's tangent plane, with the degenerate rule of
         :mod:`emscatter.radio.texture` where it is parallel to the normal.
+    transmission : ``"coherent"`` (default: the coherent slab only, as Sionna's own model) or
+        ``"diffuse"`` (also the diffusely transmitted lobe of the rough slab; RadioMapSolver only,
+        module docstring). Needs a slab (``thickness`` not ``None``) and no texture direction.
     color : RGB in [0, 1] for Sionna's previews.
     """
 
@@ -125,6 +145,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         out_of_range: str = "warn",
         table_options: TableOptions | None = None,
         texture_direction=None,
+        transmission: str = "coherent",
         color=None,
         props: mi.Properties | None = None,
     ):
@@ -144,6 +165,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             thickness = kw.get("thickness", DEFAULT_THICKNESS)
             method = kw.get("method", "auto")
             texture_direction = kw.get("texture_direction")
+            transmission = kw.get("transmission", "coherent")
         super().__init__(props)
         self._medium = resolve_medium(medium, eps_real=eps_real, conductivity=conductivity)
         thickness = check_thickness(thickness)
@@ -177,6 +199,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
                 f"method must be 'auto' or one of {solvers.available()}, got {method!r}"
             )
         self._method = method
+        self._transmission = self._check_transmission(transmission, thickness)
+        self._path_warned = False
         self._out_of_range = out_of_range
         self._options = table_options or TableOptions()
         self._tables: dict[float, _Slice] = {}
@@ -200,6 +224,29 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         return self._medium
 
     @property
+    def transmission(self) -> str:
+        """``"coherent"`` (default) or ``"diffuse"`` (class docstring)."""
+        return self._transmission
+
+    def _check_transmission(self, transmission, thickness) -> str:
+        allowed = ("coherent", "diffuse")
+        if transmission not in allowed:
+            raise ValueError(f"transmission must be one of {allowed}, got {transmission!r}")
+        if transmission == "diffuse":
+            if thickness is None:
+                raise ValueError(
+                    "transmission='diffuse' needs a slab: thickness=None is a half-space, which "
+                    "transmits nothing; give thickness [m] > 0"
+                )
+            if self._texture is not None:
+                raise ValueError(
+                    "transmission='diffuse' needs isotropic roughness without texture_direction "
+                    "(the slab transport of emscatter.radio.slab_diffuse is isotropic), got "
+                    f"texture_direction={tuple(self._texture)!r}"
+                )
+        return transmission
+
+    @property
     def surface(self):
         return self._surface
 
@@ -216,6 +263,13 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     def active_tables(self):
         """Tables of the current scene frequency, or ``None`` until a solver needs them."""
         return None if self._active is None else self._active.tables
+
+    @property
+    def active_transmission_tables(self):
+        """Diffuse-transmission tables of the current scene frequency
+        (:class:`~emscatter.radio.transmission_tables.TransmissionTables`), or ``None``
+        (``transmission="coherent"``, a flat or opaque wall, or not built yet)."""
+        return None if self._active is None else getattr(self._active, "transmission", None)
 
     def _set_medium_constants(self, frequency: float, check: bool = True):
         try:
@@ -271,8 +325,16 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             label=self.name,
             options=self._options,
         )
-        cls = _Slice if self._texture is None else TexturedSlice
-        self._active = self._tables[self._frequency] = cls(tables)
+        if self._texture is not None:
+            self._active = self._tables[self._frequency] = TexturedSlice(tables)
+            return self._active
+        through = None
+        if self._transmission == "diffuse" and not self._opaque_wall:
+            through = build_transmission_tables(
+                self._surface, self._eps, self._frequency, self._thickness, tables,
+                out_of_range=self._out_of_range,
+            )  # fmt: skip
+        self._active = self._tables[self._frequency] = _Slice(tables, through)
         return self._active
 
     def _dummy(self) -> _Slice:
@@ -294,14 +356,17 @@ class EmscatterRadioMaterial(RadioMaterialBase):
 
     # ------------------------------------------------------------------ per ray (Dr.Jit)
     def _coefficients(self, cos_i, sl: _Slice | None, active, ki=None, tex=None):
-        """Coherent ``(r_te, r_tm, t_te, t_tm)`` (Sionna convention) of the rough slab, and the
-        diffuse share ``r_incoh,h + r_incoh,v`` at this incidence."""
+        """Coherent ``(r_te, r_tm, t_te, t_tm)`` (Sionna convention) of the rough slab, the
+        diffuse reflected share ``r_incoh,h + r_incoh,v`` (+ the internal ``R_int,h + R_int,v``
+        with diffuse transmission) and the diffusely transmitted ``T_h + T_v`` at this
+        incidence."""
         eta = self._eta
         zero_f = mi.Float(0.0)
         if sl is None:  # flat: exactly Sionna's ITU slab (or its half-space limit)
             if self._thickness is not None:
                 return (
                     *itu_coefficients_single_layer_slab(cos_i, eta, self._d_op, self._lam),
+                    zero_f,
                     zero_f,
                 )
         sin2 = 1.0 - dr.square(cos_i)
@@ -318,11 +383,15 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             r1_te = r_te + mi.Complex2f(v[0], v[1])
             r1_tm = r_tm + mi.Complex2f(v[2], v[3])
             diffuse = dr.maximum(v[4] + v[5], 0.0)
+            through = zero_f
+            if sl.n_psi == 0 and sl.through is not None:
+                diffuse = diffuse + dr.maximum(v[7], 0.0)
+                through = dr.maximum(v[6], 0.0)
         else:
-            r1_te, r1_tm, diffuse = r_te, r_tm, zero_f
+            r1_te, r1_tm, diffuse, through = r_te, r_tm, zero_f, zero_f
         zero = mi.Complex2f(0.0, 0.0)
         if self._thickness is None or self._opaque_wall:
-            return r1_te, r1_tm, zero, zero, diffuse
+            return r1_te, r1_tm, zero, zero, diffuse, through
         k = self._k
         k2z = k * a
         q_t = k * cos_i - k2z
@@ -336,7 +405,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             inv = dr.rcp(1.0 - r_in * r_in * ph2)
             tt = (1.0 - r0 * r0) * chi_t * chi_t
             out.append((r1 + tt * r_in * ph2 * inv, tt * ph * inv))
-        return out[0][0], out[1][0], out[0][1], out[1][1], diffuse
+        return out[0][0], out[1][0], out[0][1], out[1][1], diffuse, through
 
     @staticmethod
     def _mean_field(expo):
@@ -391,22 +460,36 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         cross-pol with the sign pattern of Sionna's XPD matrix ``[[a, −b], [b, a]]``
         (norm-preserving when hv = vh, hh = vv)."""
         hh, hv, vh, vv = self._lobe(ki, ko, sl, active, tex)
+        if sl.n_psi == 0 and sl.through is not None:  # diffuse transmission (unpolarized)
+            back = ko.z < 0.0
+            front = ~back
+            t_h, t_v, i_h, i_v = transmission_lobe(ki, ko, sl, active)
+            ah = 0.5 * dr.select(back, t_h, i_h)
+            av = 0.5 * dr.select(back, t_v, i_v)
+            hh = dr.select(front, hh, 0.0) + ah
+            vh = dr.select(front, vh, 0.0) + ah
+            hv = dr.select(front, hv, 0.0) + av
+            vv = dr.select(front, vv, 0.0) + av
         root_omega = dr.sqrt(dr.maximum(solid_angle, 0.0))
         return mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv)) * root_omega
 
-    def _event_probabilities(self, coefs, enabled):
-        """Probabilities of specular reflection, diffuse reflection and transmission, in
-        proportion to their powers (mean of the two polarizations) among the enabled events."""
-        r_te, r_tm, t_te, t_tm, diffuse_power = coefs
+    def _event_probabilities(self, coefs, enabled, through_on=False):
+        """Probabilities of specular reflection, diffuse reflection, transmission and (with
+        ``through_on``) diffuse transmission, in proportion to their powers (mean of the two
+        polarizations) among the enabled events (diffuse transmission: diffuse and refraction
+        both enabled)."""
+        r_te, r_tm, t_te, t_tm, diffuse_power, through = coefs
         r = dr.squared_norm(r_te) + dr.squared_norm(r_tm)
         t = dr.squared_norm(t_te) + dr.squared_norm(t_tm)
         prs = dr.select((enabled & InteractionType.SPECULAR) > 0, r, 0.0)
         prd = dr.select((enabled & InteractionType.DIFFUSE) > 0, diffuse_power, 0.0)
         pt = dr.select((enabled & InteractionType.REFRACTION) > 0, t, 0.0)
-        total = prs + prd + pt
+        both = InteractionType.DIFFUSE | InteractionType.REFRACTION
+        pdt = dr.select((enabled & both) == both, through, 0.0) if through_on else 0.0
+        total = prs + prd + pt + pdt
         none = total <= 0.0
         norm = dr.select(none, 1.0, dr.rcp(total))
-        return prs * norm, prd * norm, pt * norm, none
+        return prs * norm, prd * norm, pt * norm, pdt * norm, none
 
     def _context(self, si):
         ki = si.wi
@@ -421,7 +504,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     ):  # fmt: skip
         """Jones matrix (world implicit frame) of the event of each lane: specular reflection or
         transmission, diffuse reflection into ``ko_diff``, diffraction into ``ko_diffr``."""
-        r_te, r_tm, t_te, t_tm, _ = coefs
+        r_te, r_tm, t_te, t_tm, _, _ = coefs
         reflection, diffuse, diffraction = events
         ko_spec = dr.select(reflection, mi.reflect(-ki), ki)
         c_te = dr.select(reflection, r_te, t_te)
@@ -470,22 +553,25 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         enabled = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         diffraction = mi.Bool(active) & (enabled == InteractionType.DIFFRACTION)
         coefs = self._coefficients(cos_i, sl, active, ki, tex)
-        prs, prd, pt, none = self._event_probabilities(coefs, enabled)
+        through_on = self._through_on(sl, ctx)
+        prs, prd, pt, pdt, none = self._event_probabilities(coefs, enabled, through_on)
         specular = sample1 < prs
         diffuse = (sample1 >= prs) & (sample1 < prs + prd)
-        transmission = ~specular & ~diffuse
+        through = (sample1 >= prs + prd) & (sample1 < prs + prd + pdt)
+        transmission = ~specular & ~diffuse & ~through
+        diffuse |= through
         event = dr.select(
             specular, mi.UInt(InteractionType.SPECULAR), mi.UInt(InteractionType.DIFFUSE)
         )
         event = dr.select(transmission, mi.UInt(InteractionType.REFRACTION), event)
         event = dr.select(none, mi.UInt(InteractionType.NONE), event)
         event = dr.select(diffraction, mi.UInt(InteractionType.DIFFRACTION), event)
-        prob = dr.select(specular, prs, dr.select(diffuse, prd, pt))
+        prob = dr.select(specular, prs, dr.select(through, pdt, dr.select(diffuse, prd, pt)))
         prob = dr.select(diffraction, 1.0, prob)
         diffuse &= ~diffraction & ~none
         reflection = specular | diffuse
         ko_diff = mi.warp.square_to_uniform_hemisphere(sample2)
-        ko_diff.z = dr.abs(ko_diff.z)
+        ko_diff.z = dr.select(through, -dr.abs(ko_diff.z), dr.abs(ko_diff.z))
         ko = dr.select(diffuse, ko_diff, dr.select(reflection, mi.reflect(-ki), ki))
         ko_diffr = ko
         if diffraction_on:
@@ -533,12 +619,37 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         ki, cos_i, _, tex = self._context(si)
         event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         every = InteractionType.SPECULAR | InteractionType.DIFFUSE | InteractionType.REFRACTION
-        prs, prd, pt, _ = self._event_probabilities(
-            self._coefficients(cos_i, sl, active, ki, tex), mi.UInt(every)
+        prs, prd, pt, pdt, _ = self._event_probabilities(
+            self._coefficients(cos_i, sl, active, ki, tex), mi.UInt(every), self._through_on(sl)
         )
         p = dr.select(event == InteractionType.SPECULAR, prs, prd)
+        p = dr.select((event == InteractionType.DIFFUSE) & (si.to_local(wo).z < 0.0), pdt, p)
         p = dr.select(event == InteractionType.REFRACTION, pt, p)
         return dr.select(event == InteractionType.DIFFRACTION, 1.0, p)
+
+    def _through_on(self, sl, ctx=None) -> bool:
+        """Whether diffuse transmission can be sampled in this call (host side, trace time).
+
+        Sionna's PathSolver samples with ``NO_JONES_MATRIX`` and connects a diffuse event only
+        to receivers on the incident side of the surface (``sionna.rt`` ``sb_candidate_generator``):
+        it cannot carry diffusely transmitted power, so there the material samples as with
+        ``transmission="coherent"`` (the internal light out of the front face stays in the
+        diffuse reflection) and warns once."""
+        if sl is None or sl.n_psi or sl.through is None:
+            return False
+        if ctx is not None and (ctx.component & NO_JONES_MATRIX) != 0:
+            if not self._path_warned:
+                self._path_warned = True
+                warnings.warn(
+                    f"radio material {self.name!r}: transmission='diffuse' is carried by "
+                    "RadioMapSolver only; Sionna's PathSolver connects diffuse events to "
+                    "receivers on the incident side, so its paths hold no diffusely transmitted "
+                    "power (coherent transmission and diffuse reflection are complete)",
+                    DiffuseTransmissionWarning,
+                    stacklevel=3,
+                )
+            return False
+        return True
 
     def traverse(self, callback):
         """Nothing differentiable: the tables come from emscatter on the host."""
