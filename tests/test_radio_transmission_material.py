@@ -148,7 +148,7 @@ def test_path_solver_cannot_carry_it_and_says_so():
     res = _worker("path_solver_sampling", "inputs")
     r = res["path_solver_sampling"]["result"]
     assert r["diffuse"] > 0 and r["diffuse_back"] == 0
-    assert len(r["warnings"]) == 1 and "PathSolver" in r["warnings"][0]
+    assert len(r["warnings"]) == 1 and "PathSolver" in r["warnings"][0]  # once per material
     assert min(r["rm_t_diff"]) > 0.1  # RadioMapSolver-style sampling does go through
     i = res["inputs"]["result"]
     assert "transmission must be one of ('coherent', 'diffuse'), got 'lambertian'" in i["bad_value"]

@@ -82,7 +82,7 @@ from sionna.rt.utils import (
 
 from .. import solvers
 from .convention import sionna_permittivity
-from .material_slice import _parse_props, _Slice, transmission_lobe
+from .material_slice import _parse_props, _Slice
 from .medium import check_thickness, resolve_medium
 from .tables import TableOptions, build_tables, check_policy, check_surface
 from .texture import build_textured_tables, check_direction, check_textured_surface
@@ -384,7 +384,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             r1_tm = r_tm + mi.Complex2f(v[2], v[3])
             diffuse = dr.maximum(v[4] + v[5], 0.0)
             through = zero_f
-            if sl.n_psi == 0 and sl.through is not None:
+            if sl.n_psi == 0 and sl.stacked:
                 diffuse = diffuse + dr.maximum(v[7], 0.0)
                 through = dr.maximum(v[6], 0.0)
         else:
@@ -414,7 +414,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
 
     def _lobe(self, ki, ko, sl: _Slice, active, tex=None):
         """``(hh, hv, vh, vv)`` lobe values [1/sr] for local directions ``ki`` (incident,
-        propagating) and ``ko`` (scattered)."""
+        propagating) and ``ko`` (scattered; with diffuse transmission either hemisphere: the
+        back one reads the transmitted block of the stacked texture at ``(μ = |ko.z|, φ)``)."""
         if sl.n_psi:
             psi, flip = folded_azimuth(ki, tex)
             ki, ko = to_texture_frame(ki, tex), to_texture_frame(ko, tex)
@@ -444,11 +445,18 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         th = dr.clip(dr.safe_acos(cos_i) * sl.inv_theta_max, 0.0, 1.0)
         if sl.n_psi:
             return textured_lookup(sl, s, alpha, th, psi, active)
-        pos = mi.Point3f(
-            tex_coord(s, sl.n_s),
-            tex_coord(alpha * (1.0 / math.pi), sl.n_alpha),
-            tex_coord(th, sl.n_theta),
-        )
+        if sl.stacked:  # one lookup: reflection block 0, transmission block 1 (material_slice)
+            back = ko.z < 0.0
+            kx = ko.x * e1x + ko.y * e1y
+            ky = dr.abs(ko.y * e1x - ko.x * e1y)
+            phi = dr.atan2(ky, kx)
+            s = dr.select(back, dr.clip(-ko.z, 0.0, 1.0), s)
+            alpha = dr.select(back, phi, alpha)
+            idx = th * (sl.n_theta - 1) + dr.select(back, float(sl.n_theta), 0.0)
+            z = (idx + 0.5) * (1.0 / (2 * sl.n_theta))
+        else:
+            z = tex_coord(th, sl.n_theta)
+        pos = mi.Point3f(tex_coord(s, sl.n_s), tex_coord(alpha * (1.0 / math.pi), sl.n_alpha), z)
         v = sl.lobe.eval(pos, active)
         return [dr.maximum(x, 0.0) for x in v]
 
@@ -460,16 +468,6 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         cross-pol with the sign pattern of Sionna's XPD matrix ``[[a, −b], [b, a]]``
         (norm-preserving when hv = vh, hh = vv)."""
         hh, hv, vh, vv = self._lobe(ki, ko, sl, active, tex)
-        if sl.n_psi == 0 and sl.through is not None:  # diffuse transmission (unpolarized)
-            back = ko.z < 0.0
-            front = ~back
-            t_h, t_v, i_h, i_v = transmission_lobe(ki, ko, sl, active)
-            ah = 0.5 * dr.select(back, t_h, i_h)
-            av = 0.5 * dr.select(back, t_v, i_v)
-            hh = dr.select(front, hh, 0.0) + ah
-            vh = dr.select(front, vh, 0.0) + ah
-            hv = dr.select(front, hv, 0.0) + av
-            vv = dr.select(front, vv, 0.0) + av
         root_omega = dr.sqrt(dr.maximum(solid_angle, 0.0))
         return mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv)) * root_omega
 
@@ -635,13 +633,13 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         it cannot carry diffusely transmitted power, so there the material samples as with
         ``transmission="coherent"`` (the internal light out of the front face stays in the
         diffuse reflection) and warns once."""
-        if sl is None or sl.n_psi or sl.through is None:
+        if sl is None or sl.n_psi or not sl.stacked:
             return False
         if ctx is not None and (ctx.component & NO_JONES_MATRIX) != 0:
             if not self._path_warned:
                 self._path_warned = True
                 warnings.warn(
-                    f"radio material {self.name!r}: transmission='diffuse' is carried by "
+                    "radio materials with transmission='diffuse' are carried by "
                     "RadioMapSolver only; Sionna's PathSolver connects diffuse events to "
                     "receivers on the incident side, so its paths hold no diffusely transmitted "
                     "power (coherent transmission and diffuse reflection are complete)",

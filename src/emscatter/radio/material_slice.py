@@ -1,20 +1,19 @@
 """Host side of :mod:`emscatter.radio.material`: the Dr.Jit textures of one frequency's tables
-(``_Slice``, with the diffuse-transmission tables of :mod:`emscatter.radio.transmission_tables`
-when asked for), their per-ray lookup of the transmission lobe (``transmission_lobe``) and the
-keyword arguments of an XML ``<bsdf type="emscatter-radio-material">`` (``_parse_props``).
-Imports Dr.Jit and Mitsuba."""
+(``_Slice``; with the diffuse-transmission tables of :mod:`emscatter.radio.transmission_tables`
+the lobe texture stacks two blocks along its θ axis — the reflection lobe with the internal
+light added, and the transmitted lobe on the same ``(n_alpha, n_s)`` grid read as ``(φ, μ)`` —
+so that one texture lookup per ray serves either hemisphere) and the keyword arguments of an
+XML ``<bsdf type="emscatter-radio-material">`` (``_parse_props``). Imports Dr.Jit and Mitsuba."""
 
 from __future__ import annotations
 
-import math
-
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ..spectra import ExponentialCorrelation, GaussianCorrelation
 from .convention import to_sionna
-from .texture_jit import opaque_float, tex_coord, texture
+from .texture_jit import opaque_float, texture
+from .transmission_tables import internal_on_lobe_grid, transmitted_block
 
 
 class _Slice:
@@ -56,34 +55,16 @@ class _Slice:
         self.n_s = tables.s_nodes.size
         self.linear_s = tables.grading == 1.0
         self.inv_grading = opaque_float(1.0 / tables.grading)
-        self.lobe = texture(tables.lobe, 3)
         self.n_psi = 0
-        self.through = None
-        if transmission is not None:
-            self.through = texture(transmission.lobe, 3)  # (θi, φ, μ, 4)
-            self.n_tmu = transmission.mu_nodes.size
-            self.n_tphi = transmission.phi_nodes.size
-
-
-def transmission_lobe(ki, ko, sl: _Slice, active):
-    """``(T_h, T_v, R_int,h, R_int,v)`` [1/sr] of the diffuse-transmission tables for local
-    directions ``ki`` (incident, propagating, ``ki.z < 0``) and ``ko`` (either hemisphere):
-    ``μ = |ko.z|``, ``φ`` the angle between the transverse parts of ``ki`` and ``ko``."""
-    cos_i = -ki.z
-    ti = dr.sqrt(ki.x * ki.x + ki.y * ki.y)
-    to = dr.sqrt(ko.x * ko.x + ko.y * ko.y)
-    den = ti * to
-    cos_phi = dr.select(
-        den > 1e-9, (ki.x * ko.x + ki.y * ko.y) * dr.rcp(dr.maximum(den, 1e-9)), 1.0
-    )
-    phi = dr.safe_acos(dr.clip(cos_phi, -1.0, 1.0)) * (1.0 / math.pi)
-    th = dr.clip(dr.safe_acos(cos_i) * sl.inv_theta_max, 0.0, 1.0)
-    pos = mi.Point3f(
-        tex_coord(dr.clip(dr.abs(ko.z), 0.0, 1.0), sl.n_tmu),
-        tex_coord(phi, sl.n_tphi),
-        tex_coord(th, sl.n_theta),
-    )
-    return [dr.maximum(x, 0.0) for x in sl.through.eval(pos, active)]
+        self.stacked = transmission is not None
+        if self.stacked:  # [reflection + internal light; transmission] along θ (module doc)
+            lobe = np.concatenate(
+                [tables.lobe + internal_on_lobe_grid(transmission, tables),
+                 transmitted_block(transmission, tables)], axis=0,
+            )  # fmt: skip
+            self.lobe = texture(lobe, 3)
+        else:
+            self.lobe = texture(tables.lobe, 3)
 
 
 def _parse_props(props: mi.Properties) -> dict:

@@ -36,8 +36,15 @@ import numpy as np
 from ..conventions import wavenumber
 from .slab import slab_coefficients
 from .slab_diffuse import diffuse_transmission
+from .tables import _lobe_integral, lobe_directions
 
-__all__ = ["TransmissionTables", "build_transmission_tables", "DiffuseTransmissionWarning"]
+__all__ = [
+    "TransmissionTables",
+    "build_transmission_tables",
+    "internal_on_lobe_grid",
+    "transmitted_block",
+    "DiffuseTransmissionWarning",
+]
 
 
 class DiffuseTransmissionWarning(UserWarning):
@@ -103,8 +110,8 @@ def build_transmission_tables(
     out_of_range: str = "warn",
     n_quad: int = 48,
     n_modes: int = 16,
-    n_mu: int = 33,
-    n_phi: int = 25,
+    n_mu: int | None = None,
+    n_phi: int | None = None,
 ) -> TransmissionTables:
     """Diffuse-transmission tables of one rough wall at one frequency (module docstring).
 
@@ -113,7 +120,8 @@ def build_transmission_tables(
     ``thickness`` [m] > 0; ``eps`` the wall's permittivity (``Im ε ≥ 0``); ``out_of_range`` as
     :func:`~emscatter.radio.slab_diffuse.diffuse_transmission` (GO's validity); ``n_quad`` its
     Gauss nodes (μ and φ), ``n_modes`` its azimuthal modes; ``n_mu``, ``n_phi`` the grid the
-    material interpolates.
+    material interpolates (default: the reflection lobe's ``n_s`` and ``n_alpha``, which the
+    material needs: it stacks both lobes in one texture).
     """
     import time
 
@@ -123,8 +131,8 @@ def build_transmission_tables(
         surface, eps, frequency, thickness, theta=theta, n_mu=n_quad, n_phi=n_quad,
         out_of_range=out_of_range, n_modes=n_modes,
     )  # fmt: skip
-    mu = np.linspace(0.0, 1.0, n_mu)
-    phi = np.linspace(0.0, math.pi, n_phi)
+    mu = np.linspace(0.0, 1.0, tables.s_nodes.size if n_mu is None else n_mu)
+    phi = np.linspace(0.0, math.pi, tables.alpha_nodes.size if n_phi is None else n_phi)
     lt = _on_grid(b.transmitted_lobe(phi), b.mu_nodes, mu)
     lr = _on_grid(b.internal_reflection_lobe(phi), b.mu_nodes, mu)
     r_int = b.r_lobe.sum(-1)
@@ -167,3 +175,45 @@ def zero_transmission_tables(theta_nodes) -> TransmissionTables:
     phi = np.linspace(0.0, math.pi, 4)
     return TransmissionTables(th, mu, phi, np.zeros((th.size, 4, 4, 4)), z, z, z, z, z, z,
                               np.ones_like(z), True, [], 0.0)  # fmt: skip
+
+
+def _check_grid(tt: TransmissionTables, tables):
+    if (tt.mu_nodes.size, tt.phi_nodes.size) != (tables.s_nodes.size, tables.alpha_nodes.size):
+        raise ValueError(
+            f"transmission tables on a {tt.mu_nodes.size} × {tt.phi_nodes.size} (μ, φ) grid; the "
+            f"material stacks them with its {tables.s_nodes.size} × {tables.alpha_nodes.size} "
+            "lobe: build them with n_mu = n_s, n_phi = n_alpha"
+        )
+
+
+def transmitted_block(tt: TransmissionTables, tables) -> np.ndarray:
+    """The transmitted lobe as the material reads it: ``(n_theta, n_phi, n_mu, 4)`` [1/sr]
+    with channels ``hh, hv, vh, vv`` = ``T_h/2, T_v/2, T_h/2, T_v/2`` (unpolarized light:
+    half into each scattered polarization)."""
+    _check_grid(tt, tables)
+    th, tv = tt.lobe[..., 0], tt.lobe[..., 1]
+    return 0.5 * np.stack([th, tv, th, tv], axis=-1)
+
+
+def internal_on_lobe_grid(tt: TransmissionTables, tables) -> np.ndarray:
+    """The internal light out of the front face on the reflection lobe's grid
+    (:func:`emscatter.radio.tables.lobe_directions`), ``(n_theta, n_alpha, n_s, 4)`` [1/sr],
+    channels ``hh, hv, vh, vv`` as :func:`transmitted_block`, bilinear in ``(φ, μ)`` and scaled
+    so that the lobe grid's own quadrature gives ``r_internal``."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    _check_grid(tt, tables)
+    theta_s, phi_s = lobe_directions(tables.theta_nodes, tables.alpha_nodes, tables.s_nodes,
+                                     tables.grading)  # fmt: skip
+    mu = np.cos(theta_s)
+    phi = np.abs(phi_s)
+    out = np.empty((*theta_s.shape, 2))
+    for i in range(theta_s.shape[0]):
+        for p in (0, 1):
+            f = RegularGridInterpolator((tt.phi_nodes, tt.mu_nodes), tt.lobe[i, :, :, 2 + p])
+            out[i, ..., p] = f(np.stack([phi[i].ravel(), mu[i].ravel()], -1)).reshape(mu[i].shape)
+    lobe = 0.5 * np.stack([out[..., 0], out[..., 1], out[..., 0], out[..., 1]], axis=-1)
+    got = _lobe_integral(lobe, tables.theta_nodes, tables.alpha_nodes, tables.s_nodes,
+                         tables.grading)  # fmt: skip
+    norm = np.where(got > 0, tt.r_internal / np.where(got > 0, got, 1.0), 0.0)  # (2, n_theta)
+    return lobe * np.stack([norm[0], norm[1], norm[0], norm[1]], axis=-1)[:, None, None, :]
