@@ -25,17 +25,21 @@ Per ray, at the scene frequency and the ray's incidence angle:
 **Diffuse transmission** (``transmission="diffuse"``, opt-in; isotropic rough slabs): the
 tables of :mod:`emscatter.radio.transmission_tables` (from
 :func:`emscatter.radio.slab_diffuse.diffuse_transmission`: GO faces, radiative transport inside)
-add a diffuse event into the back hemisphere (a ``DIFFUSE`` event whose direction is uniform on
-the back hemisphere, Jones matrix ``√(T_p Ω / 2)`` into each scattered polarization: the light
-that crossed the slab is unpolarized) and the internal light that leaves through the front face
-to the diffuse reflection, so that ``R_coh + R_diff + T_coh + T_diff + A = 1`` per incidence.
-RadioMapSolver follows it (it spawns the next ray along the sampled direction, either side);
-Sionna's PathSolver connects diffuse events only to receivers on the incident side and cannot
-carry it: there the material samples as with ``"coherent"`` and warns
-(:class:`~emscatter.radio.transmission_tables.DiffuseTransmissionWarning`). Off by default: a
-diffuse event through every wall costs RadioMapSolver rays (its share of the samples) and the
-tables a ``slab_diffuse`` build (~4 s per material and frequency); the default keeps every
-existing result. Flat materials ignore it (the flat limit is Sionna's slab).
+add a diffuse event into the back hemisphere (a ``DIFFUSE`` event, direction uniform on the back
+hemisphere, Jones matrix ``√(T_p Ω / 2)`` into each scattered polarization: the light that
+crossed the slab is unpolarized) and put the internal light that leaves through the front face
+into the diffuse reflection lobe, so that ``R_coh + R_diff + T_coh + T_diff + A = 1`` per
+incidence (within 1e-3, tests/test_radio_transmission_material.py). Both lobes sit in one
+stacked texture: no extra lookup per ray. RadioMapSolver follows the event (it spawns the next
+ray along the sampled direction, either side); Sionna's PathSolver connects diffuse events only
+to receivers on the incident side (``sionna.rt`` ``sb_candidate_generator``) and cannot carry
+it: there the material samples as with ``"coherent"`` (the internal light stays in its diffuse
+reflection) and warns once
+(:class:`~emscatter.radio.transmission_tables.DiffuseTransmissionWarning`). Off by default:
+existing results and PathSolver users stay as they were, the model holds only where GO does
+(outside it the material's ``out_of_range`` policy applies and the lobe is indicative), and the
+tables cost a ``slab_diffuse`` build (~1–4 s per material and frequency). Flat materials ignore
+it (the flat limit is Sionna's slab); half-spaces refuse it.
 
 **Anisotropic roughness** (walls with a texture direction, ``texture_direction=``): the
 tables get the incidence-azimuth axis and the lobe lookup works in the texture frame of each hit

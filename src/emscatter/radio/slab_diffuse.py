@@ -45,6 +45,12 @@ face and ``P = diag(a) K_r`` (``K_r`` the internal-reflection kernel), crossing 
 (``R_diff``): ``T = x₀ (I − P²)⁻¹ diag(a) t_out``, ``R_int = x₀ P (I − P²)⁻¹ diag(a) t_out``,
 ``A = x₀ (I − P)⁻¹ (1 − a)`` (``t_out`` the per-node escape fraction).
 
+With ``n_modes > 0`` the azimuthal Fourier modes of both escaping lobes are kept: the
+transmitted one (:meth:`DiffuseTransmission.transmitted_lobe`) and the internal light that leaves
+through the front face (the odd crossings, :meth:`DiffuseTransmission.internal_reflection_lobe`,
+powers ``r_lobe``); the radio material's ``transmission="diffuse"`` tables read both
+(:mod:`emscatter.radio.transmission_tables`).
+
 The flat limit (``surface=None`` or σ = 0): ``R_diff = T_diff = 0``, ``T_coh, R_coh`` the ITU
 slab, ``A = 1 − R_coh − T_coh`` (Poynting's theorem for the slab).
 """

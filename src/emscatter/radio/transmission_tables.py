@@ -13,7 +13,10 @@ reflection tables (:mod:`emscatter.radio.tables`), for ``transmission="diffuse"`
   ``slab_diffuse`` (linear in ``μ``, azimuthal Fourier modes in ``φ``, negatives clipped)
   and renormalized so that the bilinear interpolant the material evaluates integrates, over the
   hemisphere (``dΩ = dμ dφ``, both halves of the azimuth), to the powers below — exactly at each
-  incidence node.
+  incidence node. The grid defaults to the reflection lobe's ``n_s × n_alpha``: the material
+  stacks the transmitted lobe (:func:`transmitted_block`) and the reflection lobe plus the
+  internal light (:func:`internal_on_lobe_grid`, renormalized to the lobe grid's quadrature) in
+  one texture (:mod:`emscatter.radio.material_slice`).
 * **energy** — the powers are ``slab_diffuse``'s ``T_diff`` and internal ``R_diff`` times
   ``scale = E_mat / E_slab`` per incidence and polarization: ``E_slab`` is the power that
   ``slab_diffuse`` lets into the slab (``T_diff + R_int + A``), ``E_mat = 1 − R_coh − T_coh −
