@@ -197,7 +197,7 @@ def check_path_solver_sampling():
         _sample_budget(m, math.radians(30.0), 1 << 14, seed=2, path_solver=True)
     msgs = [str(w.message) for w in caught if "DiffuseTransmission" in type(w.message).__name__]
     smp, _, _ = _sample_budget(m, math.radians(30.0), 1 << 14, seed=1)
-    return {**ps, "warnings": msgs, "rm_t_diff": smp["t_diff"].tolist()}
+    return {**ps, "warnings": msgs, "rm_t_diff": smp["t_diff"].tolist(), "text": m.to_string()}
 
 
 TX = (-1.0, 0.0, 1.5)  # V-polarized isotropic transmitter above the wall (z = 0)

@@ -661,6 +661,9 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         d = "half-space" if self._thickness is None else f"thickness {self._thickness:g} m"
         t = self.active_tables
         tab = "tables not built yet" if t is None else t.describe()
+        tt = self.active_transmission_tables
+        if tt is not None:
+            tab += "; " + tt.describe()
         return (
             f"EmscatterRadioMaterial {self.name!r}: {self._medium.describe()}; {surf}; {d}; {tab}"
         )
