@@ -160,7 +160,21 @@ def _check(roughness, eps, k, theta_i, theta_t, phi_t, phi_i):
     if roughness.dimension != 2:
         raise ValueError("SPM transmission needs a 2-D surface (dimension=2), got a 1-D profile")
     k = check_positive("k", k, unit="rad/m")
-    e = check_transmission_eps(eps)
+    try:
+        e = check_transmission_eps(eps)
+    except ValueError as err:
+        if "pec" in str(err):
+            raise ValueError(
+                "eps='pec': a perfect conductor transmits nothing; SPM transmission needs a "
+                "lossless dielectric (real eps > 0, eps != 1)"
+            ) from None
+        if "must be real" in str(err):
+            raise ValueError(
+                f"eps must be real for SPM transmission (a lossless dielectric: σ⁰_t is the "
+                f"power of the propagating waves below the interface, which an absorbing "
+                f"medium attenuates with depth), got eps = {eps!r}"
+            ) from None
+        raise ValueError(str(err).replace("GO transmission", "SPM transmission")) from None
     ti = check_angle("theta_i", theta_i)
     tt = check_angle("theta_t", theta_t)
     pt = check_finite("phi_t", phi_t)
