@@ -255,22 +255,26 @@ def bistatic_transmission(
     -------
     :class:`~emscatter.scattering.Scattering`: ``sigma0`` (2, 2, *shape), ``coherent``
     (2, *shape) the coherent transmissivity (a delta lobe at the refracted direction),
-    ``theta_s``/``phi_s`` holding ``θt``/``φt``, ``info["direction"] = "transmission"``.
+    ``theta_s``/``phi_s`` holding ``θt``/``φt``, ``info["direction"] = "transmission"``;
+    ``coherent`` is computed on first read (the second-order quadrature per distinct θi).
     """
     if out_of_range not in OUT_OF_RANGE:
         raise ValueError(f"out_of_range must be one of {OUT_OF_RANGE}, got {out_of_range!r}")
     k, (ti, tt, pt, pi_, e) = _check(roughness, eps, k, theta_i, theta_t, phi_t, phi_i)
     j = jones(roughness, e, k, ti, tt, pt, pi_)
     sigma0 = np.abs(j) ** 2
-    coh = coherent_transmissivity(roughness, e, k, ti, pi_)
     validity = check_validity(roughness, k, eps=float(np.max(e)), theta_i=ti)
     failing = _failing(validity, ti.shape)
     bad = _policy(validity, failing, out_of_range)
     if np.any(bad):
         sigma0 = np.where(bad, np.nan, sigma0)
-        coh = np.where(bad, np.nan, coh)
-    elif not (np.all(np.isfinite(sigma0)) and np.all(np.isfinite(coh))):
+    elif not np.all(np.isfinite(sigma0)):
         raise ValueError("SPM transmission produced NaN/inf (please report the inputs)")
+
+    def coh():  # on first read (Scattering.coherent): ~3 ms per distinct (θi, φi, ε)
+        c = coherent_transmissivity(roughness, e, k, ti, pi_)
+        return np.where(bad, np.nan, c)
+
     info = {
         "direction": "transmission",
         "validity": validity,
