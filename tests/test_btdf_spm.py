@@ -68,6 +68,9 @@ def test_te_amplitude_is_the_closed_form():
     closed = 2 * k1zi * K**2 * (eps - 1) * np.abs(kx / np.sqrt(kn2))
     closed = closed / np.abs((k1z + k2z) * (k1zi + k2zi))
     np.testing.assert_allclose(np.abs(b[0, 0]), closed, rtol=1e-12)
+    mixed = tspm.transmission_amplitudes(np.where(kx > 0, 4.0, eps), K, th, kx, ky)
+    four = tspm.transmission_amplitudes(4.0, K, th, kx, ky)
+    np.testing.assert_array_equal(mixed, np.where(kx > 0, four, b))  # per-element media
     ref = spm._first_order_amplitudes(GaussianCorrelation(0.01, 0.2), eps, K, th, kx, ky)
     for p in (0, 1):
         np.testing.assert_allclose(b[0, p], ref[p][2], rtol=1e-12, atol=1e-12 * np.abs(b).max())

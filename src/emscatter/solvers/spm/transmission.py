@@ -93,26 +93,63 @@ def transmission_amplitudes(eps, k: float, theta_i, kx, ky) -> np.ndarray:
     """First-order transmitted E amplitudes ``b[pol_t, pol_i]`` ``(2, 2, ...)`` (complex,
     per unit height spectrum ``F(κ)`` [1/m]) of the down-going wave of transverse wavenumber
     ``(kx, ky)`` [rad/m] for unit incident h/v waves at ``theta_i`` [rad] (``φi = 0``),
-    emscatter's h/v bases (module docstring); arguments broadcast, ``eps`` real > 0."""
+    emscatter's h/v bases (module docstring); arguments broadcast, ``eps`` real > 0.
+
+    The source ``S = ∂z[J⁽⁰⁾]_t + iκ [J⁽⁰⁾_z]`` is linear in ``κ``: its two coefficients
+    depend on the incidence only and are computed once per distinct (θi, ε)."""
     eps = np.asarray(eps, dtype=complex)
     ti = np.asarray(theta_i, dtype=float)
     kx, ky = np.asarray(kx, dtype=float), np.asarray(ky, dtype=float)
-    eps, ti, kx, ky = np.broadcast_arrays(eps, ti, kx, ky)
-    si, ci = np.sin(ti), np.cos(ti)
-    kix, k1zi = k * si, k * ci
-    k2 = eps * k * k
-    k2m = np.sqrt(eps) * k
-    k2zi = _kz(k2, kix * kix)
-    rh0 = (k1zi - k2zi) / (k1zi + k2zi)
-    rv0 = (eps * k1zi - k2zi) / (eps * k1zi + k2zi)
+    shape = np.broadcast_shapes(eps.shape, ti.shape, kx.shape, ky.shape)
+    e_f = np.broadcast_to(eps, shape).reshape(-1)
+    t_f = np.broadcast_to(ti, shape).reshape(-1)
+    if e_f.size and np.all(e_f == e_f[0]):  # one medium: the distinct incidence angles
+        t_u, inv = np.unique(t_f, return_inverse=True)
+        e_u, e_big = e_f[:1], e_f[0]
+    else:
+        t_u, inv, e_u, e_big = t_f, slice(None), e_f, e_f.reshape(shape)
+    src = _incidence_source(e_u, k, t_u)  # (2 pols, 6 coefficients, n_u)
+    src = src[:, :, inv].reshape(2, 6, *shape)
+    kx, ky = np.broadcast_to(kx, shape), np.broadcast_to(ky, shape)
+    kix = k * np.broadcast_to(np.sin(ti), shape)
+    k2 = e_big * k * k
+    k2m = np.sqrt(e_big) * k
     Kn = np.hypot(kx, ky)
     safe = np.where(Kn == 0, 1.0, Kn)
     cxn, cyn = np.where(Kn == 0, 1.0, kx / safe), np.where(Kn == 0, 0.0, ky / safe)
     kap_x, kap_y = kx - kix, ky
     k1zn, k2zn = _kz(k * k, Kn * Kn), _kz(k2, Kn * Kn)
-    one, zero = np.ones_like(ci), np.zeros_like(ci)
-    out = np.empty((2, 2, *ci.shape), dtype=complex)
+    out = np.empty((2, 2, *shape), dtype=complex)
     for p in (0, 1):  # incident polarization (h, v), not an angle loop
+        ax, ay, bz, hx, hy, hz = src[p]
+        se = (ax + 1j * kap_x * bz, ay + 1j * kap_y * bz)
+        sh = (hx + 1j * kap_x * hz, hy + 1j * kap_y * hz)
+        se_c = se[0] * cxn + se[1] * cyn
+        se_h = -se[0] * cyn + se[1] * cxn
+        sh_c = sh[0] * cxn + sh[1] * cyn
+        sh_h = -sh[0] * cyn + sh[1] * cxn
+        # the system of second_order._solve_up: up-going a, down-going b
+        a_h = (sh_c - k2zn * se_h) / (k1zn + k2zn)
+        a_v = -(e_big * k * se_c + k2zn * sh_h / k) / (e_big * k1zn + k2zn)
+        out[0, p] = a_h + se_h
+        out[1, p] = (k * a_v + sh_h) / k2m
+    return out
+
+
+def _incidence_source(eps, k, ti) -> np.ndarray:
+    """Coefficients ``(2, 6, n)`` of the first-order source per incident polarization:
+    ``S_E,x = A_x + iκ_x B``, ``S_E,y = A_y + iκ_y B`` (``A = Σ ±i q_z E_t``, ``B = Σ ± E_z``
+    over the incident, reflected and transmitted zeroth-order waves at ``z = 0``), the same
+    three for ``H̃``; ``eps``, ``ti`` 1-D (n,)."""
+    si, ci = np.sin(ti), np.cos(ti)
+    kix, k1zi = k * si, k * ci
+    k2m = np.sqrt(eps) * k
+    k2zi = _kz(eps * k * k, kix * kix)
+    rh0 = (k1zi - k2zi) / (k1zi + k2zi)
+    rv0 = (eps * k1zi - k2zi) / (eps * k1zi + k2zi)
+    one, zero = np.ones_like(ci), np.zeros_like(ci)
+    out = np.zeros((2, 6, ci.size), dtype=complex)
+    for p in (0, 1):
         inc = (one, zero) if p == 0 else (zero, one)
         ref = (rh0, zero) if p == 0 else (zero, rv0)
         tra = (1.0 + rh0, zero) if p == 0 else (zero, (1.0 + rv0) / np.sqrt(eps))
@@ -121,22 +158,10 @@ def transmission_amplitudes(eps, k: float, theta_i, kx, ky) -> np.ndarray:
             (*_plane_wave(k, one, zero, kix, *ref, k1zi), k1zi, 1.0),
             (*_plane_wave(k2m, one, zero, kix, *tra, -k2zi), -k2zi, -1.0),
         )
-        se = [0.0, 0.0]
-        sh = [0.0, 0.0]
-        for E, H, qz, sg in waves:  # source S = ∂z[J⁽⁰⁾]_t + iκ [J⁽⁰⁾_z] (three waves)
-            se[0] = se[0] + sg * (1j * qz * E[0] + 1j * kap_x * E[2])
-            se[1] = se[1] + sg * (1j * qz * E[1] + 1j * kap_y * E[2])
-            sh[0] = sh[0] + sg * (1j * qz * H[0] + 1j * kap_x * H[2])
-            sh[1] = sh[1] + sg * (1j * qz * H[1] + 1j * kap_y * H[2])
-        se_c = se[0] * cxn + se[1] * cyn
-        se_h = -se[0] * cyn + se[1] * cxn
-        sh_c = sh[0] * cxn + sh[1] * cyn
-        sh_h = -sh[0] * cyn + sh[1] * cxn
-        # the system of second_order._solve_up: up-going a, down-going b
-        a_h = (sh_c - k2zn * se_h) / (k1zn + k2zn)
-        a_v = -(eps * k * se_c + k2zn * sh_h / k) / (eps * k1zn + k2zn)
-        out[0, p] = a_h + se_h
-        out[1, p] = (k * a_v + sh_h) / k2m
+        for E, H, qz, sg in waves:
+            out[p] += sg * np.stack(
+                [1j * qz * E[0], 1j * qz * E[1], E[2], 1j * qz * H[0], 1j * qz * H[1], H[2]]
+            )
     return out
 
 
