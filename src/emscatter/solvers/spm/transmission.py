@@ -13,11 +13,12 @@ up-going plane wave (amplitudes ``a_h, a_v``) and one down-going plane wave in t
 spectrum ``F(κ)``, driven by the source ``−f ∂z[E⁽⁰⁾]_t + ∇f [E⁽⁰⁾_z]`` (and the same for ``H``).
 The 4 × 4 system per ``k⊥`` is that of :func:`.second_order._solve_up` (mirrored here,
 broadcast over ``θi``); its closed forms are the first-order transmitted amplitudes of
-Johnson, JOSA A 16 (1999) 2720, §2 (his ``β⁽¹⁾``, with the reflected ``α⁽¹⁾``), Tsang, Kong &
-Ding, *Scattering of Electromagnetic Waves* vol. III (2001) ch. 4 (second-order SPM, energy
-conservation) and Ulaby, Moore & Fung 1982 vol. II §12-5 (the reflected first order, eqs.
-12.62–12.66). Amplitudes are E-field amplitudes on emscatter's h/v bases of the transmitted
-direction (``ĥ = ẑ × k̂/|ẑ × k̂|``, ``v̂ = ĥ × k̂``: :mod:`emscatter.conventions`).
+Johnson, JOSA A 16 (1999) 2720 (its first-order solution: the fields in both media; the TE
+one, ``|b_hh| = 2k₁zi k²|ε − 1||cos Δφ| / |(k₁z + k₂z)(k₁zi + k₂zi)|``, is tested), Tsang,
+Kong & Ding, *Scattering of Electromagnetic Waves* vol. III (2001) ch. 4 (second-order SPM,
+energy conservation) and Ulaby, Moore & Fung 1982 vol. II §12-5 (the reflected first order).
+Amplitudes are E-field amplitudes on emscatter's h/v bases of the transmitted direction
+(``ĥ = ẑ × k̂/|ẑ × k̂|``, ``v̂ = ĥ × k̂``: :mod:`emscatter.conventions`).
 
 Transmission coefficient (per unit area, as PO's and GO's: ``T = ∫ σ⁰_t / (4π cosθi) dΩ_t``).
 The power flux of the down-going wave through ``z = 0`` against the incident one is
