@@ -168,11 +168,11 @@ def _run_transmission(a, rough, wl, resolution, table_kw):
     from ..brdf.build import material_eps
 
     n_theta = 90 if resolution is None else resolution[0]
-    po = a.method == "po"  # the PO BTDF beside a PO reflection, GO otherwise
+    tm = a.method if a.method in ("po", "spm") else "go"  # PO/SPM BTDF beside PO/SPM, else GO
     bt = build_btdf_table(
         rough, a.material, wl, n_theta=n_theta, polarized=a.polarized,
-        dtype=table_kw["dtype"], method="po" if po else "go",
-        **({"out_of_range": a.out_of_range} if po and a.out_of_range != "nan" else {}),
+        dtype=table_kw["dtype"], method=tm,
+        **({"out_of_range": a.out_of_range} if tm != "go" and a.out_of_range != "nan" else {}),
     )  # fmt: skip
     kw = dict(table_kw, energy="off")
     table = build_table(rough, a.material, wl, **kw)
@@ -297,8 +297,8 @@ def register(subparsers) -> None:
     p.add_argument(
         "--transmission",
         action="store_true",
-        help="a rough dielectric (real ε > 0, ≠ 1): also write its BTDF (GO; PO with --method "
-        "po) as OUT_btdf.npz and "
+        help="a rough dielectric (real ε > 0, ≠ 1): also write its BTDF (GO; PO or SPM with "
+        "--method po / spm) as OUT_btdf.npz and "
         "the inside reflection (1/ε) as OUT_inner.npz (.npz output, isotropic; the reflection "
         "capped at 1 − T of that BTDF); render them with emscatter render OUT.npz --btdf …",
     )
