@@ -336,7 +336,8 @@ def fresnel_setup(s, c, eps, pec):
 @inline
 def transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0):
     """``(R_h, R_v, γ_h, γ_v)`` with Wu et al. 2001's transition, from the sum ratios
-    ``e₂ = S(2Q)/S(Q) e^{−Q}``, ``e₄ = S(4Q)/S(Q) e^{−2Q}``: ``γ_p = 1 − |F + 8R₀|² / (|F|² +
+    ``e₂ = S(2Q)/S(Q) e^{−Q}``, ``e₄ = S(4Q)/S(Q) e^{−2Q}`` at ``Q = (kσ)²``
+    (:func:`emscatter.solvers.iem.terms.transition_from_sums`: why not ``(kσ cosθ)²``): ``γ_p = 1 − |F + 8R₀|² / (|F|² +
     8 Re(F R₀*) e₂ + 16|R₀|² e₄)``, ``F_h = −F_v = −8 R₀² sin²θ (cosθ + q₂)/q₂`` (real
     arithmetic)."""
     ftc = r08sq * s2 * (c * iq + 1.0)
@@ -404,20 +405,19 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
     rh_t, rv_t = rh, rv
     gh = gv = 0.0
     if transition and not pec:
-        Q = ks2 * c * c
+        Q = ks2  # the transition's phase variable (kσ)² (terms.transition_q)
         e2, e4 = 2.0, 4.0
-        if c > 0:
+        if fast:
+            T[TQ], T[TK2], T[TACT] = Q, Kr * Kr, 1.0
+            walk_transition(T, 1, spec, dim, rtol * 1e-2, tr_ok)
+            fast = tr_ok[0]
             if fast:
-                T[TQ], T[TK2], T[TACT] = Q, Kr * Kr, 1.0
-                walk_transition(T, 1, spec, dim, rtol * 1e-2, tr_ok)
-                fast = tr_ok[0]
-                if fast:
-                    e2, e4 = transition_ratios(T, 0)
-            if not fast:
-                lq = math.log(Q)
-                l1, l2, l4 = transition_sums(lq, Kr, spec, dim, log_rtol - 4.6)
-                e2 = math.exp(min(l2 - l1 - Q, 700.0))
-                e4 = math.exp(min(l4 - l1 - 2.0 * Q, 700.0))
+                e2, e4 = transition_ratios(T, 0)
+        if not fast:
+            lq = math.log(Q)
+            l1, l2, l4 = transition_sums(lq, Kr, spec, dim, log_rtol - 4.6)
+            e2 = math.exp(min(l2 - l1 - Q, 700.0))
+            e4 = math.exp(min(l4 - l1 - 2.0 * Q, 700.0))
         rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
     e_k = -2.0 * ks2 * c * c
     if fung92:
@@ -484,8 +484,8 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             if not use_fast:
                 continue
             lq2[l], liq[l], lrh[l], lrv[l] = fresnel_setup(s, c, eps, pec)
-            if with_tr and c > 0:
-                T[TQ + l] = ks2 * c * c
+            if with_tr:  # the transition's Q = (kσ)² (terms.transition_q)
+                T[TQ + l] = ks2
                 T[TK2 + l] = K[r] * K[r]
                 T[TACT + l] = 1.0
                 any_tr = True
@@ -502,11 +502,9 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             rh_t, rv_t = rh, rv
             gh = gv = 0.0
             if with_tr:
-                e2, e4 = 2.0, 4.0
-                if c > 0:
-                    if not tr_ok[l]:
-                        continue  # log-space path
-                    e2, e4 = transition_ratios(T, l)
+                if not tr_ok[l]:
+                    continue  # log-space path
+                e2, e4 = transition_ratios(T, l)
                 rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq,
                                                       a0)  # fmt: skip
             e_k = -2.0 * ks2 * c * c
