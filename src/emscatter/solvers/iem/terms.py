@@ -38,13 +38,14 @@ the series ratio of the papers, rewritten without the ``1/F_t`` division so that
 incidence (``F_t = 0``) is regular:
 ``S_t/S_t0 = |F_t + 8R₀/cosθ|² Σ aₙWₙ / Σ aₙ |F_t + 2^(n+2) R₀ e^(−Q)/cosθ|² Wₙ``,
 ``aₙ = Qⁿ/n!``; the three sums are physical-optics-type series
-(:func:`emscatter.solvers.kirchhoff.po.series_sum`). ``F_t = 2 F_vv(R_v(0))`` is the I2EM
-backscatter complementary coefficient of v at normal-incidence reflection (``F_vv``, ``F_hh``
-of Fung et al. 2002 as coded by Ulaby & Long 2014, code 10.1; checked in ``tests/test_iem_transition.py``) and ``2 F_hh(R_h(0)) = −F_t``: h has
-``−F_t`` against the same Kirchhoff term (``f_hh(R_h(0)) = f_vv(R_v(0))``), so γ_h ≠ γ_v
-is one rule, as in the AIEM code of Chen et al. (2003), not a per-polarization choice. (The
-I2EM codes of Ulaby & Long 2014 and of Fung & Chen 2010 take γ_v for both; the latter's
-comment says the ratio has no polarization dependence, which holds only where ``F_t → 0``.)
+(:func:`emscatter.solvers.kirchhoff.po.series_sum`). ``F_t = 2 F_vv(R_v(0))``: the I2EM
+backscatter complementary coefficient of v (``F_vv``, ``F_hh`` of Fung et al. 2002 as coded
+by Ulaby & Long 2014, code 10.1) at normal-incidence reflection, and ``2 F_hh(R_h(0)) =
+−F_t`` (checked in ``tests/test_iem_transition.py``): h has ``−F_t`` against the same
+Kirchhoff term (``f_hh(R_h(0)) = f_vv(R_v(0))``), so γ_h ≠ γ_v is one rule, as in the AIEM
+code of Chen et al. (2003), not a per-polarization choice. (The I2EM codes of Ulaby & Long
+2014 and of Fung & Chen 2010 take γ_v for both; the latter's comment says the ratio has no
+polarization dependence, which holds only where ``F_t → 0``.)
 
 **The phase variable (issue 20).** The papers take ``Q = (kσ cosθ)²``. Here ``Q = (kσ)²``,
 everything else as published (``F_t`` at θ, the spectrum at the Bragg argument). This is a

@@ -337,9 +337,9 @@ def fresnel_setup(s, c, eps, pec):
 def transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0):
     """``(R_h, R_v, γ_h, γ_v)`` with Wu et al. 2001's transition, from the sum ratios
     ``e₂ = S(2Q)/S(Q) e^{−Q}``, ``e₄ = S(4Q)/S(Q) e^{−2Q}`` at ``Q = (kσ)²``
-    (:func:`emscatter.solvers.iem.terms.transition_from_sums`: why not ``(kσ cosθ)²``): ``γ_p = 1 − |F + 8R₀|² / (|F|² +
-    8 Re(F R₀*) e₂ + 16|R₀|² e₄)``, ``F_h = −F_v = −8 R₀² sin²θ (cosθ + q₂)/q₂`` (real
-    arithmetic)."""
+    (:func:`emscatter.solvers.iem.terms.transition_from_sums`: why not ``(kσ cosθ)²``):
+    ``γ_p = 1 − |F + 8R₀|² / (|F|² + 8 Re(F R₀*) e₂ + 16|R₀|² e₄)``,
+    ``F_h = −F_v = −8 R₀² sin²θ (cosθ + q₂)/q₂`` (real arithmetic)."""
     ftc = r08sq * s2 * (c * iq + 1.0)
     ff = ftc.real * ftc.real + ftc.imag * ftc.imag
     cr = 8.0 * (ftc.real * r0.real + ftc.imag * r0.imag) * e2
