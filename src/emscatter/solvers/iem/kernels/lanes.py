@@ -322,6 +322,14 @@ def transition_ratios(T, l):
 
 
 @inline
+def log_transition_ratios(Q, Kr, spec, dim, log_rtol):
+    """:func:`transition_ratios` from the log-space :func:`transition_sums` at ``Q`` (any
+    size; the sums to ``log_rtol`` − 4.6, i.e. 1e-2 of the series tolerance)."""
+    l1, l2, l4 = transition_sums(math.log(Q), Kr, spec, dim, log_rtol - 4.6)
+    return math.exp(min(l2 - l1 - Q, 700.0)), math.exp(min(l4 - l1 - 2.0 * Q, 700.0))
+
+
+@inline
 def fresnel_setup(s, c, eps, pec):
     """``(q₂, 1/q₂, R_h, R_v)`` at incidence θ (PEC: ``R_h = −1, R_v = 1``, ``q₂ = 0``)."""
     if pec:
@@ -414,10 +422,7 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
             if fast:
                 e2, e4 = transition_ratios(T, 0)
         if not fast:
-            lq = math.log(Q)
-            l1, l2, l4 = transition_sums(lq, Kr, spec, dim, log_rtol - 4.6)
-            e2 = math.exp(min(l2 - l1 - Q, 700.0))
-            e4 = math.exp(min(l4 - l1 - 2.0 * Q, 700.0))
+            e2, e4 = log_transition_ratios(Q, Kr, spec, dim, log_rtol)
         rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
     e_k = -2.0 * ks2 * c * c
     if fung92:
@@ -502,9 +507,10 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             rh_t, rv_t = rh, rv
             gh = gv = 0.0
             if with_tr:
-                if not tr_ok[l]:
-                    continue  # log-space path
-                e2, e4 = transition_ratios(T, l)
+                if tr_ok[l]:
+                    e2, e4 = transition_ratios(T, l)
+                else:  # linear sums out of range (kσ ≳ 9): log-space sums, lane stays fast
+                    e2, e4 = log_transition_ratios(ks2, K[r], spec, dim, log_rtol)
                 rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq,
                                                       a0)  # fmt: skip
             e_k = -2.0 * ks2 * c * c
