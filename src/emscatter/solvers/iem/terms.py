@@ -77,6 +77,7 @@ __all__ = [
     "complementary_terms",
     "transition_factor",
     "transition_from_sums",
+    "transition_sums",
     "transition_q",
     "backscatter_terms",
     "branch_root",
@@ -349,22 +350,57 @@ def transition_factor(eps, cs, ks: float, log_w, K, *, rtol: float = 1e-10):
     ``|F_t c + 8R₀|² S(Q) / [|F_t c|² S(Q) + 8 Re(F_t c R₀*) e^{−Q} S(2Q)
     + 16 |R₀|² e^{−2Q} S(4Q)]`` for v (``R₀ = R_v(0)``) and the same with ``F_t → −F_t`` for h
     (the h complementary coefficient at ``R_h(0) = −R_v(0)`` is ``−F_t``, the Kirchhoff one
-    ``f_hh(R_h(0)) = f_vv(R_v(0))``). The sums are the single-component case of
-    :func:`iem_series`."""
-    from emscatter.solvers.iem.series import iem_series
-
+    ``f_hh(R_h(0)) = f_vv(R_v(0))``). The sums are :func:`transition_sums`."""
     cs = np.asarray(cs, dtype=float)
-    n = cs.size
-    rows = 3 * n
-    lx = np.repeat(0.5 * np.log([1.0, 2.0, 4.0]), n)  # base √β: the series of S(βQ)
-    ls, _ = iem_series(
-        np.zeros((rows, 1)), lx[:, None], np.ones((rows, 1), complex), np.ones((rows, 1)),
-        np.zeros(rows, complex), 2.0 * math.log(ks), log_w,
-        np.tile(np.broadcast_to(K, (n,)), 3), np.zeros(rows), rtol=rtol,
-    )  # fmt: skip
-    # iem_series carries the base to the power n − 1: S(βQ) = β exp(l_β)
-    l1, l2, l4 = ls[:n], ls[n : 2 * n] + math.log(2.0), ls[2 * n :] + math.log(4.0)
-    return transition_from_sums(eps, cs, ks, l1, l2, l4)
+    Kb = np.broadcast_to(np.asarray(K, dtype=float), cs.shape).ravel()
+    l1, l2, l4 = transition_sums(ks, log_w, Kb, rtol=rtol)
+    return transition_from_sums(eps, cs, ks, *(v.reshape(cs.shape) for v in (l1, l2, l4)))
+
+
+def transition_sums(ks: float, log_w, K, *, rtol: float = 1e-10, max_terms: int = 10**6):
+    """``(log S(Q), log S(2Q), log S(4Q))``, ``S(βQ) = Σ_{n≥1} (βQ)ⁿ/n! Ŵₙ(K)``,
+    ``Q = (kσ)²`` (:func:`transition_q`), for each element of ``K`` (1-D). A table of
+    ``n log Q − log n! + log Ŵₙ(K)`` (:func:`emscatter.solvers.iem.series.orders_table`), as
+    long as the Poisson tail of ``4Q`` asks, lengthened (×2) until every row's terms decrease
+    at its end with a geometric tail bound below ``rtol`` of its sum (a spectrum that grows
+    with n, e.g. a Gaussian at a large Bragg argument, moves the mass to higher orders); rows
+    in chunks of at most ~2e6 table entries."""
+    from emscatter.solvers.iem.series import _orders_needed
+
+    K = np.asarray(K, dtype=float).ravel()
+    N0 = int(_orders_needed(np.array([4.0 * transition_q(ks)]), math.log(rtol))[0]) + 4
+    out = [np.empty(K.size) for _ in range(3)]
+    step = max(1, int(2e6 // N0))
+    for a in range(0, K.size, step):
+        for o, v in zip(out, _transition_rows(ks, log_w, K[a : a + step], N0, rtol, max_terms),
+                        strict=True):  # fmt: skip
+            o[a : a + step] = v
+    return out[0], out[1], out[2]
+
+
+def _transition_rows(ks, log_w, K, N, rtol, max_terms):
+    """:func:`transition_sums` for one chunk of rows, starting from ``N`` orders."""
+    from emscatter.solvers.iem.series import orders_table
+
+    while True:
+        table = orders_table(2.0 * math.log(ks), log_w, K, N)
+        n = np.arange(1.0, N + 1.0)
+        out, ok = [], True
+        for b in (1.0, 2.0, 4.0):
+            t = table + n[None, :] * math.log(b)
+            top = np.max(t, axis=1)
+            top = np.where(np.isfinite(top), top, 0.0)
+            ls = top + np.log(np.exp(t - top[:, None]).sum(axis=1))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                r = np.exp(t[:, -1] - t[:, -2])  # N ≥ 5: the last term ratio
+                r = np.where(np.isnan(r), 0.0, np.minimum(r, 1.0))  # −inf terms: none left
+                tail = t[:, -1] + np.log(r) - np.log1p(-r)  # r = 1: infinite, not converged
+                rel = np.where(np.isfinite(ls), tail - ls, -np.inf)
+            ok = ok and bool(np.all(~(rel > math.log(rtol))))
+            out.append(ls)
+        if ok or N >= max_terms:
+            return out
+        N = min(2 * N, max_terms)
 
 
 def transition_q(ks: float) -> float:
