@@ -33,6 +33,8 @@ __all__ = [
     "check_n_workers",
     "limited_threads",
     "open_executor",
+    "dask_client",
+    "dashboard_link",
     "call_recording",
     "run_ordered",
 ]
@@ -104,17 +106,19 @@ def limited_threads(threads: int | None):
 
 def _thread_env(threads: int | None) -> dict:
     t = str(threads or 1)
-    return {name: t for name in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS",
+    return {name: t for name in ("NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS",
                                  "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}  # fmt: skip
 
 
 def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
-                  memory_limit=None):  # fmt: skip
+                  memory_limit=None, timeout: float | None = None):  # fmt: skip
     """``(executor or None, close)`` for ``client``; ``close()`` shuts down what was started
     here (a ``"local"`` LocalCluster of ``n_workers`` single-threaded processes, default the
-    CPU count ÷ ``threads``; a Client to a scheduler address) and leaves a caller's own
-    Client or Executor open. ``memory_limit``: the LocalCluster's per-worker limit (dask's
-    default: the machine's memory ÷ workers)."""
+    CPU count ÷ ``threads``, its dashboard on a free port and its workers' statistical
+    profiler off; a Client to a scheduler address) and leaves a caller's own Client or
+    Executor open. ``memory_limit``: the LocalCluster's per-worker limit (dask's default: the
+    machine's memory ÷ workers); ``timeout`` [s]: how long to try to reach a scheduler
+    address (dask's default, 30 s, when None) before an ``OSError``."""
     check_client(client)
     if client is None:
         return None, lambda: None
@@ -131,14 +135,19 @@ def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
         if client == "local":
             n = n_workers or max(1, (os.cpu_count() or 1) // (threads or 1))
             extra = {} if memory_limit is None else {"memory_limit": memory_limit}
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=":0",
-                env=_thread_env(threads),
-                **extra,
-            )
+            import dask
+
+            # the workers' statistical profiler samples every thread each 10 ms: CPU a farm of
+            # small tasks on few cores does not have (the dashboard's task stream stays)
+            with dask.config.set({"distributed.worker.profile.enabled": False}):
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=":0",
+                    env=_thread_env(threads),
+                    **extra,
+                )
             dc = Client(cluster)
 
             def close():
@@ -146,9 +155,27 @@ def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
                 cluster.close()
 
             return dc.get_executor(), close
-        dc = Client(client)
+        dc = Client(client) if timeout is None else Client(client, timeout=timeout)
         return dc.get_executor(), dc.close
     return client.get_executor(), lambda: None  # a dask.distributed Client
+
+
+def dask_client(executor):
+    """The dask.distributed ``Client`` behind ``executor`` (its ``get_executor()``), or None."""
+    if executor is None:
+        return None
+    if callable(getattr(executor, "scheduler_info", None)):
+        return executor
+    return getattr(executor, "_client", None)
+
+
+def dashboard_link(executor) -> str | None:
+    """The dask dashboard's address of ``executor``'s cluster (None: not dask, or none)."""
+    dc = dask_client(executor)
+    try:
+        return None if dc is None else dc.dashboard_link
+    except Exception:  # noqa: BLE001 - a cluster without a dashboard
+        return None
 
 
 def call_recording(fn, *args, threads: int | None = None, **kwargs):
