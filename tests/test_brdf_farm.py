@@ -250,3 +250,18 @@ def test_local_cluster_dashboard_on_a_free_port_not_8787():
     assert not [w for w in caught if "8787" in str(w.message)]
     for a, b in zip(serial, parallel, strict=True):
         _same(a, b)
+
+
+def test_limited_threads_caps_the_wheels_openblas_and_restores_it():
+    """Without threadpoolctl, emscatter.parallel caps the OpenBLAS of numpy's and scipy's
+    wheels itself, so a serial run uses the BLAS thread count of a "local" worker
+    (OPENBLAS_NUM_THREADS=threads) and gets its bits."""
+    from emscatter import parallel
+
+    controls = parallel._openblas_controls()
+    if not controls:
+        pytest.skip("no OpenBLAS from the numpy/scipy wheels here (a system BLAS)")
+    before = [int(get()) for get, _ in controls]
+    with parallel.limited_threads(1, wheel_blas=True):
+        assert [int(get()) for get, _ in controls] == [1] * len(controls)
+    assert [int(get()) for get, _ in controls] == before

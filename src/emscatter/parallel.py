@@ -76,10 +76,12 @@ def check_client(client) -> None:
 
 
 @contextlib.contextmanager
-def limited_threads(threads: int | None):
+def limited_threads(threads: int | None, wheel_blas: bool = False):
     """Within the block, at most ``threads`` compiled threads: numba's (this thread's),
     scipy.fft's default ``workers`` and BLAS's (through ``threadpoolctl`` when installed;
-    otherwise the worker's ``OPENBLAS_NUM_THREADS``). ``None``: no cap."""
+    otherwise, with ``wheel_blas``, the OpenBLAS that numpy's and scipy's wheels ship,
+    :func:`_openblas_controls`). ``None``: no cap. BLAS's count is process-wide: the cap
+    holds for the whole process during the block."""
     if threads is None:
         yield
         return
@@ -100,8 +102,51 @@ def limited_threads(threads: int | None):
 
             stack.enter_context(threadpool_limits(limits=threads))
         except ImportError:
-            pass
+            for get, put in _openblas_controls() if wheel_blas else ():
+                before = int(get())
+                put(min(threads, before))
+                stack.callback(put, before)
         yield
+
+
+_OPENBLAS_CALLS = (
+    ("scipy_openblas_get_num_threads64_", "scipy_openblas_set_num_threads64_"),
+    ("scipy_openblas_get_num_threads", "scipy_openblas_set_num_threads"),
+    ("openblas_get_num_threads64_", "openblas_set_num_threads64_"),
+    ("openblas_get_num_threads", "openblas_set_num_threads"),
+)
+_OPENBLAS: list | None = None
+
+
+def _openblas_controls() -> list:
+    """``[(get_num_threads, set_num_threads), ...]`` of the OpenBLAS builds numpy and scipy
+    ship in their wheels (``numpy.libs``, ``scipy.libs``), found without ``threadpoolctl``:
+    the serial run caps BLAS as a ``"local"`` worker's ``OPENBLAS_NUM_THREADS`` does, since a
+    threaded BLAS reduction may differ from the single-threaded one in the last bit. Empty
+    where none is found (a system BLAS: install ``threadpoolctl``)."""
+    global _OPENBLAS
+    if _OPENBLAS is not None:
+        return _OPENBLAS
+    import ctypes
+    import glob
+
+    found = []
+    for mod in ("numpy", "scipy"):
+        try:
+            top = os.path.dirname(__import__(mod).__file__)
+        except (ImportError, TypeError):
+            continue
+        for path in sorted(glob.glob(os.path.join(top + ".libs", "*openblas*.so*"))):
+            try:
+                lib = ctypes.CDLL(path)  # already loaded by the module: the same handle
+            except OSError:
+                continue
+            for get, put in _OPENBLAS_CALLS:
+                if hasattr(lib, get) and hasattr(lib, put):
+                    found.append((getattr(lib, get), getattr(lib, put)))
+                    break
+    _OPENBLAS = found
+    return found
 
 
 def _thread_env(threads: int | None) -> dict:
@@ -178,20 +223,25 @@ def dashboard_link(executor) -> str | None:
         return None
 
 
-def call_recording(fn, *args, threads: int | None = None, **kwargs):
+def call_recording(fn, *args, threads: int | None = None, wheel_blas: bool = False, **kwargs):
     """``(fn(*args, **kwargs), [(category, message), ...])`` with ``threads`` capped
     (:func:`limited_threads`) and every warning recorded instead of shown: the task function
     of :func:`run_ordered` in a worker (module-level, so it pickles)."""
-    with limited_threads(threads), warnings.catch_warnings(record=True) as caught:
+    with limited_threads(threads, wheel_blas), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         out = fn(*args, **kwargs)
     return out, [(w.category, str(w.message)) for w in caught]
 
 
 def run_ordered(executor, fn, arg_list, names, *, threads=None, bar=None, on_result=None,
-                stacklevel: int = 3):  # fmt: skip
+                stacklevel: int = 3, cap_serial: bool = False):  # fmt: skip
     """``[fn(*args) for args in arg_list]`` on ``executor`` (None: serially here, warnings
-    shown as they come, no thread cap), in the order of ``arg_list``.
+    shown as they come, no thread cap unless ``cap_serial``), in the order of ``arg_list``.
+
+    ``cap_serial``: the serial tasks are capped at ``threads`` like a worker's, BLAS included
+    (also without ``threadpoolctl``: the wheels' OpenBLAS, ``wheel_blas``), in the workers
+    too — a threaded BLAS or numba reduction may differ from a single-threaded one in the
+    last bit, so equal counts are what make the serial and the farmed results identical.
 
     ``names[j]`` labels task ``j`` in errors and in its warnings; ``bar`` (a tqdm-like object
     or None) is advanced once per finished task; ``on_result(j, result)`` is called as each
@@ -208,11 +258,13 @@ def run_ordered(executor, fn, arg_list, names, *, threads=None, bar=None, on_res
             bar.update(1)
 
     if executor is None:
-        for j, args in enumerate(arg_list):
-            done(j, fn(*args))
+        cap = limited_threads(threads, True) if cap_serial else contextlib.nullcontext()
+        with cap:
+            for j, args in enumerate(arg_list):
+                done(j, fn(*args))
         return results
     futures = {
-        executor.submit(call_recording, fn, *args, threads=threads): j
+        executor.submit(call_recording, fn, *args, threads=threads, wheel_blas=cap_serial): j
         for j, args in enumerate(arg_list)
     }
     caught: list = [[] for _ in arg_list]

@@ -337,7 +337,7 @@ def build_tables(
             ]  # fmt: skip
             done = run_ordered(
                 executor, _build_batch, arg_list, labels, threads=threads,
-                on_result=lambda k, _res: b.update(len(tasks[k])),
+                on_result=lambda k, _res: b.update(len(tasks[k])), cap_serial=True,
             )  # fmt: skip
         finally:
             close()
