@@ -188,3 +188,19 @@ def test_single_table_brdf_command_unchanged(tmp_path):
     argv = ["--material", "pec", "--wavelengths-nm", "550", *GRID]
     assert main(["brdf", str(tmp_path / "one.npz"), *argv]) == 0
     assert np.allclose(read_npz(tmp_path / "one.npz").wavelengths, [550e-9], rtol=1e-15)
+
+
+def test_a_table_refused_on_a_worker_is_a_one_line_input_error(tmp_path, capsys):
+    """--out-of-range raise: SPM far outside its range raises in the worker; the command
+    names the table and exits 2 (bad input), as serially, not 1 (internal error)."""
+    pytest.importorskip("dask.distributed")
+    argv = ["--method", "spm", "--sigma", "5e-7", "--out-of-range", "raise", "--wavelengths-nm",
+            "550", "--n-theta", "6", "--n-phi", "8", "--quiet"]  # fmt: skip
+    for extra in ([], ["--scheduler", "local", "--workers", "1"]):
+        code = main(["farm", "brdf", "--out-dir", str(tmp_path / str(len(extra))), *argv, *extra])
+        err = capsys.readouterr().err
+        assert code == 2, err
+        line = err.strip().splitlines()[-1]
+        assert line.startswith("emscatter farm brdf: error: ") and "outside its validity" in line
+        if extra:
+            assert "Au-sigma5e-07-len1e-06 failed" in line

@@ -198,10 +198,15 @@ def run(a) -> int:
             link = parallel.dashboard_link(executor)
             if link and not a.quiet:
                 print(f"dask dashboard: {link}", file=sys.stderr)
-            build_tables(
-                [farm_specs[j] for j in todo], client=executor, threads=a.threads,
-                progress=False if a.quiet else None, batch=a.batch, out_dir=out_dir,
-            )  # fmt: skip
+            try:
+                build_tables(
+                    [farm_specs[j] for j in todo], client=executor, threads=a.threads,
+                    progress=False if a.quiet else None, batch=a.batch, out_dir=out_dir,
+                )  # fmt: skip
+            except RuntimeError as exc:  # a worker's table refused its input: the user's error
+                if isinstance(exc.__cause__, ValueError | TypeError):
+                    raise ValueError(str(exc).removeprefix("build_tables: ")) from None
+                raise
         finally:
             close()
     seconds = time.perf_counter() - t0
