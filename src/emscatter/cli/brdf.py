@@ -19,8 +19,8 @@ the material at every wavelength, the method name, and options that do not apply
 
 A progress bar over the wavelengths (advanced per chunk) is drawn on stderr when it is a
 terminal; ``--quiet`` turns it off. Many tables (materials × wavelength sets × roughness) on a
-dask cluster are the Python entry :func:`emscatter.brdf.build_tables` (one output per table
-does not fit this command's one output path).
+dask cluster: ``emscatter farm brdf`` (:mod:`emscatter.cli.farm`) or the Python entry
+:func:`emscatter.brdf.build_tables`.
 """
 
 from __future__ import annotations
@@ -346,7 +346,7 @@ def register(subparsers) -> None:
         "--quiet",
         action="store_true",
         help="no progress bar (the bar is drawn only when stderr is a terminal anyway); many "
-        "tables on a dask cluster: emscatter.brdf.build_tables(specs, client='tcp://…')",
+        "tables on a dask cluster: emscatter farm brdf --scheduler local|tcp://HOST:PORT",
     )
     p.set_defaults(func=run)
 
