@@ -28,10 +28,16 @@ incident power spreads over ``k⊥`` with standard deviation ``1/g`` per axis, i
 ``1/(k g cosθi)`` rad in θi (≈ 16° here). The incoherent σ⁰ of the patch is the plane-wave
 σ⁰ averaged over that spectrum (distinct ``k⊥`` of a stationary surface scatter
 incoherently): ``σ⁰_beam(k_s) = cosθi Σ_j I_j σ⁰(k_j → k_s) / Σ_j I_j cosθ_j`` with
-``I_j = ψ_j²`` and each component's nominal polarization split on its own h, v basis. The
-``*_beam`` columns are the models so averaged (the figure's curves); the plain columns are
-the models at the nominal incidence (thin lines). Second-order SPM hv in the plane
-(``emscatter.solvers.spm.crosspol.sigma0_22``) is at the nominal incidence only.
+``I_j = ψ_j²``, each component taken in its own h, v basis. The ``*_beam`` columns are the
+models so averaged (the figure's curves); the plain columns are the models at the nominal
+incidence (thin lines). This holds for the co-pol in the plane and for hv in the cross plane
+φs = 90° (first order, within the basis mismatch ~(1 − cos φ_j) ≈ 5 % in power). It does not
+hold for hv in the plane (and vv, hh at φs = 90° near nadir): there first-order σ⁰ vanishes
+for the nominal plane wave, and the beam's off-plane components give an hv whose value
+depends on the coherent sum of their co- and cross-pol amplitudes (the beam's ê_h is not
+its components' ĥ_j), which σ⁰ alone does not carry; summing σ⁰ gives ≈ −16 dB where the
+MoM has −29 … −47 dB. So in the plane hv is compared with second-order SPM
+(``emscatter.solvers.spm.crosspol.sigma0_22``, nominal incidence) only, as a reference.
 
 Run: PYTHONPATH=src python validation/mom3d/soil_vs_models.py [--realizations 10]
      [--models-only] [--plot-only]
@@ -148,24 +154,22 @@ def monte_carlo(results: list[dict], k: float, ti: float) -> dict:
 
 
 def beam_components(beam):
-    """``(θ_j, φ_j, weight, c_j)`` of the beam's plane waves kept for the models: ``weight`` =
-    ``I_j / Σ I_j cosθ_j · cosθi`` (so that ``Σ weight·σ⁰_j`` is the beam's σ⁰) and ``c_j =
-    (ê_h·ĥ_j)²`` the share of the nominal polarization on the component's own h, v."""
+    """``(θ_j, φ_j, weight)`` of the beam's plane waves kept for the models (power ψ² at least
+    :data:`BEAM_CUT` of the peak): ``weight = cosθi I_j / Σ I_j cosθ_j`` over all of them, so
+    that ``Σ weight·σ⁰_j`` is the beam's σ⁰ (module docstring)."""
     kh = beam.kvec / beam.k
     cos_t = -kh[:, 2]
     inten = np.abs(beam.weight) ** 2
     keep = inten >= BEAM_CUT * inten.max()
     th, ph = np.arccos(np.clip(cos_t, -1, 1)), np.arctan2(kh[:, 1], kh[:, 0])
-    h_j = np.stack([-np.sin(ph), np.cos(ph), np.zeros_like(ph)], axis=1)
-    c = np.sum(beam.e_h * h_j, axis=1) ** 2
     w = inten * math.cos(beam.theta_i) / np.sum(inten * cos_t)
-    return th[keep], ph[keep], w[keep], c[keep]
+    return th[keep], ph[keep], w[keep]
 
 
 def models(rough, eps, k, ti, ts, ps, beam) -> dict:
     """Model σ⁰ columns: ``{m}_{pol}`` at nominal incidence, ``{m}_{pol}_beam`` averaged over
     the beam's spectrum, ``spm2_hv`` (second order, nominal incidence)."""
-    th, ph, w, c = beam_components(beam)
+    th, ph, w = beam_components(beam)
     cols = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # PO/GO are out of range here: shown for reference
@@ -176,8 +180,7 @@ def models(rough, eps, k, ti, ts, ps, beam) -> dict:
                              phi_i=ph[:, None], **kw).sigma0  # (2, 2, J, D)  # fmt: skip
             if not np.all(np.isfinite(sb)):
                 raise FloatingPointError(f"{m}: σ⁰ not finite over the beam's components")
-            mixed = c[:, None] * sb + (1 - c[:, None]) * sb[:, ::-1]  # nominal pol on h_j, v_j
-            avg = np.einsum("j,qpjd->qpd", w, mixed)
+            avg = np.einsum("j,qpjd->qpd", w, sb)
             for p, (q, i) in POLS.items():
                 cols[f"{m}_{p}"] = s[q, i]
                 cols[f"{m}_{p}_beam"] = avg[q, i]
@@ -197,7 +200,8 @@ def compute(realizations: int) -> dict:
         res.append(r)
         e = r["reflectivity"] + r["absorbed"]
         print(f"realization {j}: {r['seconds']:.0f} s, R = {np.round(r['reflectivity'], 4)}, "
-              f"A = {np.round(r['absorbed'], 4)}, R + A = {np.round(e, 4)}", flush=True)  # fmt: skip
+              f"A = {np.round(r['absorbed'], 4)}, R + A = {np.round(e, 4)}",
+              flush=True)  # fmt: skip
     seconds = time.perf_counter() - t0
     mc = monte_carlo(res, k, ti)
     cols = {"cut": cut, "theta_s_deg": deg, "phi_s_deg": np.degrees(ps)}
@@ -277,14 +281,15 @@ def report(c: dict, meta: dict) -> str:
     lines = [
         COMMAND.format(n=meta["realizations"]),
         "",
-        f"# Soil-like surface: exact 3-D MoM vs models (issue 19)",
+        "# Soil-like surface: exact 3-D MoM vs models (issue 19)",
         "",
         f"{meta['material']} at {meta['frequency_hz'] / 1e9:g} GHz: ε = "
         f"{meta['eps'][0]:.3f} + {meta['eps'][1]:.3f}i; Gaussian kσ = {meta['k_sigma']:g}, "
         f"kℓ = {meta['k_ell']:g}, θi = {meta['theta_i_deg']:g}°; patch "
         f"{meta['length_wavelengths']:g}λ × {meta['length_wavelengths']:g}λ, "
         f"{meta['nodes_per_side']}² nodes ({meta['unknowns']} unknowns), taper g = "
-        f"{meta['taper_g_wavelengths']:.3g}λ, beam spread ≈ {meta['beam_width_deg']:.0f}° (1σ in θi); "
+        f"{meta['taper_g_wavelengths']:.3g}λ, beam spread ≈ {meta['beam_width_deg']:.0f}° "
+        "(1σ in θi); "
         f"{meta['realizations']} realizations, {meta['seconds_per_realization']:g} s each "
         f"(2 shared cores).",
         "",
@@ -301,13 +306,17 @@ def report(c: dict, meta: dict) -> str:
                 continue
             mean, se = c[f"mom3d_{p}"][d], c[f"mom3d_{p}_se"][d]
             mods = " | ".join(f"{db(c[f'{m}_{p}_beam'][d]):.1f}" for m in MODELS)
+            if p == "hv" and not cross:  # beam-depolarization-limited (module docstring)
+                mods = " | ".join("—" for _ in MODELS)
             s2 = f"{db(c['spm2_hv'][d]):.1f}" if p == "hv" else "—"
             lines.append(
                 f"| {'φs=90°' if cross else 'plane'} | {c['theta_s_deg'][d]:g} | {p} | "
                 f"{db(mean):.2f} | {db(mean + se) - db(mean):.2f} | {mods} | {s2} |"
             )
     lines += ["", "Models averaged over the beam's incident spectrum (module docstring of "
-              "`soil_vs_models.py`); SPM2 hv at the nominal incidence.", ""]  # fmt: skip
+              "`soil_vs_models.py`); SPM2 hv (second order, σ⁽²²⁾) at the nominal incidence. "
+              "In the plane hv is set by the beam's depolarization, which σ⁰ models cannot "
+              "average (—).", ""]  # fmt: skip
     return "\n".join(lines)
 
 
@@ -334,7 +343,14 @@ def plot() -> None:
             ax.plot(deg, db(c[f"{m}_{p}_beam"][sel]), color=col, ls=ls, label=f"{m.upper()} (beam)")
             ax.plot(deg, db(c[f"{m}_{p}"][sel]), color=col, ls=ls, lw=0.6, alpha=0.6)
         if p == "hv":
-            ax.plot(deg, db(c["spm2_hv"][sel]), color="C4", ls="-", lw=0.9, label="SPM2 (nominal)")
+            ax.plot(
+                deg,
+                db(c["spm2_hv"][sel]),
+                color="C4",
+                ls="-",
+                lw=0.9,
+                label="SPM2 σ⁽²²⁾ hv (nominal θi)",
+            )
         if cut == 0:
             ax.axvspan(meta["theta_i_deg"] - meta["beam_width_deg"],
                        meta["theta_i_deg"] + meta["beam_width_deg"], color="0.92",
@@ -343,6 +359,10 @@ def plot() -> None:
         else:
             ax.set_xlabel("θs [deg] at φs = 90° (cross plane)")
         ax.set_title(f"{p}{' (cross plane)' if cut else ''}")
+        if cut == 0:
+            ax.text(0.02, 0.97, f"grey: specular ± {meta['beam_width_deg']:.0f}° (the 3λ beam's "
+                    "spread in θi):\nthe comparison there is limited by the beam and by the "
+                    "coherent part", transform=ax.transAxes, fontsize=7, va="top")  # fmt: skip
         ax.set_ylim(-45, 0)
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("σ⁰ [dB]")
