@@ -5,7 +5,7 @@ volumetric moisture and 20 % clay, ε = 4.39 + 0.363i (``MironovSoil(0.08, 0.2)`
 ε′ ≤ 5 keeps a 3λ patch's dense Müller matrix at 1.7 GB). Gaussian correlation, kσ = 0.3,
 kℓ = 3 (rms slope per axis √2σ/ℓ = 0.14), θi = 40°, a 3λ₀ × 3λ₀ patch at 8 points per
 wavelength inside the soil (λ₀ / Re√ε / 8; 51² nodes, 10 404 unknowns), taper g = L/4,
-Monte Carlo over ``--realizations`` surfaces (default 10, seeds ``SeedSequence(19).spawn``).
+Monte Carlo over ``--realizations`` surfaces (default 16, seeds ``SeedSequence(19).spawn``).
 
 Why Gaussian, not the exponential correlation measured on many soils: an exponential
 surface has no rms slope (its structure function is linear at the origin), so a sampled one
@@ -39,7 +39,7 @@ its components' ĥ_j), which σ⁰ alone does not carry; summing σ⁰ gives ≈
 MoM has −29 … −47 dB. So in the plane hv is compared with second-order SPM
 (``emscatter.solvers.spm.crosspol.sigma0_22``, nominal incidence) only, as a reference.
 
-Run: PYTHONPATH=src python validation/mom3d/soil_vs_models.py [--realizations 10]
+Run: PYTHONPATH=src python validation/mom3d/soil_vs_models.py [--realizations 16]   (≈ 13 min)
      [--models-only] [--plot-only]
 ``--models-only`` recomputes the model columns keeping the stored MoM ones; ``--plot-only``
 redraws. Writes soil_vs_models.csv/.md/.png here and docs/figures/mom3d_soil_vs_models.png.
@@ -414,7 +414,7 @@ def plot() -> None:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--realizations", type=int, default=10)
+    ap.add_argument("--realizations", type=int, default=16)
     ap.add_argument("--models-only", action="store_true")
     ap.add_argument("--plot-only", action="store_true")
     args = ap.parse_args(argv)
