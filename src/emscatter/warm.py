@@ -63,6 +63,9 @@ def _calls():
     def back(rough, eps, method, **opt):
         return lambda: em.backscatter(rough, eps, theta_i=ti, method=method, **kw, **opt)
 
+    def emis(rough, eps, method, **opt):  # reads the coherent part (SPM: kernel_coherent)
+        return lambda: em.emissivity(rough, eps, theta_i=ti, method=method, tol=1e-2, **kw, **opt)
+
     out = {}
     for method, roughs in (("spm", (spm_g, spm_e)), ("po", (po_g, po_e))):
         out[method] = [
@@ -71,6 +74,8 @@ def _calls():
             for e in (17 + 2j, "pec")
             for f in (bi, back, lambda r, e, m: bi(r, e, m, grid))
         ]
+    # emissivity: the hemispherical layouts of σ⁰ and (SPM) the second-order coherent kernel
+    out["spm"] += [emis(spm_g, 17 + 2j, "spm"), emis(spm_e, "pec", "spm")]
     profile = GaussianCorrelation(0.4 / k, 6.0 / k, dimension=1)
     in_plane = (ti, ts, np.array([0.0, math.pi, 0.0]))  # a 1-D profile scatters in its plane
     out["po"].append(bi(profile, 17 + 2j, "po", in_plane))
