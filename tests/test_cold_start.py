@@ -104,3 +104,51 @@ def test_slow_first_chunk_in_the_spm_validity_integral_is_not_refused(monkeypatc
     assert not state["first"]  # the slow chunk ran
     assert np.all((res.emissivity > 0) & (res.emissivity < 1))
     assert res.info["validity"]["valid"]
+
+
+def test_frozen_erfcx_coefficients_are_the_fit():
+    """:mod:`emscatter.kernels._vmath`'s erfcx Chebyshev coefficients are frozen (no scipy
+    import, no fit at import); they are the fit to scipy's erfcx (bits may differ with the
+    LAPACK build: ≤ 1e-12 of the leading coefficient), and meet its error bound."""
+    from scipy import special
+
+    from emscatter.kernels import _vmath as vm
+
+    coef, err = vm._erfcx_fit()
+    np.testing.assert_allclose(vm.ERFCX_COEF, coef, rtol=0, atol=1e-12 * abs(coef[0]))
+    assert vm.ERFCX_COEF.size == vm.ERFCX_DEGREE + 1 and err <= 4e-15
+    x = np.linspace(0.0, vm.ERFCX_HI, 20_001)
+    t = (x - vm._ERFCX_K) / (x + vm._ERFCX_K)
+    u = 2.0 * (t + 1.0) / (vm._ERFCX_T1 + 1.0) - 1.0
+    approx = np.polynomial.chebyshev.chebval(u, vm.ERFCX_COEF) / (1.0 + 2.0 * x)
+    assert np.max(np.abs(approx / special.erfcx(x) - 1.0)) <= 4e-15
+
+
+def test_loading_the_kernels_imports_no_scipy_special():
+    pytest.importorskip("numba")
+    code = (
+        "import sys; import emscatter.kernels._vmath, emscatter.solvers.spm.kernel; "
+        "print('scipy.special' in sys.modules)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=300)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip().splitlines()[-1] == "False"
+
+
+def test_warm_up_compiles_the_go_validity_pass(monkeypatch):
+    """The compiled GO per-angle validity pass runs only above 4096 angles
+    (``method_resolution._DISTINCT_MAX``): the GO warm-up has such a call."""
+    pytest.importorskip("numba")
+    from emscatter import method_resolution, warm
+    from emscatter.solvers.kirchhoff import go_validity
+
+    monkeypatch.setenv("EMSCATTER_KERNELS", "numba")
+    monkeypatch.setenv("EMSCATTER_CACHE", "0")
+    big = warm._calls()["go"][-1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = big()
+    assert res.sigma0.shape[-1] > max(method_resolution._DISTINCT_MAX, go_validity.MIN_ANGLES)
+    assert go_validity._angle_pass.signatures

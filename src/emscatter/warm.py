@@ -85,6 +85,10 @@ def _calls():
         for opt in ({}, {"shadowing": "separable"}, {"shadowing": "correlated"})
         for f in (bi, back, lambda r, e, m, **o: bi(r, e, m, grid, **o))
     ]
+    # the compiled per-angle validity pass runs above 4096 angles (method_resolution)
+    rng = np.random.default_rng(0)
+    many = tuple(rng.uniform(lo, hi, 8192) for lo, hi in ((0, 1.5), (0, 1.5), (-3.1, 3.1)))
+    out["go"].append(bi(go_g, 17 + 2j, "go", many))
     out["iem"] = [
         f(r, e, "iem")
         for r in (iem_g, iem_e)
