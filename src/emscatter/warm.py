@@ -9,7 +9,12 @@ cross-pol integral), 1–4 s for SPM, GO and PO (and for the backscatter cross-p
 through the public API on a few angles with ``EMSCATTER_KERNELS=numba`` (so even these tiny
 calls take the compiled path), in the layouts and argument types that select distinct compiled
 signatures: a dielectric and ``"pec"``, Gaussian and exponential correlations, flat geometries
-and a grid (θi × θs × φs), bistatic and backscatter, 1-D and 2-D where the kernel covers both.
+and a grid (θi × θs × φs), bistatic and backscatter, 1-D and 2-D where the kernel covers both;
+SPM emissivity (it reads the coherent part: the second-order kernel,
+:mod:`emscatter.solvers.spm.kernel_coherent`) and a GO call above 4096 angles (the compiled
+per-angle validity pass, :mod:`emscatter.solvers.kirchhoff.go_validity`, runs only there).
+``python benchmarks/bench_api.py --parts cold`` checks that a fresh process then compiles
+nothing and times each method's first call (issue 22: under 2 s).
 numba writes what it compiles to the cache folder of :mod:`emscatter.kernels._runtime`
 (``EMSCATTER_NUMBA_CACHE_DIR``, default ``~/.cache/emscatter/numba``; ``NUMBA_CACHE_DIR`` when
 the user set it); a later process loads it (≈ 0.1–0.5 s per method instead of seconds).
