@@ -29,7 +29,9 @@ as ``emissivity_copol``, without), twice: with an empty numba cache folder
 (what ``make setup`` runs). ``auto`` is the newcomer's call: ``backscatter(rough,
 "medium_dry_ground", frequency=5.4e9, ...)`` and ``emissivity(rough, 17 + 2i, ...)``. Each row
 has the import time, the first and second call (result cache off) and ``under_limit``: import +
-first call < 2 s (issue 22's target after setup). ``--kinds`` / ``--states`` select rows.
+first call < 2 s (issue 22's target after setup), and ``compiled``: the kernels the call
+compiled into the cache folder (after setup: none expected — a kernel listed there is missing
+from :mod:`emscatter.warm`). ``--kinds`` / ``--states`` select rows.
 """
 
 from __future__ import annotations
@@ -244,9 +246,14 @@ def _child(method, kind, cache) -> dict:
     env.pop("EMSCATTER_KERNELS", None)
     env["PYTHONPATH"] = str(ROOT / "src")
     code = _CHILD.format(bench=str(Path(__file__).resolve().parent), method=method, kind=kind)
+    before = {p for p in Path(cache).rglob("*.nbi")} if Path(cache).is_dir() else set()
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True)  # fmt: skip
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    row = json.loads(out.stdout.strip().splitlines()[-1])
+    # the kernels this first call compiled (after setup: none expected; names, not counts)
+    new = sorted(p.name.split("-")[0] for p in Path(cache).rglob("*.nbi") if p not in before)
+    row["compiled"] = new
+    return row
 
 
 COLD_KINDS = ("backscatter", "bistatic", "emissivity")
@@ -281,7 +288,8 @@ def cold(methods=("spm", "go", "po", "iem", "auto"), kinds=COLD_KINDS,
                 row["under_limit"] = row["import_s"] + row["first_call_s"] < results["limit_s"]
                 print(f"{state:12s} {method:5s} {kind:16s} import {row['import_s']:.2f} s, "
                       f"first call {row['first_call_s']:.2f} s, "
-                      f"second {row['second_call_s']:.3f} s", flush=True)  # fmt: skip
+                      f"second {row['second_call_s']:.3f} s, compiled {len(row['compiled'])} "
+                      "kernel(s)", flush=True)  # fmt: skip
     return results
 
 
