@@ -251,6 +251,62 @@ def _g_hv(eps, k, inv_k2, k2zs, inv_den, cphi, sphi, ksx, ksy, K_i, zc, rho, rad
     return (th_c - k2zs * te_h) * inv_den
 
 
+@inline
+def _node_rules(k, kis0, kis1, ksv0, ksv1, sq_eps, inv_len, extent, log, s_r, ds_r, s_a, ds_a,
+                pts, br, kr, wr, psi, wpsi):  # fmt: skip
+    """The radial and azimuth node rules of one backscatter angle (``crosspol._polar_nodes``):
+    ``(nr, na)``, the nodes and weights written into ``kr, wr`` and ``psi, wpsi``; ``k_i⊥ =
+    (kis0, kis1)``, ``k_s⊥ = (ksv0, ksv1)`` [rad/m]. Shared with the resummed cross-pol kernel
+    (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`)."""
+    # radial rule
+    p0, p1 = math.hypot(kis0, kis1), math.hypot(ksv0, ksv1)
+    pts[0], pts[1] = k, sq_eps.real * k
+    m = 2
+    for c in (p0, p1):
+        for d in _DISTANCES:
+            pts[m] = c - d * inv_len
+            pts[m + 1] = c + d * inv_len
+            m += 2
+    nb = _breaks(0.0, max(p0, p1) + extent, pts, m, br)
+    nr = _nodes_on(br, nb, s_r, ds_r, log, kr, wr)
+    # azimuth rule
+    m = 0
+    for c, ang in ((p0, math.atan2(kis1, kis0)), (p1, math.atan2(ksv1, ksv0))):
+        for d in (0.0, 0.5, 1.5, 4.0):
+            off = d * inv_len / max(c, inv_len)
+            if off < math.pi:
+                pts[m] = _remainder_2pi(ang - off)
+                pts[m + 1] = _remainder_2pi(ang + off)
+                m += 2
+    nb = _breaks(-math.pi, math.pi, pts, m, br)
+    na = _nodes_on(br, nb, s_a, ds_a, False, psi, wpsi)
+    return nr, na
+
+
+@inline
+def _fill_g(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, zc, kr, nr, cpsi, spsi,
+            first, na):  # fmt: skip
+    """The second-order kernel ``g_hv`` at the nodes ``(ir < nr, first ≤ ia < na)`` into ``g``,
+    after the zeroth-order waves of an incident v wave (``crosspol._zeroth_order_waves``,
+    pol = 1) into ``zc``. Shared with the resummed cross-pol kernel."""
+    K_i, k1z = k * si, k * ci
+    k2z = _root(eps * k * k - K_i * K_i)
+    rv = (eps * k1z - k2z) / (eps * k1z + k2z)
+    zc[:] = 0j
+    _zeroth(zc, 1.0 + 0j, -k1z + 0j, 1.0, k + 0j, K_i)  # incident
+    _zeroth(zc, rv, k1z + 0j, 1.0, k + 0j, K_i)  # reflected
+    _zeroth(zc, (1.0 + rv) / sq_eps, -k2z, -1.0, sq_eps * k, K_i)  # transmitted
+    k2zs = _root(eps * k * k - (k * si) ** 2)
+    inv_den = 1.0 / (k * ci + k2zs)
+    for ir in range(nr):
+        rho = kr[ir]
+        rad = _radial(eps, k, rho)
+        for ia in range(first, na):
+            g[ir, ia] = _g_hv(eps, k, inv_k2, k2zs, inv_den, cphi, sphi, ksv0, ksv1, K_i, zc,
+                              rho, rad, cpsi[ia], spsi[ia], rho * cpsi[ia],
+                              rho * spsi[ia])  # fmt: skip
+
+
 @jit
 def _hv_kernel(theta, eps, k, sigma4, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, start, stop,
                out, flag):  # fmt: skip
@@ -280,28 +336,8 @@ def _hv_kernel(theta, eps, k, sigma4, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a
         si, ci = math.sin(a), math.cos(a)
         kis0, kis1 = k * si, 0.0
         ksv0, ksv1 = k * si * cphi, k * si * sphi
-        # radial rule (crosspol._polar_nodes)
-        p0, p1 = math.hypot(kis0, kis1), math.hypot(ksv0, ksv1)
-        pts[0], pts[1] = k, sq_eps.real * k
-        m = 2
-        for c in (p0, p1):
-            for d in _DISTANCES:
-                pts[m] = c - d * inv_len
-                pts[m + 1] = c + d * inv_len
-                m += 2
-        nb = _breaks(0.0, max(p0, p1) + extent, pts, m, br)
-        nr = _nodes_on(br, nb, s_r, ds_r, log, kr, wr)
-        # azimuth rule
-        m = 0
-        for c, ang in ((p0, math.atan2(kis1, kis0)), (p1, math.atan2(ksv1, ksv0))):
-            for d in (0.0, 0.5, 1.5, 4.0):
-                off = d * inv_len / max(c, inv_len)
-                if off < math.pi:
-                    pts[m] = _remainder_2pi(ang - off)
-                    pts[m + 1] = _remainder_2pi(ang + off)
-                    m += 2
-        nb = _breaks(-math.pi, math.pi, pts, m, br)
-        na = _nodes_on(br, nb, s_a, ds_a, False, psi, wpsi)
+        nr, na = _node_rules(k, kis0, kis1, ksv0, ksv1, sq_eps, inv_len, extent, log, s_r, ds_r,
+                             s_a, ds_a, pts, br, kr, wr, psi, wpsi)  # fmt: skip
         flag[j] = 0
         out[j] = 0.0
         if not _partner(psi, na, math.pi, False, neg):
@@ -318,27 +354,12 @@ def _hv_kernel(theta, eps, k, sigma4, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a
                     b = wt[ir, mir[ia]]
                     if not abs(wt[ir, ia] - b) <= 1e-12 * abs(b):
                         half = False
-        # zeroth-order waves, incident v (crosspol._zeroth_order_waves, pol = 1)
-        K_i, k1z = k * si, k * ci
-        k2z = _root(eps * k * k - K_i * K_i)
-        rv = (eps * k1z - k2z) / (eps * k1z + k2z)
-        zc[:] = 0j
-        _zeroth(zc, 1.0 + 0j, -k1z + 0j, 1.0, k + 0j, K_i)  # incident
-        _zeroth(zc, rv, k1z + 0j, 1.0, k + 0j, K_i)  # reflected
-        _zeroth(zc, (1.0 + rv) / sq_eps, -k2z, -1.0, sq_eps * k, K_i)  # transmitted
-        k2zs = _root(eps * k * k - (k * si) ** 2)
-        inv_den = 1.0 / (k * ci + k2zs)
         first = 0
         if half:  # the upper half plane: g(−p) = −g(ρ, π − ψ), the mirror of −p
             while first < na and not psi[first] > 0.0:
                 first += 1
-        for ir in range(nr):
-            rho = kr[ir]
-            rad = _radial(eps, k, rho)
-            for ia in range(first, na):
-                g[ir, ia] = _g_hv(eps, k, inv_k2, k2zs, inv_den, cphi, sphi, ksv0, ksv1, K_i, zc,
-                                  rho, rad, cpsi[ia], spsi[ia], rho * cpsi[ia],
-                                  rho * spsi[ia])  # fmt: skip
+        _fill_g(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, zc, kr, nr, cpsi, spsi,
+                first, na)  # fmt: skip
         val = 0.0
         for ir in range(nr):
             for ia in range(first, na):

@@ -40,19 +40,13 @@ import numpy as np
 
 from emscatter.kernels._runtime import inline, jit, run_split
 from emscatter.solvers.spm.kernel_crosspol import (
-    _DISTANCES,
     _MAX_AZIMUTH_SEGMENTS,
     _MAX_RADIAL_SEGMENTS,
     GAUSSIAN,
-    _breaks,
-    _g_hv,
-    _nodes_on,
+    _fill_g,
+    _node_rules,
     _partner,
     _q2,
-    _radial,
-    _remainder_2pi,
-    _root,
-    _zeroth,
     unit_rule,
 )
 
@@ -133,28 +127,8 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
         si, ci = math.sin(a), math.cos(a)
         kis0, kis1 = k * si, 0.0
         ksv0, ksv1 = k * si * cphi, k * si * sphi
-        # radial rule (spm.crosspol._polar_nodes)
-        p0, p1 = math.hypot(kis0, kis1), math.hypot(ksv0, ksv1)
-        pts[0], pts[1] = k, sq_eps.real * k
-        m = 2
-        for c in (p0, p1):
-            for d in _DISTANCES:
-                pts[m] = c - d * inv_len
-                pts[m + 1] = c + d * inv_len
-                m += 2
-        nb = _breaks(0.0, max(p0, p1) + extent, pts, m, br)
-        nr = _nodes_on(br, nb, s_r, ds_r, log, kr, wr)
-        # azimuth rule
-        m = 0
-        for c, ang in ((p0, math.atan2(kis1, kis0)), (p1, math.atan2(ksv1, ksv0))):
-            for d in (0.0, 0.5, 1.5, 4.0):
-                off = d * inv_len / max(c, inv_len)
-                if off < math.pi:
-                    pts[m] = _remainder_2pi(ang - off)
-                    pts[m + 1] = _remainder_2pi(ang + off)
-                    m += 2
-        nb = _breaks(-math.pi, math.pi, pts, m, br)
-        na = _nodes_on(br, nb, s_a, ds_a, False, psi, wpsi)
+        nr, na = _node_rules(k, kis0, kis1, ksv0, ksv1, sq_eps, inv_len, extent, log, s_r, ds_r,
+                             s_a, ds_a, pts, br, kr, wr, psi, wpsi)  # fmt: skip
         flag[j] = 0
         out[j] = 0.0
         if not _partner(psi, na, math.pi, False, neg):
@@ -183,23 +157,8 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
                 px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
                 tm[ir, ia] = _t_hat(_q2(px - kis0, py - kis1, cr, sr, lx, ly), coef, nc, spec,
                                     area)  # fmt: skip
-        # zeroth-order waves, incident v (spm.crosspol._zeroth_order_waves, pol = 1)
-        K_i, k1z = k * si, k * ci
-        k2z = _root(eps * k * k - K_i * K_i)
-        rv = (eps * k1z - k2z) / (eps * k1z + k2z)
-        zc[:] = 0j
-        _zeroth(zc, 1.0 + 0j, -k1z + 0j, 1.0, k + 0j, K_i)  # incident
-        _zeroth(zc, rv, k1z + 0j, 1.0, k + 0j, K_i)  # reflected
-        _zeroth(zc, (1.0 + rv) / sq_eps, -k2z, -1.0, sq_eps * k, K_i)  # transmitted
-        k2zs = _root(eps * k * k - (k * si) ** 2)
-        inv_den = 1.0 / (k * ci + k2zs)
-        for ir in range(nr):
-            rho = kr[ir]
-            rad = _radial(eps, k, rho)
-            for ia in range(first, na):
-                g[ir, ia] = _g_hv(eps, k, inv_k2, k2zs, inv_den, cphi, sphi, ksv0, ksv1, K_i, zc,
-                                  rho, rad, cpsi[ia], spsi[ia], rho * cpsi[ia],
-                                  rho * spsi[ia])  # fmt: skip
+        _fill_g(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, zc, kr, nr, cpsi, spsi,
+                first, na)  # fmt: skip
         val = 0.0
         for ir in range(nr):
             base = wr[ir] * kr[ir]
