@@ -51,9 +51,9 @@ import warnings
 
 import numpy as np
 
-from emscatter.conventions import check_angle, check_finite, check_positive
+from emscatter.conventions import check_positive
 from emscatter.scattering import Scattering
-from emscatter.solvers.kirchhoff.transmission.go import check_transmission_eps
+from emscatter.solvers.kirchhoff.transmission.go import check_transmission_eps, transmission_angles
 from emscatter.solvers.spm.second_order import _second_order_R
 from emscatter.solvers.spm.validity import check_validity
 from emscatter.spectra import Roughness
@@ -201,21 +201,7 @@ def _check(roughness, eps, k, theta_i, theta_t, phi_t, phi_i):
                 f"medium attenuates with depth), got eps = {eps!r}"
             ) from None
         raise ValueError(str(err).replace("GO transmission", "SPM transmission")) from None
-    ti = check_angle("theta_i", theta_i)
-    tt = check_angle("theta_t", theta_t)
-    pt = check_finite("phi_t", phi_t)
-    pi_ = check_finite("phi_i", phi_i)
-    for name, arr in (("phi_t", pt), ("phi_i", pi_)):
-        if np.iscomplexobj(arr):
-            raise TypeError(f"{name} must be real (radians), got a complex array")
-    try:
-        arrs = np.broadcast_arrays(ti, tt, pt.astype(float), pi_.astype(float), e)
-    except ValueError:
-        raise ValueError(
-            "angle arrays (and eps) do not broadcast together: theta_i"
-            f"{np.shape(theta_i)}, theta_t{np.shape(theta_t)}, phi_t{np.shape(phi_t)}, "
-            f"phi_i{np.shape(phi_i)}, eps{np.shape(eps)}"
-        ) from None
+    arrs = transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i)
     return k, arrs
 
 

@@ -100,6 +100,27 @@ LOSSLESS_RTOL = 1e-12
 _TAU_EPS = 1e-28
 
 
+def transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i) -> tuple:
+    """The transmission solvers' angles checked (θ in [0, π/2], φ finite and real) and broadcast
+    with the checked permittivity ``e`` (``eps``: the caller's argument, for the message):
+    ``(theta_i, theta_t, phi_t, phi_i, e)`` [rad], or a ValueError naming the shapes."""
+    ti = check_angle("theta_i", theta_i)
+    tt = check_angle("theta_t", theta_t)
+    pt = check_finite("phi_t", phi_t)
+    pi_ = check_finite("phi_i", phi_i)
+    for name, arr in (("phi_t", pt), ("phi_i", pi_)):
+        if np.iscomplexobj(arr):
+            raise TypeError(f"{name} must be real (radians), got a complex array")
+    try:
+        return tuple(np.broadcast_arrays(ti, tt, pt.astype(float), pi_.astype(float), e))
+    except ValueError:
+        raise ValueError(
+            "angle arrays (and eps) do not broadcast together: theta_i"
+            f"{np.shape(theta_i)}, theta_t{np.shape(theta_t)}, phi_t{np.shape(phi_t)}, "
+            f"phi_i{np.shape(phi_i)}, eps{np.shape(eps)}"
+        ) from None
+
+
 def check_transmission_eps(eps) -> np.ndarray:
     """``ε`` as a real float array, or a ValueError: the BTDF needs a real index ``η = √ε``
     (a lossless dielectric, ``ε > 0``, ``ε ≠ 1``); PEC and absorbing media are refused."""
@@ -280,21 +301,7 @@ def bistatic_transmission(
     k = check_positive("k", k, unit="rad/m")
     mode = check_transmission_shadowing(shadowing)
     e = check_transmission_eps(eps)
-    ti = check_angle("theta_i", theta_i)
-    tt = check_angle("theta_t", theta_t)
-    pt = check_finite("phi_t", phi_t)
-    pi_ = check_finite("phi_i", phi_i)
-    for name, arr in (("phi_t", pt), ("phi_i", pi_)):
-        if np.iscomplexobj(arr):
-            raise TypeError(f"{name} must be real (radians), got a complex array")
-    try:
-        ti, tt, pt, pi_, e = np.broadcast_arrays(ti, tt, pt.astype(float), pi_.astype(float), e)
-    except ValueError:
-        raise ValueError(
-            "angle arrays (and eps) do not broadcast together: theta_i"
-            f"{np.shape(theta_i)}, theta_t{np.shape(theta_t)}, phi_t{np.shape(phi_t)}, "
-            f"phi_i{np.shape(phi_i)}, eps{np.shape(eps)}"
-        ) from None
+    ti, tt, pt, pi_, e = transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i)
     sx, sy = slope_variances(rough, k_max, slope_variance, k=k)
     inten = transmission_intensity(e, ti, tt, pt, pi_, sx, sy, mode)
     j = _jones(e, ti, tt, pt, pi_)

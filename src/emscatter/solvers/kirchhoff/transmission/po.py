@@ -56,7 +56,7 @@ import warnings
 
 import numpy as np
 
-from emscatter.conventions import check_angle, check_finite, check_positive
+from emscatter.conventions import check_angle, check_positive
 from emscatter.scattering import Scattering
 from emscatter.solvers.kirchhoff import compiled as kirchhoff_compiled
 from emscatter.solvers.kirchhoff import po
@@ -66,6 +66,7 @@ from emscatter.solvers.kirchhoff.transmission.go import (
     _half,
     _jones,
     check_transmission_eps,
+    transmission_angles,
 )
 
 __all__ = ["bistatic_transmission", "coherent_transmissivity", "OUT_OF_RANGE", "POWarning"]
@@ -147,21 +148,7 @@ def bistatic_transmission(
     if isinstance(max_terms, bool) or not isinstance(max_terms, int | np.integer) or max_terms < 1:
         raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
     e = check_transmission_eps(eps)
-    ti = check_angle("theta_i", theta_i)
-    tt = check_angle("theta_t", theta_t)
-    pt = check_finite("phi_t", phi_t)
-    pi_ = check_finite("phi_i", phi_i)
-    for name, arr in (("phi_t", pt), ("phi_i", pi_)):
-        if np.iscomplexobj(arr):
-            raise TypeError(f"{name} must be real (radians), got a complex array")
-    try:
-        ti, tt, pt, pi_, e = np.broadcast_arrays(ti, tt, pt.astype(float), pi_.astype(float), e)
-    except ValueError:
-        raise ValueError(
-            "angle arrays (and eps) do not broadcast together: theta_i"
-            f"{np.shape(theta_i)}, theta_t{np.shape(theta_t)}, phi_t{np.shape(phi_t)}, "
-            f"phi_i{np.shape(phi_i)}, eps{np.shape(eps)}"
-        ) from None
+    ti, tt, pt, pi_, e = transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i)
     validity = po.check_validity(rough, k, eps=float(np.max(e)), theta_i=ti)
     bad = _policy(validity, ti.shape, out_of_range)
     shape = ti.shape
