@@ -134,3 +134,31 @@ def test_emissivity_unchanged(monkeypatch, kind, ks):
             ref = call()
     np.testing.assert_allclose(new.emissivity, ref.emissivity, rtol=1e-12, atol=0)
     assert np.all((new.emissivity > 0) & (new.emissivity < 1))
+
+
+def _transition_three_calls(rough, eps, cs, ks, K, rtol):
+    """The pre-change :func:`emscatter.solvers.iem.amplitudes._transition`: one Poisson-sum call
+    per β."""
+    from emscatter.solvers.iem import terms as kern
+
+    spec = iem_jit.spectrum_code(rough)
+    with np.errstate(divide="ignore"):
+        lq = np.log((ks * cs) ** 2)
+    sums = [iem_jit.poisson_sums(lq + math.log(b), K, spec, rough.dimension, rtol=rtol * 1e-2)
+            for b in (1.0, 2.0, 4.0)]  # fmt: skip
+    return kern.transition_from_sums(eps, cs, ks, *sums)
+
+
+@pytest.mark.parametrize("kind", ["exp", "gauss"])
+@pytest.mark.parametrize("ks", [0.1, 1.0, 3.0])
+def test_transition_sums_in_one_call_bit_identical(kind, ks):
+    rough = _rough(kind, ks)
+    ti, ts, _ = _geometries(200, seed=7)
+    cs = np.cos(ti)
+    K = 2.0 * K0 * rough.length * np.abs(np.sin(ts) - np.sin(ti))
+    for eps in (17 + 2j, 3.2 + 0.1j):
+        new = amp._transition(rough, eps, cs, K0 * rough.sigma, log_nfold(rough), K, 1e-8)
+        ref = _transition_three_calls(rough, eps, cs, K0 * rough.sigma, K, 1e-8)
+        for a, b in zip(new, ref, strict=True):
+            np.testing.assert_array_equal(a, b)
+        assert np.all((new[1] >= 0) & (new[1] <= 1))

@@ -147,9 +147,12 @@ def _transition(rough, eps, cs, ks, log_w, K, rtol):
         return kern.transition_factor(eps, cs, ks, log_w, K)
     with np.errstate(divide="ignore"):
         lq = np.log((ks * cs) ** 2)
-    sums = [iem_jit.poisson_sums(lq + math.log(b), K, spec, rough.dimension, rtol=rtol * 1e-2)
-            for b in (1.0, 2.0, 4.0)]  # fmt: skip
-    return kern.transition_from_sums(eps, cs, ks, *sums)
+    # the three sums S(βQ), β = 1, 2, 4, in one call (independent elements: the same values)
+    n = lq.size
+    lqs = np.concatenate([lq + math.log(b) for b in (1.0, 2.0, 4.0)])
+    Ks = np.tile(np.broadcast_to(K, (n,)), 3)
+    s = iem_jit.poisson_sums(lqs, Ks, spec, rough.dimension, rtol=rtol * 1e-2)
+    return kern.transition_from_sums(eps, cs, ks, s[:n], s[n : 2 * n], s[2 * n :])
 
 
 def _series(rough, la, lx, ph, sx, d, log_ks2, log_w, K, pref, opt):
