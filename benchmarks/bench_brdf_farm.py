@@ -16,7 +16,11 @@ the ``.npz`` files, the serial side writes the same files).
 
     EMSCATTER_CACHE=off PYTHONPATH=src python benchmarks/bench_brdf_farm.py [--repeat 3]
         [--workloads go po iem spm] [--workers 2] [--scale 1.0] [--resolution 90 180]
-        [--out brdf_farm]
+        [--out brdf_farm] [--cli]
+
+``--cli`` adds a row for the command line (``emscatter farm brdf`` serially and with
+``--scheduler local``, each a fresh process: the interpreter's and the cluster's start are in
+the time, as a user waits for them).
 
 The default tables are small (GO 5 ms, IEM 20 ms of CPU each on the reference machine): the
 farm's fixed costs show. Full-size tables (``--resolution 90 180``: 17.5 MB each in float32)
@@ -141,6 +145,57 @@ def run_workload(name, client, repeat, scale, resolution=None) -> dict:
     return row
 
 
+def run_cli(workers: int, repeat: int, scale: float, resolution=None) -> dict:
+    """``emscatter farm brdf`` of the GO workload's tables (σ × material × wavelength, one
+    ``.npz`` each), serially and with ``--scheduler local --workers N``, alternated: what a
+    command-line user waits for, the interpreter's and the cluster's start included; the
+    two folders' files compared byte for byte."""
+    import subprocess
+
+    method, n, res, sigmas, ell = WORKLOADS["go"]
+    res = tuple(resolution) if resolution else res
+    n_mat = max(1, min(len(MATERIALS), round(len(MATERIALS) * scale)))
+    argv = [sys.executable, "-m", "emscatter", "farm", "brdf", "--quiet", "--method", method,
+            "--n-theta", str(res[0]), "--n-phi", str(res[1]), "--out-of-range", "ignore",
+            "--length", f"{ell * 1e-6:g}"]  # fmt: skip
+    for s in sigmas:
+        argv += ["--sigma", f"{s * 1e-6:g}"]
+    for m in MATERIALS[:n_mat]:
+        argv += ["--material", m]
+    for w in WAVELENGTHS:
+        argv += ["--wavelengths-nm", f"{w * 1e9:g}"]
+    tables = len(sigmas) * n_mat * len(WAVELENGTHS)
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
+    times = {"serial": [], "local": []}
+    identical = True
+    with tempfile.TemporaryDirectory(prefix="emscatter-farm-cli-") as tmp:
+        for r in range(repeat):
+            out = {}
+            for side, extra in (("serial", []), ("local", ["--scheduler", "local", "--workers",
+                                                          str(workers)])):  # fmt: skip
+                out[side] = Path(tmp) / f"{side}-{r}"
+                t = time.perf_counter()
+                subprocess.run([*argv, "--out-dir", str(out[side]), *extra], check=True, env=env,
+                               capture_output=True)  # fmt: skip
+                times[side].append(time.perf_counter() - t)
+            a = {p.name: p.read_bytes() for p in out["serial"].glob("*.npz")}
+            b = {p.name: p.read_bytes() for p in out["local"].glob("*.npz")}
+            identical = identical and len(a) == tables and a == b
+    row = {
+        "what": f"emscatter farm brdf: {tables} {method.upper()} tables {res[0]}×{res[1]}, "
+        f"serial vs --scheduler local --workers {workers} (interpreter and cluster start "
+        "included)",
+        "tables": tables,
+        "serial_s": times["serial"],
+        "local_s": times["local"],
+        "speedup": statistics.median(times["serial"]) / statistics.median(times["local"]),
+        "identical_files": identical,
+    }
+    print(f"cli  {tables:3d} tables  serial {statistics.median(times['serial']):.2f} s  "
+          f"local ×{row['speedup']:.2f}  identical files {identical}", flush=True)  # fmt: skip
+    return row
+
+
 def main() -> None:
     os.environ.setdefault("EMSCATTER_CACHE", "off")
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -156,24 +211,30 @@ def main() -> None:
         help="every workload's table resolution instead of its own (e.g. 90 180)",
     )
     ap.add_argument("--out", default="brdf_farm", help="results file name (results/NAME.json)")
+    ap.add_argument(
+        "--cli",
+        action="store_true",
+        help="also time the command line: 'emscatter farm brdf' serially and with "
+        "--scheduler local (process and cluster start included)",
+    )
     args = ap.parse_args()
     warnings.simplefilter("ignore")
-    import dask
-    from dask.distributed import Client, LocalCluster
+    from emscatter.parallel import open_executor
 
-    # as build_tables(client="local"): the workers' 10 ms statistical profiler off
-    dask.config.set({"distributed.worker.profile.enabled": False})
-    env = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "EMSCATTER_CACHE": "off"}
+    # the cluster build_tables(client="local") starts (emscatter.parallel): thread caps in the
+    # workers' environment, their statistical profiler off, the dashboard on a free port;
+    # EMSCATTER_CACHE=off reaches them through this process's environment
     data = {"machine": machine(), "command": command(), "workers": args.workers, "rows": {}}
-    with (
-        LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
-                     dashboard_address=None, env=env) as cluster,
-        Client(cluster) as client,
-    ):  # fmt: skip
+    client, close = open_executor("local", args.workers, 1)
+    try:
         for name in args.workloads:
             data["rows"][name] = run_workload(
                 name, client, args.repeat, args.scale, args.resolution
             )
+    finally:
+        close()
+    if args.cli:
+        data["rows"]["cli"] = run_cli(args.workers, args.repeat, args.scale, args.resolution)
     data["machine"]["load_average_end"] = list(os.getloadavg())
     print(json.dumps({k: {m: v[m] for m in v if m.endswith("speedup")}
                       for k, v in data["rows"].items()}, indent=1))  # fmt: skip

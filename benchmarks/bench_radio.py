@@ -12,6 +12,10 @@ emscatter tables — whose one-off cost is reported apart), and the medians of `
 calls are compared. Process CPU time is recorded beside wall time: on a loaded machine its
 ratio is the steadier measure of the per-ray cost (the target is on wall time).
 
+``--transmission diffuse`` gives every rough slab of the emscatter scene diffuse transmission
+(``EmscatterRadioMaterial(transmission="diffuse")``; RadioMapSolver samples it, PathSolver
+cannot and runs as with ``"coherent"``) and writes ``radio_diffuse_transmission*.json``.
+
 Run: ``.venv/bin/python benchmarks/bench_radio.py`` (≈ 3 min on 2 cores) — prints and writes
 ``benchmarks/results/radio.json``. ``--quick`` for a smoke run.
 """
@@ -39,6 +43,22 @@ def _versions():
     }
 
 
+def _with_diffuse_transmission(make):
+    """The same emscatter materials with ``transmission="diffuse"`` on every rough slab."""
+    from emscatter.radio.material import EmscatterRadioMaterial
+
+    def wrapped(obj, medium, thickness):
+        m = make(obj, medium, thickness)
+        if m.surface is None or m.thickness is None:
+            return m
+        return EmscatterRadioMaterial(
+            m.name, surface=m.surface, medium=m.medium, thickness=m.thickness,
+            transmission="diffuse", out_of_range="ignore",
+        )  # fmt: skip
+
+    return wrapped
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("--repeat", type=int, default=5)
@@ -46,6 +66,7 @@ def main(argv=None) -> int:
     p.add_argument("--map-samples", type=int, default=1_000_000)
     p.add_argument("--frequency", type=float, default=28e9)
     p.add_argument("--quick", action="store_true")
+    p.add_argument("--transmission", choices=("coherent", "diffuse"), default="coherent")
     a = p.parse_args(argv)
     if a.quick:
         a.repeat, a.samples, a.map_samples = 2, 20_000, 20_000
@@ -60,6 +81,8 @@ def main(argv=None) -> int:
     built = {}
     for kind in ("builtin", "emscatter"):
         make = indoor.material_factory("sionna" if kind == "builtin" else "rough", f)
+        if kind == "emscatter" and a.transmission == "diffuse":
+            make = _with_diffuse_transmission(make)
         sc = scenes.load(setup.scene, f, make)
         indoor.add_devices(sc, setup)
         built[kind] = sc
@@ -103,7 +126,10 @@ def main(argv=None) -> int:
         "RadioMapSolver +diffuse, XPD port map": (port_map, True, 1.5),
     }
     results = {
-        "command": "python benchmarks/bench_radio.py" + (" --quick" if a.quick else ""),
+        "command": "python benchmarks/bench_radio.py"
+        + (" --quick" if a.quick else "")
+        + (" --transmission diffuse" if a.transmission == "diffuse" else ""),
+        "transmission": a.transmission,
         "machine": platform.processor() or platform.machine(),
         "cpus": os.cpu_count(),
         "versions": _versions(),
@@ -157,10 +183,11 @@ def main(argv=None) -> int:
     print(
         f"tables: {len(log)} builds, {results['tables']['seconds_total']:.1f} s once per frequency"
     )
+    stem = "radio" if a.transmission == "coherent" else "radio_diffuse_transmission"
     out = (
         pathlib.Path(__file__).parent
         / "results"
-        / ("radio_quick.json" if a.quick else "radio.json")
+        / (f"{stem}_quick.json" if a.quick else f"{stem}.json")
     )
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")

@@ -1032,6 +1032,32 @@ def check_slab_diffuse_flat():
 CHECKS["slab_diffuse_flat"] = check_slab_diffuse_flat
 
 
+def check_roughen_diffuse_transmission():
+    """``roughen(transmission="diffuse")``: the isotropic rough slabs take the material's diffuse
+    transmission; flat objects and half-spaces keep the coherent slab; rows() name the model."""
+    import sionna.rt as rt
+
+    from emscatter import radio
+
+    sc = rt.load_scene(rt.scene.simple_street_canyon, merge_shapes=False)
+    sc.frequency = 28e9
+    handle = radio.roughen(sc, transmission="diffuse")
+    rows = handle.rows()
+    out = {"rows": [{k: r[k] for k in ("object", "correlation", "thickness_m", "transmission")}
+                    for r in rows],
+           "materials": {name: m.transmission for name, m in handle.materials.items()}}  # fmt: skip
+    radio.flatten(sc)
+    try:
+        radio.roughen(sc, transmission="lambertian")
+        out["bad"] = None
+    except ValueError as exc:
+        out["bad"] = str(exc)
+    return out
+
+
+CHECKS["roughen_diffuse_transmission"] = check_roughen_diffuse_transmission
+
+
 def main(argv):
     results = {}
     for name in argv:

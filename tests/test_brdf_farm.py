@@ -4,6 +4,7 @@ LocalCluster, bit-identical; every spec checked before any work; the build's pro
 from __future__ import annotations
 
 import concurrent.futures as cf
+import re
 import warnings
 
 import numpy as np
@@ -107,14 +108,14 @@ def test_bad_spec_names_the_field_before_any_work(change, message):
 @pytest.mark.parametrize(
     "kw, message",
     [
-        ({"client": "mpi://x"}, "client must be None, 'local', a scheduler address"),
+        ({"client": "mpi://x"}, "client must be None (serial), 'local', a scheduler address"),
         ({"threads": 0}, "threads must be a positive integer"),
         ({"n_workers": -1}, "n_workers must be a positive integer"),
         ({"progress": "yes"}, "progress must be True, False or None"),
     ],
 )
 def test_bad_arguments(kw, message):
-    with pytest.raises(ValueError, match=message.replace("(", r"\(")):
+    with pytest.raises(ValueError, match=re.escape(message)):
         build_tables(_specs()[:1], **kw)
 
 
@@ -224,3 +225,43 @@ def test_dask_batched_out_dir_bit_identical_to_serial(tmp_path):
     paths = build_tables(specs, client="local", n_workers=2, out_dir=tmp_path, progress=False)
     for a, p in zip(serial, paths, strict=True):
         _same(a, read_npz(p))
+
+
+def test_local_cluster_dashboard_on_a_free_port_not_8787():
+    """The farm's LocalCluster (emscatter.parallel) takes a free dashboard port: with 8787
+    taken, no "Port 8787 is already in use" warning and the same tables."""
+    pytest.importorskip("dask.distributed")
+    import socket
+
+    blocker = socket.socket()
+    try:
+        blocker.bind(("127.0.0.1", 8787))
+        blocker.listen()
+    except OSError:  # already taken by someone else: the case under test all the same
+        pass
+    try:
+        specs = _specs(out_of_range="ignore")[:2]
+        serial = build_tables(specs, progress=False)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            parallel = build_tables(specs, client="local", n_workers=2, progress=False)
+    finally:
+        blocker.close()
+    assert not [w for w in caught if "8787" in str(w.message)]
+    for a, b in zip(serial, parallel, strict=True):
+        _same(a, b)
+
+
+def test_limited_threads_caps_the_wheels_openblas_and_restores_it():
+    """Without threadpoolctl, emscatter.parallel caps the OpenBLAS of numpy's and scipy's
+    wheels itself, so a serial run uses the BLAS thread count of a "local" worker
+    (OPENBLAS_NUM_THREADS=threads) and gets its bits."""
+    from emscatter import parallel
+
+    controls = parallel._openblas_controls()
+    if not controls:
+        pytest.skip("no OpenBLAS from the numpy/scipy wheels here (a system BLAS)")
+    before = [int(get()) for get, _ in controls]
+    with parallel.limited_threads(1, wheel_blas=True):
+        assert [int(get()) for get, _ in controls] == [1] * len(controls)
+    assert [int(get()) for get, _ in controls] == before

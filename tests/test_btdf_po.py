@@ -269,8 +269,8 @@ def test_po_table_policies_and_npz_round_trip(tmp_path, po_table):
     assert len([w for w in rec if "Kirchhoff" in str(w.message)]) == 1
     with pytest.raises(ValueError, match="grazing"):
         build_btdf_table(GLASS_PO, 2.25, [LAM], out_of_range="raise", **kw)
-    with pytest.raises(ValueError, match="method must be 'go' or 'po'"):
-        build_btdf_table(GLASS_PO, 2.25, [LAM], method="spm")
+    with pytest.raises(ValueError, match="method must be 'go', 'po' or 'spm'"):
+        build_btdf_table(GLASS_PO, 2.25, [LAM], method="mom")
     with pytest.raises(ValueError, match="unknown option"):
         build_btdf_table(GLASS_PO, 2.25, [LAM], method="po", shadowing=True)
     per = po_table.metadata["per_wavelength"][0]

@@ -368,8 +368,10 @@ def test_copol_ratio_in_backscatter_hh_below_vv():
     SMAP look-up table) at kσ = 0.79–1.32: there the exact solutions give HH − VV = −1.2 dB
     on average (−2.9 … +0.5), and measured bare soils have p = σhh/σvv ≤ 1 (Oh, Sarabandi &
     Ulaby, IEEE TGRS 30, 370, 1992). The default (``"aiem-faded"``): HH − VV ∈ [−3.5, −0.3]
-    dB (−2.40 … −0.69 measured, mean −1.54; validation/iem/copol_ratio.md);
-    ``complementary="aiem-upper"``: ∈ [−5.5, −1] dB (−5.0 … −1.7 measured). The published
+    dB (−2.50 … −0.46 measured, mean −1.42; validation/iem/copol_ratio.md);
+    ``complementary="aiem-upper"``: ∈ [−6.5, −1] dB (−6.0 … −1.9 measured; −5.0 … −1.7 with
+    the published transition variable (kσ cosθ)²: with (kσ)² its R_T is nearer R(0) at
+    40°, while its lower-medium terms, never faded, keep VV up). The published
     AIEM (``"aiem"``) inverts it (HH above VV up to +2.4 dB there: its lower-medium terms die
     out as e^{−σ² Re q₂²}), the issue-20 defect, asserted as such."""
     th = math.radians(40.0)
@@ -381,7 +383,7 @@ def test_copol_ratio_in_backscatter_hh_below_vv():
             kw = dict(crosspol=False, coherent=False)
             s = iem.bistatic(rough, eps, K, th, th, math.pi, complementary="aiem-upper", **kw)
             d = _db(s.sigma0[0, 0] / s.sigma0[1, 1])
-            assert np.all((d < -1.0) & (d > -5.5)), (ks, ratio, d)
+            assert np.all((d < -1.0) & (d > -6.5)), (ks, ratio, d)
             s = iem.bistatic(rough, eps, K, th, th, math.pi, **kw).sigma0
             d = _db(s[0, 0] / s[1, 1])
             assert np.all((d < -0.3) & (d > -3.5)), (ks, ratio, d)

@@ -142,8 +142,7 @@ def _transition_three_calls(rough, eps, cs, ks, K, rtol):
     from emscatter.solvers.iem import terms as kern
 
     spec = iem_jit.spectrum_code(rough)
-    with np.errstate(divide="ignore"):
-        lq = np.log((ks * cs) ** 2)
+    lq = np.full(np.shape(cs), math.log(kern.transition_q(ks)))  # S(βQ), Q = (kσ)²
     sums = [iem_jit.poisson_sums(lq + math.log(b), K, spec, rough.dimension, rtol=rtol * 1e-2)
             for b in (1.0, 2.0, 4.0)]  # fmt: skip
     return kern.transition_from_sums(eps, cs, ks, *sums)

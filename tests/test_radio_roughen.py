@@ -160,3 +160,28 @@ def test_cli_street_canyon_rough_minus_flat_png_and_csv(tmp_path):
     assert rows["building_2"] == "mapping['brick']" and rows["building_1"] == "mapping['glass']"
     assert rows["floor"] == "default table (concrete)"
     assert "rough − flat median" in p.stdout
+
+
+def test_roughen_with_diffuse_transmission_where_a_slab_can_carry_it():
+    s = _run("roughen_diffuse_transmission")["roughen_diffuse_transmission"]
+    for row in s["rows"]:
+        slab = row["correlation"] != "flat" and row["thickness_m"] is not None
+        assert row["transmission"] == ("diffuse" if slab else "coherent"), row
+    assert any(r["transmission"] == "diffuse" for r in s["rows"])  # the brick/concrete walls
+    assert "coherent" in s["materials"].values() or all(
+        r["transmission"] == "diffuse" for r in s["rows"]
+    )
+    assert "transmission must be one of ('coherent', 'diffuse')" in s["bad"]
+    assert "'lambertian'" in s["bad"]
+
+
+def test_cli_diffuse_transmission_is_for_scenes():
+    src = str(HERE.parent / "src")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")])}
+    p = subprocess.run(
+        [sys.executable, "-m", "emscatter.cli", "radio", "--plate", "--diffuse-transmission"],
+        capture_output=True, text=True, env=env, timeout=300,
+    )  # fmt: skip
+    assert p.returncode == 2, p.stderr
+    assert "--diffuse-transmission applies to scenes" in p.stderr
+    assert "Traceback" not in p.stderr

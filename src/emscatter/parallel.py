@@ -33,6 +33,8 @@ __all__ = [
     "check_n_workers",
     "limited_threads",
     "open_executor",
+    "dask_client",
+    "dashboard_link",
     "call_recording",
     "run_ordered",
 ]
@@ -74,10 +76,12 @@ def check_client(client) -> None:
 
 
 @contextlib.contextmanager
-def limited_threads(threads: int | None):
+def limited_threads(threads: int | None, wheel_blas: bool = False):
     """Within the block, at most ``threads`` compiled threads: numba's (this thread's),
     scipy.fft's default ``workers`` and BLAS's (through ``threadpoolctl`` when installed;
-    otherwise the worker's ``OPENBLAS_NUM_THREADS``). ``None``: no cap."""
+    otherwise, with ``wheel_blas``, the OpenBLAS that numpy's and scipy's wheels ship,
+    :func:`_openblas_controls`). ``None``: no cap. BLAS's count is process-wide: the cap
+    holds for the whole process during the block."""
     if threads is None:
         yield
         return
@@ -98,23 +102,68 @@ def limited_threads(threads: int | None):
 
             stack.enter_context(threadpool_limits(limits=threads))
         except ImportError:
-            pass
+            for get, put in _openblas_controls() if wheel_blas else ():
+                before = int(get())
+                put(min(threads, before))
+                stack.callback(put, before)
         yield
+
+
+_OPENBLAS_CALLS = (
+    ("scipy_openblas_get_num_threads64_", "scipy_openblas_set_num_threads64_"),
+    ("scipy_openblas_get_num_threads", "scipy_openblas_set_num_threads"),
+    ("openblas_get_num_threads64_", "openblas_set_num_threads64_"),
+    ("openblas_get_num_threads", "openblas_set_num_threads"),
+)
+_OPENBLAS: list | None = None
+
+
+def _openblas_controls() -> list:
+    """``[(get_num_threads, set_num_threads), ...]`` of the OpenBLAS builds numpy and scipy
+    ship in their wheels (``numpy.libs``, ``scipy.libs``), found without ``threadpoolctl``:
+    the serial run caps BLAS as a ``"local"`` worker's ``OPENBLAS_NUM_THREADS`` does, since a
+    threaded BLAS reduction may differ from the single-threaded one in the last bit. Empty
+    where none is found (a system BLAS: install ``threadpoolctl``)."""
+    global _OPENBLAS
+    if _OPENBLAS is not None:
+        return _OPENBLAS
+    import ctypes
+    import glob
+
+    found = []
+    for mod in ("numpy", "scipy"):
+        try:
+            top = os.path.dirname(__import__(mod).__file__)
+        except (ImportError, TypeError):
+            continue
+        for path in sorted(glob.glob(os.path.join(top + ".libs", "*openblas*.so*"))):
+            try:
+                lib = ctypes.CDLL(path)  # already loaded by the module: the same handle
+            except OSError:
+                continue
+            for get, put in _OPENBLAS_CALLS:
+                if hasattr(lib, get) and hasattr(lib, put):
+                    found.append((getattr(lib, get), getattr(lib, put)))
+                    break
+    _OPENBLAS = found
+    return found
 
 
 def _thread_env(threads: int | None) -> dict:
     t = str(threads or 1)
-    return {name: t for name in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS",
+    return {name: t for name in ("NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS",
                                  "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}  # fmt: skip
 
 
 def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
-                  memory_limit=None):  # fmt: skip
+                  memory_limit=None, timeout: float | None = None):  # fmt: skip
     """``(executor or None, close)`` for ``client``; ``close()`` shuts down what was started
     here (a ``"local"`` LocalCluster of ``n_workers`` single-threaded processes, default the
-    CPU count ÷ ``threads``; a Client to a scheduler address) and leaves a caller's own
-    Client or Executor open. ``memory_limit``: the LocalCluster's per-worker limit (dask's
-    default: the machine's memory ÷ workers)."""
+    CPU count ÷ ``threads``, its dashboard on a free port and its workers' statistical
+    profiler off; a Client to a scheduler address) and leaves a caller's own Client or
+    Executor open. ``memory_limit``: the LocalCluster's per-worker limit (dask's default: the
+    machine's memory ÷ workers); ``timeout`` [s]: how long to try to reach a scheduler
+    address (dask's default, 30 s, when None) before an ``OSError``."""
     check_client(client)
     if client is None:
         return None, lambda: None
@@ -131,14 +180,19 @@ def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
         if client == "local":
             n = n_workers or max(1, (os.cpu_count() or 1) // (threads or 1))
             extra = {} if memory_limit is None else {"memory_limit": memory_limit}
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=":0",
-                env=_thread_env(threads),
-                **extra,
-            )
+            import dask
+
+            # the workers' statistical profiler samples every thread each 10 ms: CPU a farm of
+            # small tasks on few cores does not have (the dashboard's task stream stays)
+            with dask.config.set({"distributed.worker.profile.enabled": False}):
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=":0",
+                    env=_thread_env(threads),
+                    **extra,
+                )
             dc = Client(cluster)
 
             def close():
@@ -146,25 +200,48 @@ def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
                 cluster.close()
 
             return dc.get_executor(), close
-        dc = Client(client)
+        dc = Client(client) if timeout is None else Client(client, timeout=timeout)
         return dc.get_executor(), dc.close
     return client.get_executor(), lambda: None  # a dask.distributed Client
 
 
-def call_recording(fn, *args, threads: int | None = None, **kwargs):
+def dask_client(executor):
+    """The dask.distributed ``Client`` behind ``executor`` (its ``get_executor()``), or None."""
+    if executor is None:
+        return None
+    if callable(getattr(executor, "scheduler_info", None)):
+        return executor
+    return getattr(executor, "_client", None)
+
+
+def dashboard_link(executor) -> str | None:
+    """The dask dashboard's address of ``executor``'s cluster (None: not dask, or none)."""
+    dc = dask_client(executor)
+    try:
+        return None if dc is None else dc.dashboard_link
+    except Exception:  # noqa: BLE001 - a cluster without a dashboard
+        return None
+
+
+def call_recording(fn, *args, threads: int | None = None, wheel_blas: bool = False, **kwargs):
     """``(fn(*args, **kwargs), [(category, message), ...])`` with ``threads`` capped
     (:func:`limited_threads`) and every warning recorded instead of shown: the task function
     of :func:`run_ordered` in a worker (module-level, so it pickles)."""
-    with limited_threads(threads), warnings.catch_warnings(record=True) as caught:
+    with limited_threads(threads, wheel_blas), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         out = fn(*args, **kwargs)
     return out, [(w.category, str(w.message)) for w in caught]
 
 
 def run_ordered(executor, fn, arg_list, names, *, threads=None, bar=None, on_result=None,
-                stacklevel: int = 3):  # fmt: skip
+                stacklevel: int = 3, cap_serial: bool = False):  # fmt: skip
     """``[fn(*args) for args in arg_list]`` on ``executor`` (None: serially here, warnings
-    shown as they come, no thread cap), in the order of ``arg_list``.
+    shown as they come, no thread cap unless ``cap_serial``), in the order of ``arg_list``.
+
+    ``cap_serial``: the serial tasks are capped at ``threads`` like a worker's, BLAS included
+    (also without ``threadpoolctl``: the wheels' OpenBLAS, ``wheel_blas``), in the workers
+    too — a threaded BLAS or numba reduction may differ from a single-threaded one in the
+    last bit, so equal counts are what make the serial and the farmed results identical.
 
     ``names[j]`` labels task ``j`` in errors and in its warnings; ``bar`` (a tqdm-like object
     or None) is advanced once per finished task; ``on_result(j, result)`` is called as each
@@ -181,11 +258,13 @@ def run_ordered(executor, fn, arg_list, names, *, threads=None, bar=None, on_res
             bar.update(1)
 
     if executor is None:
-        for j, args in enumerate(arg_list):
-            done(j, fn(*args))
+        cap = limited_threads(threads, True) if cap_serial else contextlib.nullcontext()
+        with cap:
+            for j, args in enumerate(arg_list):
+                done(j, fn(*args))
         return results
     futures = {
-        executor.submit(call_recording, fn, *args, threads=threads): j
+        executor.submit(call_recording, fn, *args, threads=threads, wheel_blas=cap_serial): j
         for j, args in enumerate(arg_list)
     }
     caught: list = [[] for _ in arg_list]

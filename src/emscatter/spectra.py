@@ -181,11 +181,11 @@ class Roughness(ABC):
         used) when the slope variance is infinite (exponential, power law). Without it such
         a roughness raises ``ValueError``.
         """
-        from scipy import integrate  # lazy: keep `import emscatter` fast
-
         closed = self._mss_closed()
         if closed is not None and k_max is None:
             return closed
+        from scipy import integrate  # lazy: keep `import emscatter` (and closed forms) fast
+
         if k_max is None:
             raise ValueError(
                 f"{type(self).__name__} has an infinite slope variance (its correlation is "

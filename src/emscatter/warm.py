@@ -9,7 +9,12 @@ cross-pol integral), 1–4 s for SPM, GO and PO (and for the backscatter cross-p
 through the public API on a few angles with ``EMSCATTER_KERNELS=numba`` (so even these tiny
 calls take the compiled path), in the layouts and argument types that select distinct compiled
 signatures: a dielectric and ``"pec"``, Gaussian and exponential correlations, flat geometries
-and a grid (θi × θs × φs), bistatic and backscatter, 1-D and 2-D where the kernel covers both.
+and a grid (θi × θs × φs), bistatic and backscatter, 1-D and 2-D where the kernel covers both;
+SPM emissivity (it reads the coherent part: the second-order kernel,
+:mod:`emscatter.solvers.spm.kernel_coherent`) and a GO call above 4096 angles (the compiled
+per-angle validity pass, :mod:`emscatter.solvers.kirchhoff.go_validity`, runs only there).
+``python benchmarks/bench_api.py --parts cold`` checks that a fresh process then compiles
+nothing and times each method's first call (issue 22: under 2 s).
 numba writes what it compiles to the cache folder of :mod:`emscatter.kernels._runtime`
 (``EMSCATTER_NUMBA_CACHE_DIR``, default ``~/.cache/emscatter/numba``; ``NUMBA_CACHE_DIR`` when
 the user set it); a later process loads it (≈ 0.1–0.5 s per method instead of seconds).
@@ -63,6 +68,9 @@ def _calls():
     def back(rough, eps, method, **opt):
         return lambda: em.backscatter(rough, eps, theta_i=ti, method=method, **kw, **opt)
 
+    def emis(rough, eps, method, **opt):  # reads the coherent part (SPM: kernel_coherent)
+        return lambda: em.emissivity(rough, eps, theta_i=ti, method=method, tol=1e-2, **kw, **opt)
+
     out = {}
     for method, roughs in (("spm", (spm_g, spm_e)), ("po", (po_g, po_e))):
         out[method] = [
@@ -71,6 +79,8 @@ def _calls():
             for e in (17 + 2j, "pec")
             for f in (bi, back, lambda r, e, m: bi(r, e, m, grid))
         ]
+    # emissivity: the hemispherical layouts of σ⁰ and (SPM) the second-order coherent kernel
+    out["spm"] += [emis(spm_g, 17 + 2j, "spm"), emis(spm_e, "pec", "spm")]
     profile = GaussianCorrelation(0.4 / k, 6.0 / k, dimension=1)
     in_plane = (ti, ts, np.array([0.0, math.pi, 0.0]))  # a 1-D profile scatters in its plane
     out["po"].append(bi(profile, 17 + 2j, "po", in_plane))
@@ -80,6 +90,10 @@ def _calls():
         for opt in ({}, {"shadowing": "separable"}, {"shadowing": "correlated"})
         for f in (bi, back, lambda r, e, m, **o: bi(r, e, m, grid, **o))
     ]
+    # the compiled per-angle validity pass runs above 4096 angles (method_resolution)
+    rng = np.random.default_rng(0)
+    many = tuple(rng.uniform(lo, hi, 8192) for lo, hi in ((0, 1.5), (0, 1.5), (-3.1, 3.1)))
+    out["go"].append(bi(go_g, 17 + 2j, "go", many))
     out["iem"] = [
         f(r, e, "iem")
         for r in (iem_g, iem_e)

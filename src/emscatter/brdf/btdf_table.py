@@ -40,6 +40,7 @@ import numpy as np
 from ..solvers.kirchhoff.common import slope_variances
 from ..solvers.kirchhoff.transmission import go as gt
 from ..solvers.kirchhoff.transmission import po as tpo
+from ..solvers.spm import transmission as tspm
 from . import grid
 from .btdf import checked_surface, emscatter_to_mitsuba
 from .build import _check_count, _check_wavelengths, default_phi_d, default_theta, material_eps
@@ -265,8 +266,12 @@ def build_btdf_table(
     ``"po"`` the Kirchhoff (physical-optics) transmission of
     :mod:`emscatter.solvers.kirchhoff.transmission.po`, whose coherent transmissivity
     ``T_F exp(−σ²(k₁cosθi − k₂cosθt)²)`` goes to ``coherent`` (a delta lobe, counted in
-    :meth:`BtdfTable.albedo`). ``out_of_range`` (PO): ``"warn"`` (once per wavelength, naming
-    the θi nodes outside PO's validity), ``"raise"`` or ``"ignore"``; recorded in
+    :meth:`BtdfTable.albedo`), ``"spm"`` the first-order small-perturbation transmission of
+    :mod:`emscatter.solvers.spm.transmission` (fine polish, ``kσ ≲ 0.3``), whose second-order
+    coherent transmissivity goes to ``coherent`` (``R + T = 1`` to ``O((kσ)²)`` with the SPM
+    reflection) and whose Mueller part (``polarized=True``) is the products of its complex
+    amplitudes. ``out_of_range`` (PO, SPM): ``"warn"`` (once per wavelength, naming the θi nodes
+    outside the method's validity), ``"raise"`` or ``"ignore"``; recorded in
     ``metadata["per_wavelength"]``.
 
     ``surface``: a 2-D isotropic :class:`emscatter.spectra.Roughness`; ``material``: a real
@@ -285,14 +290,14 @@ def build_btdf_table(
     "separable" = Mitsuba's ``roughdielectric``, False), ``slope_variance``, ``k_max``; (PO):
     ``rtol``, ``max_terms`` of the series.
     """
-    if method not in ("go", "po"):
-        raise ValueError(f"method must be 'go' or 'po' for a BTDF table, got {method!r}")
+    if method not in ("go", "po", "spm"):
+        raise ValueError(f"method must be 'go', 'po' or 'spm' for a BTDF table, got {method!r}")
     if out_of_range not in ("warn", "raise", "ignore"):
         raise ValueError(
             f"out_of_range must be 'warn', 'raise' or 'ignore' for a table, got {out_of_range!r}"
         )
-    if method == "po":
-        rough, po_opts = _po_surface(surface, options)
+    if method != "go":
+        rough, po_opts = _po_surface(surface, options, method)
         options = {}
     else:
         rough = checked_surface(surface, options, "a BTDF table")
@@ -318,7 +323,11 @@ def build_btdf_table(
         sx, sy = slope_variances(
             rough, options.get("k_max"), options.get("slope_variance"), k=2 * math.pi / wl[0]
         )
-        auto_t, auto_p = default_resolution(math.sqrt(float(np.mean(sx + sy))), e0, n_theta)
+        m = math.sqrt(float(np.mean(sx + sy)))
+        if method == "spm":  # the lobe is the spectrum's width, Δ(sinθt) ≈ 2/(ηkℓ)
+            eta0 = math.sqrt(e0)
+            m = 2 * wl[0] / (2 * math.pi * eta0 * rough.length) * eta0 / abs(eta0 - 1)
+        auto_t, auto_p = default_resolution(m, e0, n_theta)
         n_theta_t = auto_t if n_theta_t is None else n_theta_t
         n_phi = auto_p if n_phi is None else n_phi
     n_tt = n_theta_t
@@ -351,7 +360,7 @@ def build_btdf_table(
     values = np.empty((wl.size, ti.size, tt.size, pd.size), dtype=dt)
     mueller = np.empty((wl.size, 4, 4, ti.size, tt.size, pd.size), dtype=dt) if polarized else None
     rows = max(1, _CHUNK // (tt.size * pd.size))
-    coherent = np.zeros((wl.size, ti.size)) if method == "po" else None
+    coherent = np.zeros((wl.size, ti.size)) if method != "go" else None
     per_wl = []
     for j, lam in enumerate(wl):
         e = material_eps(material, float(lam))
@@ -363,6 +372,9 @@ def build_btdf_table(
         if method == "po":
             per_wl.append(_po_validity(rough, eps[j], k, ti, float(lam), out_of_range))
             coherent[j] = tpo.coherent_transmissivity(rough, eps[j], k, ti).mean(axis=0)
+        elif method == "spm":
+            per_wl.append(_po_validity(rough, eps[j], k, ti, float(lam), out_of_range, "spm"))
+            coherent[j] = tspm.coherent_transmissivity(rough, eps[j], k, ti).mean(axis=0)
         for lo in range(0, ti.size, rows):
             a, b, c = np.meshgrid(ti[lo : lo + rows], tt, pd, indexing="ij")
             # renderer Δφ → emscatter: φi = π (k̂_i = −wi with φ(wi) = 0), φt = Δφ
@@ -371,11 +383,21 @@ def build_btdf_table(
                     rough, eps[j], k, a, b, c, math.pi, out_of_range="ignore", **po_opts
                 )  # the slopes of the same spectrum: the plugin samples Beckmann normals
                 slopes = [float(x) for x in slope_variances(rough, None, None, k=k)]
+                unpol = res.unpolarized()
+            elif method == "spm":  # σ⁰_t = |J|² (the coherent part: above, once per θi)
+                jones = tspm.jones(rough, eps[j], k, a, b, c, math.pi)
+                slopes = [float(x) for x in slope_variances(rough, None, None, k=k)]
+                unpol = 0.5 * np.sum(np.abs(jones) ** 2, axis=(0, 1))
             else:
                 res = gt.bistatic_transmission(rough, eps[j], k, a, b, c, math.pi, **options)
                 slopes = [float(np.mean(x)) for x in res.info["slope_variance"]]
-            values[j, lo : lo + rows] = res.unpolarized() / (4 * math.pi * np.cos(a) * np.cos(b))
-            if polarized:  # the facet's Jones matrix as a Mueller matrix (.btdf)
+                unpol = res.unpolarized()
+            values[j, lo : lo + rows] = unpol / (4 * math.pi * np.cos(a) * np.cos(b))
+            if polarized and method == "spm":  # SPM's own amplitude products
+                mm = jones_to_mueller(jones) / (4 * math.pi * np.cos(a) * np.cos(b))
+                mueller[j, :, :, lo : lo + rows] = mm
+                mueller[j, 0, 0, lo : lo + rows] = values[j, lo : lo + rows]
+            elif polarized:  # the facet's Jones matrix as a Mueller matrix (.btdf)
                 jones = gt.transmission_jones(eps[j], a, b, c, math.pi)
                 mm = jones_to_mueller(jones) * (values[j, lo : lo + rows] / _m00(jones))
                 mueller[j, :, :, lo : lo + rows] = mm
@@ -400,6 +422,14 @@ def build_btdf_table(
             "(delta lobe at the refracted direction, not in values)",
             per_wavelength=per_wl,
         )
+    if method == "spm":
+        meta.update(
+            solver="spm-transmission",
+            source="first-order small-perturbation transmission (Rice 1951; Johnson, JOSA A 16, "
+            "1999), coherent part to second order (emscatter.solvers.spm.transmission)",
+            coherent="coherent transmissivity to second order in k sigma (delta lobe at the "
+            "refracted direction, not in values)",
+        )
     return BtdfTable(
         wavelengths=wl, theta_i=ti, theta_t=tt, phi_d=pd, values=values, eps=eps,
         mueller=mueller, metadata=meta, coherent=coherent,
@@ -409,29 +439,34 @@ def build_btdf_table(
 _PO_OPTIONS = ("rtol", "max_terms")
 
 
-def _po_surface(surface, options):
-    """The roughness and the series options of a PO BTDF table (clear errors)."""
-    unknown = set(options) - set(_PO_OPTIONS)
+def _po_surface(surface, options, method="po"):
+    """The roughness and the series options of a PO (SPM: none) BTDF table (clear errors)."""
+    allowed = _PO_OPTIONS if method == "po" else ()
+    unknown = set(options) - set(allowed)
     if unknown:
         raise ValueError(
-            f"unknown option(s) {sorted(unknown)} for the PO BTDF; allowed: {list(_PO_OPTIONS)}"
+            f"unknown option(s) {sorted(unknown)} for the {method.upper()} BTDF; allowed: "
+            f"{list(allowed)}"
         )
     return checked_surface(surface, {}, "a BTDF table"), dict(options)
 
 
-def _po_validity(rough, eps, k, theta, lam, out_of_range) -> dict:
-    """PO's validity at the θi nodes for one wavelength: the ``out_of_range`` policy (one
-    warning naming the failing nodes, or a ValueError) and a record for the metadata."""
+def _po_validity(rough, eps, k, theta, lam, out_of_range, method="po") -> dict:
+    """PO's (SPM's) validity at the θi nodes for one wavelength: the ``out_of_range`` policy
+    (one warning naming the failing nodes, or a ValueError) and a record for the metadata."""
     from ..solvers.kirchhoff import po as rpo
+    from ..solvers.spm import validity as spm_validity
 
-    rep_ = rpo.check_validity(rough, k, eps=eps, theta_i=theta)
+    check = rpo.check_validity if method == "po" else spm_validity.check_validity
+    rep_ = check(rough, k, eps=eps, theta_i=theta)
     bad = ~np.broadcast_to(np.asarray(rep_.get("angle_valid", True), dtype=bool), theta.shape)
     if not rep_["valid"] and out_of_range != "ignore":
         nodes = np.degrees(theta[bad])
         where = f"θi {nodes.min():.3g}–{nodes.max():.3g}° ({bad.sum()} nodes)" if bad.any() else ""
+        theory = "Kirchhoff approximation's" if method == "po" else "small-perturbation method's"
         msg = (
-            f"build_btdf_table(method='po') at λ = {lam:.6g} m is outside the Kirchhoff "
-            f"approximation's validity {where}: {'; '.join(rep_['reasons'])}"
+            f"build_btdf_table(method={method!r}) at λ = {lam:.6g} m is outside the {theory} "
+            f"validity {where}: {'; '.join(rep_['reasons'])}"
         )
         if out_of_range == "raise":
             raise ValueError(msg + " (out_of_range='warn' builds it anyway)")

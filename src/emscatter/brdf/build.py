@@ -31,7 +31,7 @@ import warnings
 
 import numpy as np
 
-from .. import api, materials
+from .. import api, materials, solvers
 from ..constants import SPEED_OF_LIGHT
 from ..conventions import check_positive
 from ..fresnel import check_eps
@@ -134,7 +134,7 @@ def _sigma0(rough, eps, wavelength, name, ti, to, po, pi_, out_of_range, options
     """Unpolarized (and per-pair) f_r at renderer angles: ``(f, f_pol or None, info)``."""
     opts = dict(options)
     if not _API_LAZY_COHERENT:  # an API that does not defer the coherent part itself
-        module = api.solvers.get(name)
+        module = solvers.get(name)
         if "coherent" in inspect.signature(module.bistatic).parameters:
             opts.setdefault("coherent", False)
     res = _bistatic(rough, eps, wavelength, name, ti, pi_, to, po, out_of_range, opts)

@@ -23,6 +23,11 @@ per small table), and with ``out_dir`` each worker writes its tables to
 sends back only the path: thousands of 17.5 MB tables neither cross the network nor sit in
 this process's memory (the folder must be one the workers and this process share).
 
+The executor plumbing (a ``"local"`` LocalCluster with its dashboard on a free port, a
+scheduler address, thread caps per task, results in order, failed tasks named, worker
+warnings passed on) is :mod:`emscatter.parallel`'s, shared with the MoM Monte Carlo and the
+radio farm (:mod:`emscatter.radio.farm`).
+
 Every spec is checked before any work (surface, material at every wavelength, method, the
 keyword names): a bad one raises a ``ValueError`` naming the spec, the field, the value and
 what is allowed. Warnings raised in the workers are passed on once each in this process,
@@ -35,7 +40,6 @@ dashboard.
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import contextlib
 import inspect
 import itertools
@@ -44,6 +48,14 @@ import os
 import warnings
 from collections.abc import Iterable, Mapping
 
+from ..parallel import (
+    check_client,
+    check_n_workers,
+    check_threads,
+    dask_client,
+    open_executor,
+    run_ordered,
+)
 from ..spectra import check_roughness
 from . import build as _build_mod
 from .progress import bar
@@ -131,14 +143,6 @@ def check_spec(spec, index: int = 0) -> dict:
     return {**kw, "wavelengths": wl, **options}
 
 
-def _check_threads(threads) -> int | None:
-    if threads is None:
-        return None
-    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
-        raise ValueError(f"threads must be a positive integer or None, got {threads!r}")
-    return int(threads)
-
-
 def _cap_threads(kwargs: dict, threads: int | None, in_worker: bool) -> dict:
     """The solver's ``threads=`` set to the cap where it takes one and the caller did not;
     in a worker also numba's own thread count (this thread's, never the caller's process)."""
@@ -191,13 +195,15 @@ def _build_one(kwargs: dict, threads: int | None, in_worker: bool = True, compil
     return table, [(w.category, str(w.message)) for w in caught]
 
 
-def _build_batch(calls: list, names: list, threads, compiled: bool, out_dir) -> list:
+def _build_batch(calls: list, names: list, threads, compiled: bool, out_dir,
+                 in_worker: bool = True) -> list:  # fmt: skip
     """The tables of one task: ``[(table or its path, warnings), ...]`` in the order given;
-    with ``out_dir`` each is written to ``out_dir/<name>.npz`` here, in the worker."""
+    with ``out_dir`` each is written to ``out_dir/<name>.npz`` here, in the worker (serially:
+    ``in_worker=False``, this process's numba thread count left alone)."""
     out = []
     for kw, name in zip(calls, names, strict=True):
         try:
-            table, caught = _build_one(kw, threads, True, compiled)
+            table, caught = _build_one(kw, threads, in_worker, compiled)
         except Exception as exc:
             if len(calls) == 1:
                 raise
@@ -214,9 +220,7 @@ def _workers_of(executor, client, n_workers, threads) -> int | None:
     """How many tasks ``executor`` runs at once, where it says (None: unknown)."""
     if client == "local":
         return n_workers or max(1, (os.cpu_count() or 1) // (threads or 1))
-    dc = client if hasattr(client, "scheduler_info") else None
-    if dc is None and hasattr(executor, "_client"):
-        dc = executor._client  # dask's ClientExecutor
+    dc = dask_client(client if hasattr(client, "scheduler_info") else executor)
     if dc is not None:
         try:
             workers = dc.scheduler_info().get("workers", {})
@@ -264,64 +268,6 @@ def _check_out_dir(out_dir, names: list[str]):
     return path
 
 
-def _executor(client, n_workers, threads):
-    """``(executor or None, close)`` for ``client``; ``close()`` shuts down what we started."""
-    if client is None:
-        return None, lambda: None
-    if isinstance(client, cf.Executor):
-        return client, lambda: None
-    if isinstance(client, str):
-        try:
-            from dask.distributed import Client, LocalCluster
-        except ImportError:
-            raise ValueError(
-                f"client={client!r} needs dask.distributed (pip install 'emscatter[distributed]'); "
-                "or pass a concurrent.futures Executor, or None (serial)"
-            ) from None
-        if client == "local":
-            n = n_workers or max(1, (os.cpu_count() or 1) // (threads or 1))
-            cap = str(threads or 1)  # numba's threads and the BLAS/FFT pools' of numpy/scipy
-            env = {
-                name: cap
-                for name in (
-                    "NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS",
-                    "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                )
-            }  # fmt: skip
-            import dask
-
-            # the workers' statistical profiler samples every thread each 10 ms: CPU a 2-core
-            # farm of small tables does not have (the dashboard's task stream stays)
-            with dask.config.set({"distributed.worker.profile.enabled": False}):
-                cluster = LocalCluster(
-                    n_workers=n,
-                    threads_per_worker=1,
-                    processes=True,
-                    dashboard_address=None,
-                    env=env,
-                )
-            dc = Client(cluster)
-
-            def close():
-                dc.close()
-                cluster.close()
-
-            return dc.get_executor(), close
-        if client.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
-            dc = Client(client)
-            return dc.get_executor(), dc.close
-        raise ValueError(
-            f"client must be None, 'local', a scheduler address 'tcp://host:port', a "
-            f"dask.distributed Client or a concurrent.futures Executor, got {client!r}"
-        )
-    if hasattr(client, "get_executor") and callable(client.get_executor):
-        return client.get_executor(), lambda: None  # a dask.distributed Client
-    raise ValueError(
-        f"client must be None, 'local', a scheduler address 'tcp://host:port', a "
-        f"dask.distributed Client or a concurrent.futures Executor, got {client!r}"
-    )
-
-
 def build_tables(
     specs: Iterable[Mapping],
     *,
@@ -355,15 +301,13 @@ def build_tables(
         names must then be unique file names) and its :class:`~pathlib.Path` comes back
         (read it with :func:`emscatter.brdf.export_npz.read_npz`).
     """
-    threads = _check_threads(threads)
+    threads = check_threads(threads)
     if batch is not None and (
         isinstance(batch, bool) or not isinstance(batch, numbers.Integral) or batch < 1
     ):
         raise ValueError(f"batch must be a positive integer or None, got {batch!r}")
-    if n_workers is not None and (
-        isinstance(n_workers, bool) or not isinstance(n_workers, numbers.Integral) or n_workers < 1
-    ):
-        raise ValueError(f"n_workers must be a positive integer or None, got {n_workers!r}")
+    n_workers = check_n_workers(n_workers)
+    check_client(client)
     if isinstance(specs, Mapping):
         raise ValueError("specs must be a list of spec dicts, got a single dict (wrap it: [spec])")
     specs = list(specs)
@@ -373,46 +317,31 @@ def build_tables(
     names = [s.get("name") or f"specs[{i}]" for i, s in enumerate(specs)]
     out_dir = _check_out_dir(out_dir, names)
     compiled = _load_compiled()  # the same kernel path in this process and every worker
-    executor, close = _executor(client, n_workers, threads)
-    results: list = [None] * len(calls)
-    try:
-        with bar(len(calls), "BRDF tables", progress, unit="table") as b:
+    with bar(len(calls), "BRDF tables", progress, unit="table") as b:
+        executor, close = open_executor(client, n_workers, threads)
+        try:
             if executor is None:
-                for j, kw in enumerate(calls):
-                    table, caught = _build_one(kw, threads, in_worker=False)
-                    if out_dir is not None:
-                        from .export_npz import write_npz
-
-                        table = write_npz(table, os.path.join(out_dir, f"{names[j]}.npz"))
-                    results[j] = (table, caught)
-                    b.update(1)
+                tasks = [range(j, j + 1) for j in range(len(calls))]
             else:
-                submit = executor.submit
-                tasks = _batches(len(calls), batch, _workers_of(executor, client, n_workers,
-                                                                threads))  # fmt: skip
-                futures = {
-                    submit(_build_batch, [calls[j] for j in r], [names[j] for j in r], threads,
-                           compiled, out_dir): r
-                    for r in tasks
-                }  # fmt: skip
-                try:
-                    for fut in cf.as_completed(futures):
-                        r = futures[fut]
-                        try:
-                            done = fut.result()
-                        except Exception as exc:
-                            # a batch's error names its table (_build_batch)
-                            which = f"{names[r[0]]} failed" if len(r) == 1 else "a table failed"
-                            raise RuntimeError(f"build_tables: {which}: {exc}") from exc
-                        for j, item in zip(r, done, strict=True):
-                            results[j] = item
-                        b.update(len(r))
-                except BaseException:
-                    for fut in futures:
-                        fut.cancel()
-                    raise
-    finally:
-        close()
+                workers = _workers_of(executor, client, n_workers, threads)
+                tasks = _batches(len(calls), batch, workers)
+            arg_list = [
+                ([calls[j] for j in r], [names[j] for j in r], threads, compiled, out_dir,
+                 executor is not None)
+                for r in tasks
+            ]  # fmt: skip
+            labels = [
+                f"build_tables: {names[r[0]]}" if len(r) == 1
+                else f"build_tables: a table of {names[r[0]]} … {names[r[-1]]}"
+                for r in tasks
+            ]  # fmt: skip
+            done = run_ordered(
+                executor, _build_batch, arg_list, labels, threads=threads,
+                on_result=lambda k, _res: b.update(len(tasks[k])), cap_serial=True,
+            )  # fmt: skip
+        finally:
+            close()
+    results = [item for batch_out in done for item in batch_out]
     seen = set()
     for name, (_, caught) in zip(names, results, strict=True):
         for category, message in caught:

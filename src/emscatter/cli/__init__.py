@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(_join_negative_values(argv))
     except SystemExit as exc:  # --help, --version, or a usage error already printed
         return int(exc.code or 0) if not isinstance(exc.code, str) else 2
-    command = args.command
+    command = getattr(args, "_command_name", None) or args.command  # 'farm brdf'
     args._argv = argv  # what was typed: commands check which options were given
     with warnings.catch_warnings():
         warnings.simplefilter("always")

@@ -19,8 +19,8 @@ the material at every wavelength, the method name, and options that do not apply
 
 A progress bar over the wavelengths (advanced per chunk) is drawn on stderr when it is a
 terminal; ``--quiet`` turns it off. Many tables (materials × wavelength sets × roughness) on a
-dask cluster are the Python entry :func:`emscatter.brdf.build_tables` (one output per table
-does not fit this command's one output path).
+dask cluster: ``emscatter farm brdf`` (:mod:`emscatter.cli.farm`) or the Python entry
+:func:`emscatter.brdf.build_tables`.
 """
 
 from __future__ import annotations
@@ -168,11 +168,11 @@ def _run_transmission(a, rough, wl, resolution, table_kw):
     from ..brdf.build import material_eps
 
     n_theta = 90 if resolution is None else resolution[0]
-    po = a.method == "po"  # the PO BTDF beside a PO reflection, GO otherwise
+    tm = a.method if a.method in ("po", "spm") else "go"  # PO/SPM BTDF beside PO/SPM, else GO
     bt = build_btdf_table(
         rough, a.material, wl, n_theta=n_theta, polarized=a.polarized,
-        dtype=table_kw["dtype"], method="po" if po else "go",
-        **({"out_of_range": a.out_of_range} if po and a.out_of_range != "nan" else {}),
+        dtype=table_kw["dtype"], method=tm,
+        **({"out_of_range": a.out_of_range} if tm != "go" and a.out_of_range != "nan" else {}),
     )  # fmt: skip
     kw = dict(table_kw, energy="off")
     table = build_table(rough, a.material, wl, **kw)
@@ -297,8 +297,8 @@ def register(subparsers) -> None:
     p.add_argument(
         "--transmission",
         action="store_true",
-        help="a rough dielectric (real ε > 0, ≠ 1): also write its BTDF (GO; PO with --method "
-        "po) as OUT_btdf.npz and "
+        help="a rough dielectric (real ε > 0, ≠ 1): also write its BTDF (GO; PO or SPM with "
+        "--method po / spm) as OUT_btdf.npz and "
         "the inside reflection (1/ε) as OUT_inner.npz (.npz output, isotropic; the reflection "
         "capped at 1 − T of that BTDF); render them with emscatter render OUT.npz --btdf …",
     )
@@ -346,7 +346,7 @@ def register(subparsers) -> None:
         "--quiet",
         action="store_true",
         help="no progress bar (the bar is drawn only when stderr is a terminal anyway); many "
-        "tables on a dask cluster: emscatter.brdf.build_tables(specs, client='tcp://…')",
+        "tables on a dask cluster: emscatter farm brdf --scheduler local|tcp://HOST:PORT",
     )
     p.set_defaults(func=run)
 

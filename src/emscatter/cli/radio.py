@@ -259,6 +259,14 @@ def register(subparsers) -> None:
             "and <scene>_xpd_vs_frequency.csv/.png (median and quartiles per frequency)"
         ),
     )
+    r.add_argument(
+        "--diffuse-transmission",
+        action="store_true",
+        help=(
+            "any-scene mode: rough slabs (isotropic, with a thickness) also scatter diffusely "
+            "into the back hemisphere (radio maps only: Sionna's PathSolver cannot carry it)"
+        ),
+    )
     r.add_argument("--quick", action="store_true", help="few rays, coarse maps and tables")
     r.add_argument(
         "--quiet",
@@ -287,10 +295,11 @@ def _run(a) -> int:
     if a.plate and a.height_map:
         raise ValueError("--height-map applies to scenes, not to --plate")
     a.map_spec = _map_spec(a)  # the map read and its band checked before anything else
-    if a.xpd_map and (a.plate or a.builtin_json is not None):
-        raise ValueError(
-            "--xpd-map applies to scenes (radio maps), not to --plate or --builtin-json"
-        )
+    for flag, on in (("--xpd-map", a.xpd_map), ("--diffuse-transmission", a.diffuse_transmission)):
+        if on and (a.plate or a.builtin_json is not None):
+            raise ValueError(
+                f"{flag} applies to scenes (radio maps), not to --plate or --builtin-json"
+            )
     if a.builtin_json is not None:
         if a.plate or a.tx is not None or a.extrapolate:
             raise ValueError(
@@ -494,7 +503,7 @@ def run_any_scene(a) -> int:
         res = compare_rough_flat(
             sc, common, mapping=mapping, extrapolate=a.extrapolate, table_options=opts,
             frequencies=freqs, xpd=bool(a.rx), texture_direction=_texture_directions(a),
-            xpd_map=a.xpd_map,
+            xpd_map=a.xpd_map, transmission="diffuse" if a.diffuse_transmission else "coherent",
             paths={"samples_per_src": samples, "max_depth": depth} if a.rx else False,
             radio_map={"center": (*((lo[:2] + hi[:2]) / 2), a.map_height),
                        "orientation": (0.0, 0.0, 0.0), "size": tuple(size),

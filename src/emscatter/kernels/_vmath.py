@@ -193,7 +193,20 @@ def _erfcx_fit() -> tuple[np.ndarray, float]:
     return coef, float(np.max(np.abs(approx / special.erfcx(x) - 1.0)))
 
 
-ERFCX_COEF, ERFCX_MAX_REL_ERR = _erfcx_fit()
+#: :func:`_erfcx_fit`'s coefficients, frozen (bit-exact hex): importing scipy.special and
+#: fitting cost ~0.3 s of a fresh process's first SPM call (issue 22); tests/test_cold_start.py
+#: refits and compares.
+_ERFCX_HEX = (
+    "0x1.32442f0f2a8b8p+0", "0x1.5117cae7afc67p-4", "-0x1.78e38c9958ae9p-4",
+    "0x1.57bcbe48b69e5p-6", "-0x1.58c5b24b32316p-10", "-0x1.ed60f1001dd15p-13",
+    "0x1.94bfe9cf48419p-16", "0x1.4b341a057946cp-18", "-0x1.096010adb596fp-22",
+    "-0x1.0d1b95c5c26fap-23", "-0x1.7c31d2f70e7b6p-28", "0x1.548acacdf23e1p-29",
+    "0x1.e5cbe09aebf19p-32", "-0x1.e3446137c93b8p-38", "-0x1.d22e434b35803p-37",
+    "-0x1.0946f73771556p-39", "0x1.57d922362bee0p-44", "0x1.3e65abf972c7ep-44",
+    "0x1.80ab13d07079ep-47", "-0x1.f861d05e70376p-53", "-0x1.c3c8efe72064ep-52",
+)  # fmt: skip
+ERFCX_COEF = np.array([float.fromhex(h) for h in _ERFCX_HEX])
+ERFCX_MAX_REL_ERR = 1.2212453270876722e-15  # the fit's, on 100001 points of [0, ERFCX_HI]
 # module constants: numba freezes them into the compiled code (no table look-ups)
 (
     _X0,

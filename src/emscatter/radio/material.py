@@ -22,6 +22,25 @@ Per ray, at the scene frequency and the ray's incidence angle:
 * **diffraction** uses Sionna's own UTD wedge coefficients with the flat slab of the medium
   (roughness does not enter the wedge).
 
+**Diffuse transmission** (``transmission="diffuse"``, opt-in; isotropic rough slabs): the
+tables of :mod:`emscatter.radio.transmission_tables` (from
+:func:`emscatter.radio.slab_diffuse.diffuse_transmission`: GO faces, radiative transport inside)
+add a diffuse event into the back hemisphere (a ``DIFFUSE`` event, direction uniform on the back
+hemisphere, Jones matrix ``√(T_p Ω / 2)`` into each scattered polarization: the light that
+crossed the slab is unpolarized) and put the internal light that leaves through the front face
+into the diffuse reflection lobe, so that ``R_coh + R_diff + T_coh + T_diff + A = 1`` per
+incidence (within 1e-3, tests/test_radio_transmission_material.py). Both lobes sit in one
+stacked texture: no extra lookup per ray. RadioMapSolver follows the event (it spawns the next
+ray along the sampled direction, either side); Sionna's PathSolver connects diffuse events only
+to receivers on the incident side (``sionna.rt`` ``sb_candidate_generator``) and cannot carry
+it: there the material samples as with ``"coherent"`` (the internal light stays in its diffuse
+reflection) and warns once
+(:class:`~emscatter.radio.transmission_tables.DiffuseTransmissionWarning`). Off by default:
+existing results and PathSolver users stay as they were, the model holds only where GO does
+(outside it the material's ``out_of_range`` policy applies and the lobe is indicative), and the
+tables cost a ``slab_diffuse`` build (~1–4 s per material and frequency). Flat materials ignore
+it (the flat limit is Sionna's slab); half-spaces refuse it.
+
 **Anisotropic roughness** (walls with a texture direction, ``texture_direction=``): the
 tables get the incidence-azimuth axis and the lobe lookup works in the texture frame of each hit
 (:mod:`emscatter.radio.texture`, Dr.Jit side in :mod:`emscatter.radio.texture_jit`).
@@ -43,6 +62,7 @@ face), which saves the slab arithmetic per ray; flat materials always keep Sionn
 from __future__ import annotations
 
 import math
+import warnings
 
 import drjit as dr
 import mitsuba as mi
@@ -65,8 +85,8 @@ from sionna.rt.utils import (
 )
 
 from .. import solvers
-from ..spectra import ExponentialCorrelation, GaussianCorrelation
-from .convention import sionna_permittivity, to_sionna
+from .convention import sionna_permittivity
+from .material_slice import _parse_props, _Slice
 from .medium import check_thickness, resolve_medium
 from .tables import TableOptions, build_tables, check_policy, check_surface
 from .texture import build_textured_tables, check_direction, check_textured_surface
@@ -75,96 +95,16 @@ from .texture_jit import (
     folded_azimuth,
     opaque_float,
     tex_coord,
-    texture,
     texture_axes,
     textured_lookup,
     to_texture_frame,
 )
+from .transmission_tables import DiffuseTransmissionWarning, build_transmission_tables
 
 __all__ = ["EmscatterRadioMaterial", "PLUGIN_NAME"]
 
 PLUGIN_NAME = "emscatter-radio-material"
 _HALF_SPACE_DIFFRACTION_THICKNESS = 1e3  # [m] a half-space seen by Sionna's UTD wedge code
-
-
-class _Slice:
-    """Dr.Jit textures of one frequency's tables (host object)."""
-
-    def __init__(self, tables):
-        self.tables = tables
-        delta = to_sionna(tables.delta)  # (2, n_cos)
-        inc = tables.incoherent_on_cos()
-        zero = np.zeros_like(inc[0])
-        # 8 channels: Dr.Jit pads other counts with a copy kernel, which fails when the table is
-        # first built inside a solver's symbolic loop (drjit 1.5: undefined '%mask').
-        per_cos = np.stack(
-            [
-                delta[0].real,
-                delta[0].imag,
-                delta[1].real,
-                delta[1].imag,
-                inc[0],
-                inc[1],
-                zero,
-                zero,
-            ],
-            axis=-1,
-        )
-        self.n_cos = tables.cos_nodes.size
-        self.per_cos = texture(per_cos, 1)  # roughness correction + diffuse share, on cosθi
-        self.n_theta = tables.theta_nodes.size
-        self.inv_theta_max = opaque_float(1.0 / float(tables.theta_nodes[-1]))
-        self.n_alpha = tables.alpha_nodes.size
-        self.n_s = tables.s_nodes.size
-        self.linear_s = tables.grading == 1.0
-        self.inv_grading = opaque_float(1.0 / tables.grading)
-        self.lobe = texture(tables.lobe, 3)
-        self.n_psi = 0
-
-
-def _parse_props(props: mi.Properties) -> dict:
-    """Keyword arguments from an XML ``<bsdf type="emscatter-radio-material">``."""
-    out: dict = {}
-
-    def take(key):
-        v = props[key]
-        del props[key]
-        return v
-
-    for key in ("medium", "method", "correlation", "texture_direction"):
-        if key in props:
-            out[key] = str(take(key))
-    floats = ("eps_real", "conductivity", "thickness", "rms_height", "correlation_length")
-    for key in (*floats, "correlation_length_y"):
-        if key in props:
-            out[key] = float(take(key))
-    if "half_space" in props and bool(take("half_space")):
-        out["thickness"] = None
-    if "rms_height" in out or "correlation_length" in out:
-        if "rms_height" not in out or "correlation_length" not in out:
-            raise ValueError(
-                f"emscatter-radio-material {props.id()!r}: give both rms_height [m] and "
-                "correlation_length [m] (or neither, for a flat surface)"
-            )
-        kind = out.pop("correlation", "gaussian").lower()
-        cls = {"gaussian": GaussianCorrelation, "exponential": ExponentialCorrelation}.get(kind)
-        if cls is None:
-            raise ValueError(
-                f"emscatter-radio-material {props.id()!r}: correlation must be 'gaussian' or "
-                f"'exponential', got {kind!r}"
-            )
-        out["surface"] = cls(sigma=out.pop("rms_height"), length=out.pop("correlation_length"),
-                             length_y=out.pop("correlation_length_y", None))  # fmt: skip
-    if "texture_direction" in out:  # "0 0 1" or "0, 0, 1"
-        text = out["texture_direction"]
-        try:
-            out["texture_direction"] = [float(v) for v in text.replace(",", " ").split()]
-        except ValueError:
-            raise ValueError(
-                f"emscatter-radio-material {props.id()!r}: texture_direction must be three "
-                f"numbers (e.g. '0 0 1'), got {text!r}"
-            ) from None
-    return out
 
 
 class EmscatterRadioMaterial(RadioMaterialBase):
@@ -190,6 +130,9 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         roughness (then the textured tables are used: a check of the textured path); projected
         onto each hit's tangent plane, with the degenerate rule of
         :mod:`emscatter.radio.texture` where it is parallel to the normal.
+    transmission : ``"coherent"`` (default: the coherent slab only, as Sionna's own model) or
+        ``"diffuse"`` (also the diffusely transmitted lobe of the rough slab; RadioMapSolver only,
+        module docstring). Needs a slab (``thickness`` not ``None``) and no texture direction.
     color : RGB in [0, 1] for Sionna's previews.
     """
 
@@ -206,6 +149,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         out_of_range: str = "warn",
         table_options: TableOptions | None = None,
         texture_direction=None,
+        transmission: str = "coherent",
         color=None,
         props: mi.Properties | None = None,
     ):
@@ -225,6 +169,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             thickness = kw.get("thickness", DEFAULT_THICKNESS)
             method = kw.get("method", "auto")
             texture_direction = kw.get("texture_direction")
+            transmission = kw.get("transmission", "coherent")
         super().__init__(props)
         self._medium = resolve_medium(medium, eps_real=eps_real, conductivity=conductivity)
         thickness = check_thickness(thickness)
@@ -258,6 +203,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
                 f"method must be 'auto' or one of {solvers.available()}, got {method!r}"
             )
         self._method = method
+        self._transmission = self._check_transmission(transmission, thickness)
+        self._path_warned = False
         self._out_of_range = out_of_range
         self._options = table_options or TableOptions()
         self._tables: dict[float, _Slice] = {}
@@ -281,6 +228,29 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         return self._medium
 
     @property
+    def transmission(self) -> str:
+        """``"coherent"`` (default) or ``"diffuse"`` (class docstring)."""
+        return self._transmission
+
+    def _check_transmission(self, transmission, thickness) -> str:
+        allowed = ("coherent", "diffuse")
+        if transmission not in allowed:
+            raise ValueError(f"transmission must be one of {allowed}, got {transmission!r}")
+        if transmission == "diffuse":
+            if thickness is None:
+                raise ValueError(
+                    "transmission='diffuse' needs a slab: thickness=None is a half-space, which "
+                    "transmits nothing; give thickness [m] > 0"
+                )
+            if self._texture is not None:
+                raise ValueError(
+                    "transmission='diffuse' needs isotropic roughness without texture_direction "
+                    "(the slab transport of emscatter.radio.slab_diffuse is isotropic), got "
+                    f"texture_direction={tuple(self._texture)!r}"
+                )
+        return transmission
+
+    @property
     def surface(self):
         return self._surface
 
@@ -297,6 +267,13 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     def active_tables(self):
         """Tables of the current scene frequency, or ``None`` until a solver needs them."""
         return None if self._active is None else self._active.tables
+
+    @property
+    def active_transmission_tables(self):
+        """Diffuse-transmission tables of the current scene frequency
+        (:class:`~emscatter.radio.transmission_tables.TransmissionTables`), or ``None``
+        (``transmission="coherent"``, a flat or opaque wall, or not built yet)."""
+        return None if self._active is None else getattr(self._active, "transmission", None)
 
     def _set_medium_constants(self, frequency: float, check: bool = True):
         try:
@@ -352,8 +329,16 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             label=self.name,
             options=self._options,
         )
-        cls = _Slice if self._texture is None else TexturedSlice
-        self._active = self._tables[self._frequency] = cls(tables)
+        if self._texture is not None:
+            self._active = self._tables[self._frequency] = TexturedSlice(tables)
+            return self._active
+        through = None
+        if self._transmission == "diffuse" and not self._opaque_wall:
+            through = build_transmission_tables(
+                self._surface, self._eps, self._frequency, self._thickness, tables,
+                out_of_range=self._out_of_range,
+            )  # fmt: skip
+        self._active = self._tables[self._frequency] = _Slice(tables, through)
         return self._active
 
     def _dummy(self) -> _Slice:
@@ -375,14 +360,17 @@ class EmscatterRadioMaterial(RadioMaterialBase):
 
     # ------------------------------------------------------------------ per ray (Dr.Jit)
     def _coefficients(self, cos_i, sl: _Slice | None, active, ki=None, tex=None):
-        """Coherent ``(r_te, r_tm, t_te, t_tm)`` (Sionna convention) of the rough slab, and the
-        diffuse share ``r_incoh,h + r_incoh,v`` at this incidence."""
+        """Coherent ``(r_te, r_tm, t_te, t_tm)`` (Sionna convention) of the rough slab, the
+        diffuse reflected share ``r_incoh,h + r_incoh,v`` (+ the internal ``R_int,h + R_int,v``
+        with diffuse transmission) and the diffusely transmitted ``T_h + T_v`` at this
+        incidence."""
         eta = self._eta
         zero_f = mi.Float(0.0)
         if sl is None:  # flat: exactly Sionna's ITU slab (or its half-space limit)
             if self._thickness is not None:
                 return (
                     *itu_coefficients_single_layer_slab(cos_i, eta, self._d_op, self._lam),
+                    zero_f,
                     zero_f,
                 )
         sin2 = 1.0 - dr.square(cos_i)
@@ -399,11 +387,15 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             r1_te = r_te + mi.Complex2f(v[0], v[1])
             r1_tm = r_tm + mi.Complex2f(v[2], v[3])
             diffuse = dr.maximum(v[4] + v[5], 0.0)
+            through = zero_f
+            if sl.n_psi == 0 and sl.stacked:
+                diffuse = diffuse + dr.maximum(v[7], 0.0)
+                through = dr.maximum(v[6], 0.0)
         else:
-            r1_te, r1_tm, diffuse = r_te, r_tm, zero_f
+            r1_te, r1_tm, diffuse, through = r_te, r_tm, zero_f, zero_f
         zero = mi.Complex2f(0.0, 0.0)
         if self._thickness is None or self._opaque_wall:
-            return r1_te, r1_tm, zero, zero, diffuse
+            return r1_te, r1_tm, zero, zero, diffuse, through
         k = self._k
         k2z = k * a
         q_t = k * cos_i - k2z
@@ -417,7 +409,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             inv = dr.rcp(1.0 - r_in * r_in * ph2)
             tt = (1.0 - r0 * r0) * chi_t * chi_t
             out.append((r1 + tt * r_in * ph2 * inv, tt * ph * inv))
-        return out[0][0], out[1][0], out[0][1], out[1][1], diffuse
+        return out[0][0], out[1][0], out[0][1], out[1][1], diffuse, through
 
     @staticmethod
     def _mean_field(expo):
@@ -426,7 +418,8 @@ class EmscatterRadioMaterial(RadioMaterialBase):
 
     def _lobe(self, ki, ko, sl: _Slice, active, tex=None):
         """``(hh, hv, vh, vv)`` lobe values [1/sr] for local directions ``ki`` (incident,
-        propagating) and ``ko`` (scattered)."""
+        propagating) and ``ko`` (scattered; with diffuse transmission either hemisphere: the
+        back one reads the transmitted block of the stacked texture at ``(μ = |ko.z|, φ)``)."""
         if sl.n_psi:
             psi, flip = folded_azimuth(ki, tex)
             ki, ko = to_texture_frame(ki, tex), to_texture_frame(ko, tex)
@@ -456,11 +449,18 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         th = dr.clip(dr.safe_acos(cos_i) * sl.inv_theta_max, 0.0, 1.0)
         if sl.n_psi:
             return textured_lookup(sl, s, alpha, th, psi, active)
-        pos = mi.Point3f(
-            tex_coord(s, sl.n_s),
-            tex_coord(alpha * (1.0 / math.pi), sl.n_alpha),
-            tex_coord(th, sl.n_theta),
-        )
+        if sl.stacked:  # one lookup: reflection block 0, transmission block 1 (material_slice)
+            back = ko.z < 0.0
+            kx = ko.x * e1x + ko.y * e1y
+            ky = dr.abs(ko.y * e1x - ko.x * e1y)
+            phi = dr.atan2(ky, kx)
+            s = dr.select(back, dr.clip(-ko.z, 0.0, 1.0), s)
+            alpha = dr.select(back, phi, alpha)
+            idx = th * (sl.n_theta - 1) + dr.select(back, float(sl.n_theta), 0.0)
+            z = (idx + 0.5) * (1.0 / (2 * sl.n_theta))
+        else:
+            z = tex_coord(th, sl.n_theta)
+        pos = mi.Point3f(tex_coord(s, sl.n_s), tex_coord(alpha * (1.0 / math.pi), sl.n_alpha), z)
         v = sl.lobe.eval(pos, active)
         return [dr.maximum(x, 0.0) for x in v]
 
@@ -475,19 +475,23 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         root_omega = dr.sqrt(dr.maximum(solid_angle, 0.0))
         return mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv)) * root_omega
 
-    def _event_probabilities(self, coefs, enabled):
-        """Probabilities of specular reflection, diffuse reflection and transmission, in
-        proportion to their powers (mean of the two polarizations) among the enabled events."""
-        r_te, r_tm, t_te, t_tm, diffuse_power = coefs
+    def _event_probabilities(self, coefs, enabled, through_on=False):
+        """Probabilities of specular reflection, diffuse reflection, transmission and (with
+        ``through_on``) diffuse transmission, in proportion to their powers (mean of the two
+        polarizations) among the enabled events (diffuse transmission: diffuse and refraction
+        both enabled)."""
+        r_te, r_tm, t_te, t_tm, diffuse_power, through = coefs
         r = dr.squared_norm(r_te) + dr.squared_norm(r_tm)
         t = dr.squared_norm(t_te) + dr.squared_norm(t_tm)
         prs = dr.select((enabled & InteractionType.SPECULAR) > 0, r, 0.0)
         prd = dr.select((enabled & InteractionType.DIFFUSE) > 0, diffuse_power, 0.0)
         pt = dr.select((enabled & InteractionType.REFRACTION) > 0, t, 0.0)
-        total = prs + prd + pt
+        both = InteractionType.DIFFUSE | InteractionType.REFRACTION
+        pdt = dr.select((enabled & both) == both, through, 0.0) if through_on else 0.0
+        total = prs + prd + pt + pdt
         none = total <= 0.0
         norm = dr.select(none, 1.0, dr.rcp(total))
-        return prs * norm, prd * norm, pt * norm, none
+        return prs * norm, prd * norm, pt * norm, pdt * norm, none
 
     def _context(self, si):
         ki = si.wi
@@ -502,7 +506,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     ):  # fmt: skip
         """Jones matrix (world implicit frame) of the event of each lane: specular reflection or
         transmission, diffuse reflection into ``ko_diff``, diffraction into ``ko_diffr``."""
-        r_te, r_tm, t_te, t_tm, _ = coefs
+        r_te, r_tm, t_te, t_tm, _, _ = coefs
         reflection, diffuse, diffraction = events
         ko_spec = dr.select(reflection, mi.reflect(-ki), ki)
         c_te = dr.select(reflection, r_te, t_te)
@@ -551,22 +555,25 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         enabled = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         diffraction = mi.Bool(active) & (enabled == InteractionType.DIFFRACTION)
         coefs = self._coefficients(cos_i, sl, active, ki, tex)
-        prs, prd, pt, none = self._event_probabilities(coefs, enabled)
+        through_on = self._through_on(sl, ctx)
+        prs, prd, pt, pdt, none = self._event_probabilities(coefs, enabled, through_on)
         specular = sample1 < prs
         diffuse = (sample1 >= prs) & (sample1 < prs + prd)
-        transmission = ~specular & ~diffuse
+        through = (sample1 >= prs + prd) & (sample1 < prs + prd + pdt)
+        transmission = ~specular & ~diffuse & ~through
+        diffuse |= through
         event = dr.select(
             specular, mi.UInt(InteractionType.SPECULAR), mi.UInt(InteractionType.DIFFUSE)
         )
         event = dr.select(transmission, mi.UInt(InteractionType.REFRACTION), event)
         event = dr.select(none, mi.UInt(InteractionType.NONE), event)
         event = dr.select(diffraction, mi.UInt(InteractionType.DIFFRACTION), event)
-        prob = dr.select(specular, prs, dr.select(diffuse, prd, pt))
+        prob = dr.select(specular, prs, dr.select(through, pdt, dr.select(diffuse, prd, pt)))
         prob = dr.select(diffraction, 1.0, prob)
         diffuse &= ~diffraction & ~none
         reflection = specular | diffuse
         ko_diff = mi.warp.square_to_uniform_hemisphere(sample2)
-        ko_diff.z = dr.abs(ko_diff.z)
+        ko_diff.z = dr.select(through, -dr.abs(ko_diff.z), dr.abs(ko_diff.z))
         ko = dr.select(diffuse, ko_diff, dr.select(reflection, mi.reflect(-ki), ki))
         ko_diffr = ko
         if diffraction_on:
@@ -614,12 +621,37 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         ki, cos_i, _, tex = self._context(si)
         event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         every = InteractionType.SPECULAR | InteractionType.DIFFUSE | InteractionType.REFRACTION
-        prs, prd, pt, _ = self._event_probabilities(
-            self._coefficients(cos_i, sl, active, ki, tex), mi.UInt(every)
+        prs, prd, pt, pdt, _ = self._event_probabilities(
+            self._coefficients(cos_i, sl, active, ki, tex), mi.UInt(every), self._through_on(sl)
         )
         p = dr.select(event == InteractionType.SPECULAR, prs, prd)
+        p = dr.select((event == InteractionType.DIFFUSE) & (si.to_local(wo).z < 0.0), pdt, p)
         p = dr.select(event == InteractionType.REFRACTION, pt, p)
         return dr.select(event == InteractionType.DIFFRACTION, 1.0, p)
+
+    def _through_on(self, sl, ctx=None) -> bool:
+        """Whether diffuse transmission can be sampled in this call (host side, trace time).
+
+        Sionna's PathSolver samples with ``NO_JONES_MATRIX`` and connects a diffuse event only
+        to receivers on the incident side of the surface (``sionna.rt`` ``sb_candidate_generator``):
+        it cannot carry diffusely transmitted power, so there the material samples as with
+        ``transmission="coherent"`` (the internal light out of the front face stays in the
+        diffuse reflection) and warns once."""
+        if sl is None or sl.n_psi or not sl.stacked:
+            return False
+        if ctx is not None and (ctx.component & NO_JONES_MATRIX) != 0:
+            if not self._path_warned:
+                self._path_warned = True
+                warnings.warn(
+                    "radio materials with transmission='diffuse' are carried by "
+                    "RadioMapSolver only; Sionna's PathSolver connects diffuse events to "
+                    "receivers on the incident side, so its paths hold no diffusely transmitted "
+                    "power (coherent transmission and diffuse reflection are complete)",
+                    DiffuseTransmissionWarning,
+                    stacklevel=3,
+                )
+            return False
+        return True
 
     def traverse(self, callback):
         """Nothing differentiable: the tables come from emscatter on the host."""
@@ -629,6 +661,9 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         d = "half-space" if self._thickness is None else f"thickness {self._thickness:g} m"
         t = self.active_tables
         tab = "tables not built yet" if t is None else t.describe()
+        tt = self.active_transmission_tables
+        if tt is not None:
+            tab += "; " + tt.describe()
         return (
             f"EmscatterRadioMaterial {self.name!r}: {self._medium.describe()}; {surf}; {d}; {tab}"
         )

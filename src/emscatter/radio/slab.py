@@ -26,7 +26,8 @@ where ``Re(k²) < 0`` of their argument; a passive mean field cannot grow, so th
 exponent is clipped at 0 there (only the phase is kept). The power that leaves the coherent
 field is scattered diffusely: the diffuse *reflection* from the front face is emscatter's σ⁰ of
 the half-space (the material's lobe); diffuse *transmission* and diffuse light from the back face
-are not modelled (they are not in Sionna's material model either).
+are not modelled here (nor in Sionna's material model): the radio material's
+``transmission="diffuse"`` adds them from :mod:`emscatter.radio.slab_diffuse`.
 
 ``thickness=None`` is a half-space (a thick or lossy wall, the ground): ``R = r_coh``,
 ``T = 0``. With σ = 0 and ``front = r`` everything reduces exactly to the ITU formulas above

@@ -45,6 +45,12 @@ face and ``P = diag(a) K_r`` (``K_r`` the internal-reflection kernel), crossing 
 (``R_diff``): ``T = x₀ (I − P²)⁻¹ diag(a) t_out``, ``R_int = x₀ P (I − P²)⁻¹ diag(a) t_out``,
 ``A = x₀ (I − P)⁻¹ (1 − a)`` (``t_out`` the per-node escape fraction).
 
+With ``n_modes > 0`` the azimuthal Fourier modes of both escaping lobes are kept: the
+transmitted one (:meth:`DiffuseTransmission.transmitted_lobe`) and the internal light that leaves
+through the front face (the odd crossings, :meth:`DiffuseTransmission.internal_reflection_lobe`,
+powers ``r_lobe``); the radio material's ``transmission="diffuse"`` tables read both
+(:mod:`emscatter.radio.transmission_tables`).
+
 The flat limit (``surface=None`` or σ = 0): ``R_diff = T_diff = 0``, ``T_coh, R_coh`` the ITU
 slab, ``A = 1 − R_coh − T_coh`` (Poynting's theorem for the slab).
 """
@@ -90,18 +96,29 @@ class DiffuseTransmission:
     mu_nodes: np.ndarray | None = None  # air-side cosine nodes of t_lobe
     mu_weights: np.ndarray | None = None
     t_modes: np.ndarray | None = None  # (2, n, n_mu, M + 1) azimuthal modes of t_lobe
+    r_lobe: np.ndarray | None = None  # (2, n, n_mu) internal diffuse light out of the front face
+    r_modes: np.ndarray | None = None  # (2, n, n_mu, M + 1) azimuthal modes of r_lobe
 
     def transmitted_lobe(self, phi) -> np.ndarray:
         """Diffusely transmitted power per unit solid angle [1/sr], ``(2, n, n_mu, n_phi)``
         over ``(pol_i, θi, μ node, φ)``, at azimuths ``phi`` [rad] from the plane of incidence
         (``φ = 0``: forward): ``Σ_m (2 − δ_m0) T_m cos(mφ) / (2π w_j)``; its integral over
         the back hemisphere is ``t_diff`` (needs ``n_modes > 0``)."""
-        if self.t_modes is None:
+        return self._lobe(self.t_modes, phi)
+
+    def internal_reflection_lobe(self, phi) -> np.ndarray:
+        """The part of ``r_diff`` that crossed the slab and left through the front face (not
+        the front face's own diffuse reflection), per unit solid angle [1/sr], as
+        :meth:`transmitted_lobe` (``φ = 0``: the specular side); integral: ``r_lobe`` summed."""
+        return self._lobe(self.r_modes, phi)
+
+    def _lobe(self, modes, phi):
+        if modes is None:
             raise ValueError("no azimuthal modes: call diffuse_transmission(..., n_modes=M > 0)")
         ph = np.atleast_1d(np.asarray(phi, dtype=float))
-        m = np.arange(self.t_modes.shape[-1])
+        m = np.arange(modes.shape[-1])
         basis = np.where(m == 0, 1.0, 2.0)[:, None] * np.cos(m[:, None] * ph[None, :])
-        lobe = self.t_modes @ basis / (2.0 * math.pi)
+        lobe = modes @ basis / (2.0 * math.pi)
         return lobe / self.mu_weights[None, None, :, None]
 
     @property
@@ -270,16 +287,18 @@ def diffuse_transmission(
     # (negligible where GO holds: their share is reported in r_coh, t_coh)
     keep = np.clip(1.0 - r_coh - t_coh, 0.0, 1.0)
     t_lobe = t_lobe * keep[..., None]
-    modes = None
+    modes = r_modes = None
     if n_modes:  # the same chain per azimuthal mode (the power fluxes above are mode 0)
         pm = att[None, :, None] * kr1m
         tm = att[None, :, None] * kt1m
         inv2m = np.linalg.inv(eye[None] - pm @ pm)  # (M + 1, n_mu, n_mu)
         modes = np.einsum("mpij,mjk->pikm", kt0m, inv2m @ tm) * keep[..., None, None]
+        r_modes = np.einsum("mpij,mjk->pikm", kt0m, pm @ inv2m @ tm) * keep[..., None, None]
     r_diff = (kr0.sum(-1) + r_int.sum(-1)) * keep
     out = DiffuseTransmission(
         th, f, e, d, r_coh, r_diff, t_coh, t_lobe.sum(-1), absorbed * keep, lost * keep,
         False, bool(rep["valid"]), list(rep["reasons"]), def0, t_lobe, mu, wmu, modes,
+        r_int * keep[..., None], r_modes,
     )  # fmt: skip
     if not np.all(np.isfinite(out.total)):
         raise ValueError("diffuse slab transmission produced NaN/inf (please report the inputs)")

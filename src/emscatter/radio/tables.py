@@ -373,7 +373,7 @@ def build_tables(
 
 
 def _build(surface, eps, frequency, method, out_of_range, label, opts, bar) -> RadioTables:
-    from .. import api
+    from .. import api, solvers
 
     policy = check_policy(out_of_range)
     k = wavenumber(frequency=frequency)
@@ -414,13 +414,13 @@ def _build(surface, eps, frequency, method, out_of_range, label, opts, bar) -> R
         msg = (
             f"radio material {label!r} at {frequency / 1e9:g} GHz: {_describe_regime(rough, k)}; "
             f"method {name!r} is outside its validity range ({why}). To change: pick another "
-            f"method= ({', '.join(api.solvers.available())}), a roughness inside a method's range, "
+            f"method= ({', '.join(solvers.available())}), a roughness inside a method's range, "
             "or out_of_range='raise' to make this an error."
         )
         if method == "auto":
             msg = msg.replace(f"method {name!r} is", f"no method is valid; 'auto' took {name!r},")
         if policy == "raise":
-            raise api.select.ValidityError(msg)
+            raise solvers.select.ValidityError(msg)
         if policy == "warn":
             warnings.warn(msg, RadioValidityWarning, stacklevel=3)
     coherent, n_coh = _coherent_on_grid(rough, eps, k, name, cos_nodes, fres, opts.n_cos_spm)

@@ -182,8 +182,12 @@ class Roughened:
         return self._scene()
 
     def rows(self) -> list[dict]:
-        """One dict per object (:meth:`Assignment.row`), for a table or a CSV."""
-        return [a.row() for a in self.assignments]
+        """One dict per object (:meth:`Assignment.row` and its material's ``transmission``
+        model), for a table or a CSV."""
+        return [
+            {**a.row(), "transmission": self.materials[a.material].transmission}
+            for a in self.assignments
+        ]
 
     def describe(self) -> str:
         lines = [f"{len(self.assignments)} objects, {len(self.materials)} emscatter materials:"]
@@ -363,6 +367,19 @@ def _shared_names(assignments, scene, prefix: str) -> list[Assignment]:
     return out
 
 
+#: The transmission models :func:`roughen` takes (:class:`EmscatterRadioMaterial`'s).
+TRANSMISSIONS = ("coherent", "diffuse")
+
+
+def _transmission_for(a, transmission: str) -> str:
+    """``"diffuse"`` only where the material can carry it: an isotropic rough slab."""
+    if transmission == "diffuse" and (
+        a.surface is None or a.thickness is None or not a.surface.is_isotropic
+    ):
+        return "coherent"
+    return transmission
+
+
 def roughen(
     scene,
     roughness=None,
@@ -376,6 +393,7 @@ def roughen(
     flat: bool = False,
     prefix: str = "rough-",
     texture_direction=None,
+    transmission: str = "coherent",
 ) -> Roughened:
     """Every object of the Sionna ``scene`` gets its emscatter equivalent (module docstring);
     returns the :class:`Roughened` handle (``flatten()`` undoes it).
@@ -390,7 +408,11 @@ def roughen(
     first trace, only for used materials. ``texture_direction``: world direction of the ``ℓx``
     axis of every anisotropic roughness (``(σ, ℓx, ℓy)``; :mod:`emscatter.radio.texture`), or
     a dict material name or ITU type → direction (per medium, keyed as ``mapping``), required
-    where one is given."""
+    where one is given. ``transmission``: ``"coherent"`` (default, Sionna's own slab model) or
+    ``"diffuse"`` (:class:`~emscatter.radio.material.EmscatterRadioMaterial`'s diffuse
+    transmission through rough slabs, carried by RadioMapSolver only): it applies to the
+    isotropic rough slabs; flat objects, half-spaces (no thickness) and textured walls keep the
+    coherent slab, and ``rows()`` names each object's model (``"transmission"``)."""
     from ..material import EmscatterRadioMaterial
 
     if isinstance(texture_direction, dict):
@@ -429,6 +451,8 @@ def roughen(
         )
     if not isinstance(prefix, str) or not prefix:
         raise ValueError(f"prefix must be a non-empty string, got {prefix!r}")
+    if transmission not in TRANSMISSIONS:
+        raise ValueError(f"transmission must be one of {TRANSMISSIONS}, got {transmission!r}")
     old = _HANDLES.get(scene)
     if old is not None and old.active:
         old.flatten()
@@ -447,6 +471,7 @@ def roughen(
                 texture_direction=None
                 if a.surface is None or a.surface.is_isotropic
                 else direction_of(a),
+                transmission=_transmission_for(a, transmission),
             )
     originals = {}
     for a in assignments:

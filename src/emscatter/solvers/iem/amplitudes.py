@@ -145,8 +145,7 @@ def _transition(rough, eps, cs, ks, log_w, K, rtol):
     spec = iem_jit.spectrum_code(rough) if iem_jit.enabled() else None
     if spec is None:
         return kern.transition_factor(eps, cs, ks, log_w, K)
-    with np.errstate(divide="ignore"):
-        lq = np.log((ks * cs) ** 2)
+    lq = np.full(np.shape(cs), math.log(kern.transition_q(ks)))  # S(βQ), Q = (kσ)²
     # the three sums S(βQ), β = 1, 2, 4, in one call (independent elements: the same values)
     n = lq.size
     lqs = np.concatenate([lq + math.log(b) for b in (1.0, 2.0, 4.0)])

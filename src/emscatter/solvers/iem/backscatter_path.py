@@ -162,10 +162,9 @@ def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
     if N > opt.max_terms:
         raise RuntimeError(_too_many(opt.rtol, opt.max_terms, N, log_ks2))
     table = orders_table(log_ks2, log_w, K, N)
-    # transition (Wu et al. 2001): the three sums S(βQ) from the same table
+    # transition (Wu et al. 2001, Q = (kσ)²: terms.py): its own sums S(βQ), β = 1, 2, 4
     if opt.fresnel == "transition" and not pec:
-        sums = [_table_sum(table, np.log(b * cs * cs)) for b in (1.0, 2.0, 4.0)]
-        g_h, g_v = kern.transition_from_sums(eps_f, cs, ks, *sums)
+        g_h, g_v = kern.transition_factor(eps_f, cs, ks, log_w, K, rtol=opt.rtol * 1e-2)
         rh0, rv0 = fresnel_cos(eps_f, np.ones(1))
         rh_t, rv_t = rh + (rh0 - rh) * g_h, rv + (rv0 - rv) * g_v
     else:

@@ -87,12 +87,13 @@ Choices made here, where the papers are silent or inconsistent (each tested):
   70°). The first-order defect ``D`` is taken with the unfaded terms (the fade, like the
   transition, is part of the model, not undone at n = 1; ``D = 0`` in backscatter still), and
   γ → 0 as kσ → 0, so the SPM limit is unchanged. Against the NMM3D 40° table (162 cases,
-  validation/iem/copol_ratio.md): HH RMSE 0.62 dB (published AIEM 1.20), HH − VV −1.54 dB
-  mean at kσ 0.79–1.32 (NMM3D −1.23; max −0.69), PO limit at kσ = 3 within 0.03 dB; VV RMSE
-  1.28 dB (AIEM 1.04: VV +0.9 dB biased at kσ 0.26–0.8, as every IEM with full lower-medium
+  validation/iem/copol_ratio.md): HH RMSE 0.58 dB (published AIEM 1.13), HH − VV −1.42 dB
+  mean at kσ 0.79–1.32 (NMM3D −1.23; max −0.46), PO limit at kσ = 3 within 0.03 dB; VV RMSE
+  1.28 dB (AIEM 0.94: VV +0.9 dB biased at kσ 0.26–0.8, as every IEM with full lower-medium
   terms — I2EM, SMRT ``iiem_fung02``, the 1992 IEM; AIEM's lower VV there came with the
-  inverted ratio). Left: past the Brewster angle of a low-ε soil (ε ≈ 4, θ ≈ 70°) at
-  kσ 1–4.5, where the transition moves ``R_vT`` through zero, hh stays above vv (≤ +2.1 dB).
+  inverted ratio). Past the Brewster angle of a low-ε soil (ε ≈ 4, θ ≈ 70°, kσ 1–4.5) hh
+  stays below vv since the transition's phase variable is (kσ)², not the papers' (kσ cosθ)²
+  (:mod:`emscatter.solvers.iem.terms`: with it hh exceeded vv there by up to +2.1 dB).
 * **Reciprocity.** The transition and the complementary coefficients use ``R(θi)``, so the
   published bistatic σ⁰ is not reciprocal. ``reciprocal=True`` (default) returns
   ``½[σ⁰_qp(i→s) + σ⁰_pq(−s→−i)]`` (exactly reciprocal; a single evaluation in backscatter and

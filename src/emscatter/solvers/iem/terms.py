@@ -32,13 +32,37 @@ by ``ksz + kz`` so they stay finite at forward grazing; and the scalar (I2EM) fo
 :mod:`emscatter.solvers.iem.model`
 for how the two are combined.
 
-Transition (Wu, Chen, Shi & Fung, IEEE TGRS 39, 2001; Fung & Chen, IEEE GRSL 1, 75, 2004):
-``R_T = R(θi) + (R(θ_l) − R(θi)) γ`` with ``γ = 1 − S_t/S_t0`` from the series ratio of the
-paper, rewritten without the ``1/F_t`` division so that normal incidence (``F_t = 0``) is
-regular:
-``S_t/S_t0 = |F_t + 8R₀/cosθ|² Σ aₙWₙ / Σ aₙ |F_t + 2^(n+2) R₀ e^(−(kσcosθ)²)/cosθ|² Wₙ``,
-``aₙ = (kσ cosθ)^(2n)/n!``; the three sums are physical-optics-type series
-(:func:`emscatter.solvers.kirchhoff.po.series_sum`).
+Transition (Wu, Chen, Shi & Fung, IEEE TGRS 39, 2040, 2001; Chen et al. 2003; Fung & Chen,
+IEEE GRSL 1, 75, 2004): ``R_T = R(θi) + (R(θ_l) − R(θi)) γ`` with ``γ = 1 − S_t/S_t0`` from
+the series ratio of the papers, rewritten without the ``1/F_t`` division so that normal
+incidence (``F_t = 0``) is regular:
+``S_t/S_t0 = |F_t + 8R₀/cosθ|² Σ aₙWₙ / Σ aₙ |F_t + 2^(n+2) R₀ e^(−Q)/cosθ|² Wₙ``,
+``aₙ = Qⁿ/n!``; the three sums are physical-optics-type series
+(:func:`emscatter.solvers.kirchhoff.po.series_sum`). ``F_t = 2 F_vv(R_v(0))``: the I2EM
+backscatter complementary coefficient of v (``F_vv``, ``F_hh`` of Fung et al. 2002 as coded
+by Ulaby & Long 2014, code 10.1) at normal-incidence reflection, and ``2 F_hh(R_h(0)) =
+−F_t`` (checked in ``tests/test_iem_transition.py``): h has ``−F_t`` against the same
+Kirchhoff term (``f_hh(R_h(0)) = f_vv(R_v(0))``), so γ_h ≠ γ_v is one rule, as in the AIEM
+code of Chen et al. (2003), not a per-polarization choice. (The I2EM codes of Ulaby & Long
+2014 and of Fung & Chen 2010 take γ_v for both; the latter's comment says the ratio has no
+polarization dependence, which holds only where ``F_t → 0``.)
+
+**The phase variable (issue 20).** The papers take ``Q = (kσ cosθ)²``. Here ``Q = (kσ)²``,
+everything else as published (``F_t`` at θ, the spectrum at the Bragg argument). This is a
+documented change, not a published one. The argument: γ is the weight of the specular-facet
+regime, where the Kirchhoff coefficient has ``R`` at the facets' local incidence angle — zero
+in backscatter, at every θ; the ratio is built from the field with ``R(0)``, i.e. the field
+of those facets, whose own phase variable at local normal incidence is kσ. Measured soils
+agree (Oh, Sarabandi & Ulaby, IEEE TGRS 30, 370, 1992: ``p = σhh/σvv =
+[1 − (2θ/π)^{1/(3Γ₀)} e^{−kσ}]²`` → 1 as ``e^{−kσ}`` at every angle from 10° to 70°, not
+as a function of ``kσ cosθ``). With
+``(kσ cosθ)²`` the transition at oblique incidence stalls half-way (γ_v ≈ 0.2 at 70°,
+kσ = 3, exponential kℓ = 3, ε = 4 + 0.5i), where past the Brewster angle ``R_vT`` passes
+through zero and the Kirchhoff term makes hh exceed vv (+1.2 dB; with γ_h := γ_v, the I2EM
+rule, +4.6 dB), against p ≤ 1 in every data set. Identical at normal incidence; the SPM
+(γ → 0 as kσ → 0) and physical-optics (γ → 1 as kσ → ∞) limits are kept for every
+correlation. Against the NMM3D 40° table (validation/auto/nmm3d_table.md) the IEM's RMSE is
+VV 1.28 → 1.28 dB, HH 0.62 → 0.58 dB.
 """
 
 from __future__ import annotations
@@ -52,6 +76,9 @@ __all__ = [
     "kirchhoff_scalar",
     "complementary_terms",
     "transition_factor",
+    "transition_from_sums",
+    "transition_sums",
+    "transition_q",
     "backscatter_terms",
     "branch_root",
 ]
@@ -313,46 +340,89 @@ def fung92_backscatter_terms(si, cs, eps):
 
 # ----------------------------------------------------------------------------- transition
 def transition_factor(eps, cs, ks: float, log_w, K, *, rtol: float = 1e-10):
-    """``(γ_h, γ_v)`` ∈ [0, 1] of Wu et al. (2001) / Fung & Chen (2004) at incidence cosine
-    ``cs``, normalized roughness ``ks = kσ``, scaled spectral argument ``K`` (as for
+    """``(γ_h, γ_v)`` ∈ [0, 1], the Fresnel transition of Wu et al. (2001) with the phase
+    variable ``Q = (kσ)²`` (module docstring: why not ``(kσ cosθ)²``), at incidence cosine
+    ``cs``, normalized roughness ``ks = kσ`` and scaled spectral argument ``K`` (as for
     ``log_w``, the n-fold spectrum of :func:`emscatter.solvers.kirchhoff.po.log_nfold`).
 
-    With ``S(βQ) = Σₙ (βQ)ⁿ/n! Ŵₙ``, ``Q = (kσ cosθ)²``, ``c = cosθ`` and
-    ``F_t c = 8R₀² sin²θ (c + q₂)/q₂`` (finite at grazing), the ratio of the papers is
+    With ``S(βQ) = Σₙ (βQ)ⁿ/n! Ŵₙ(K)``, ``c = cosθ`` and ``F_t c = 8R₀² sin²θ (c + q₂)/q₂``
+    (finite at grazing), the ratio of the papers is
     ``|F_t c + 8R₀|² S(Q) / [|F_t c|² S(Q) + 8 Re(F_t c R₀*) e^{−Q} S(2Q)
     + 16 |R₀|² e^{−2Q} S(4Q)]`` for v (``R₀ = R_v(0)``) and the same with ``F_t → −F_t`` for h
-    (``R_h(0) = −R_v(0)``). The sums are the single-component case of :func:`iem_series`."""
-    from emscatter.solvers.iem.series import iem_series
-
+    (the h complementary coefficient at ``R_h(0) = −R_v(0)`` is ``−F_t``, the Kirchhoff one
+    ``f_hh(R_h(0)) = f_vv(R_v(0))``). The sums are :func:`transition_sums`."""
     cs = np.asarray(cs, dtype=float)
-    n = cs.size
-    with np.errstate(divide="ignore"):
-        lx = np.concatenate([np.log(np.sqrt(b) * cs) for b in (1.0, 2.0, 4.0)])
-    rows = 3 * n
-    ls, _ = iem_series(
-        np.zeros((rows, 1)), lx[:, None], np.ones((rows, 1), complex), np.ones((rows, 1)),
-        np.zeros(rows, complex), 2.0 * math.log(ks), log_w, np.tile(K, 3), np.zeros(rows),
-        rtol=rtol,
-    )  # fmt: skip
-    l1, l2, l4 = ls[:n], ls[n : 2 * n], ls[2 * n :]  # S(βQ) = β c² exp(l_β)
-    with np.errstate(divide="ignore"):  # log 0 = −inf at exact grazing: S = 0 there
-        lc1, lc2, lc4 = np.log(cs * cs), np.log(2 * cs * cs), np.log(4 * cs * cs)
-    return transition_from_sums(eps, cs, ks, l1 + lc1, l2 + lc2, l4 + lc4)
+    Kb = np.broadcast_to(np.asarray(K, dtype=float), cs.shape).ravel()
+    l1, l2, l4 = transition_sums(ks, log_w, Kb, rtol=rtol)
+    return transition_from_sums(eps, cs, ks, *(v.reshape(cs.shape) for v in (l1, l2, l4)))
+
+
+def transition_sums(ks: float, log_w, K, *, rtol: float = 1e-10, max_terms: int = 10**6):
+    """``(log S(Q), log S(2Q), log S(4Q))``, ``S(βQ) = Σ_{n≥1} (βQ)ⁿ/n! Ŵₙ(K)``,
+    ``Q = (kσ)²`` (:func:`transition_q`), for each element of ``K`` (1-D). A table of
+    ``n log Q − log n! + log Ŵₙ(K)`` (:func:`emscatter.solvers.iem.series.orders_table`), as
+    long as the Poisson tail of ``4Q`` asks, lengthened (×2) until every row's terms decrease
+    at its end with a geometric tail bound below ``rtol`` of its sum (a spectrum that grows
+    with n, e.g. a Gaussian at a large Bragg argument, moves the mass to higher orders); rows
+    in chunks of at most ~2e6 table entries."""
+    from emscatter.solvers.iem.series import _orders_needed
+
+    K = np.asarray(K, dtype=float).ravel()
+    N0 = int(_orders_needed(np.array([4.0 * transition_q(ks)]), math.log(rtol))[0]) + 4
+    out = [np.empty(K.size) for _ in range(3)]
+    step = max(1, int(2e6 // N0))
+    for a in range(0, K.size, step):
+        for o, v in zip(out, _transition_rows(ks, log_w, K[a : a + step], N0, rtol, max_terms),
+                        strict=True):  # fmt: skip
+            o[a : a + step] = v
+    return out[0], out[1], out[2]
+
+
+def _transition_rows(ks, log_w, K, N, rtol, max_terms):
+    """:func:`transition_sums` for one chunk of rows, starting from ``N`` orders."""
+    from emscatter.solvers.iem.series import orders_table
+
+    while True:
+        table = orders_table(2.0 * math.log(ks), log_w, K, N)
+        n = np.arange(1.0, N + 1.0)
+        out, ok = [], True
+        for b in (1.0, 2.0, 4.0):
+            t = table + n[None, :] * math.log(b)
+            top = np.max(t, axis=1)
+            top = np.where(np.isfinite(top), top, 0.0)
+            ls = top + np.log(np.exp(t - top[:, None]).sum(axis=1))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                r = np.exp(t[:, -1] - t[:, -2])  # N ≥ 5: the last term ratio
+                r = np.where(np.isnan(r), 0.0, np.minimum(r, 1.0))  # −inf terms: none left
+                tail = t[:, -1] + np.log(r) - np.log1p(-r)  # r = 1: infinite, not converged
+                rel = np.where(np.isfinite(ls), tail - ls, -np.inf)
+            ok = ok and bool(np.all(~(rel > math.log(rtol))))
+            out.append(ls)
+        if ok or N >= max_terms:
+            return out
+        N = min(2 * N, max_terms)
+
+
+def transition_q(ks: float) -> float:
+    """The transition's phase variable ``Q = (kσ)²`` [-] (module docstring): the sums
+    ``S(βQ)`` of :func:`transition_from_sums` are taken at ``βQ``, β = 1, 2, 4."""
+    return float(ks) * float(ks)
 
 
 def transition_from_sums(eps, cs, ks: float, l1, l2, l4):
-    """``(γ_h, γ_v)`` from ``l_β = log S(βQ)`` (:func:`transition_factor`)."""
+    """``(γ_h, γ_v)`` from ``l_β = log S(βQ)``, ``Q = (kσ)²`` (:func:`transition_factor`,
+    :func:`transition_q`); ``cs`` enters through ``F_t`` only."""
     cs = np.asarray(cs, dtype=float)
     s2 = 1.0 - cs * cs
     sq = np.sqrt(eps)
     r0 = (sq - 1.0) / (sq + 1.0)
     q2 = branch_root(eps - s2)
     ftc = 8.0 * r0 * r0 * s2 * (cs + q2) / q2
-    Q = (ks * cs) ** 2
-    with np.errstate(invalid="ignore"):
-        e2 = np.exp(np.minimum(l2 - l1 - Q, 700.0))
-        e4 = np.exp(np.minimum(l4 - l1 - 2.0 * Q, 700.0))
-    e2 = np.where(np.isnan(e2), 2.0, e2)  # grazing (cosθ = 0): the n = 1 terms, S(βQ)/S(Q) = β
+    Q = transition_q(ks)
+    with np.errstate(invalid="ignore", over="ignore"):
+        e2 = np.exp(np.minimum(np.asarray(l2) - l1 - Q, 700.0))
+        e4 = np.exp(np.minimum(np.asarray(l4) - l1 - 2.0 * Q, 700.0))
+    e2 = np.where(np.isnan(e2), 2.0, e2)  # S = 0 (no spectrum left): the n = 1 ratios
     e4 = np.where(np.isnan(e4), 4.0, e4)
     a0 = 16.0 * np.abs(r0) ** 2
     out = []

@@ -4,6 +4,7 @@ angle, with their sources, and the report :func:`check_validity` builds from the
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
@@ -12,7 +13,6 @@ from emscatter.fresnel import is_pec
 from emscatter.solvers.kirchhoff.common import check_roughness
 from emscatter.solvers.validity import angle_upper, build_report, check_solver_options, upper
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
-from emscatter.surfaces.measured import MeasuredRoughness
 
 __all__ = ["OPTIONS", "VALIDITY", "check_validity", "nominal_rms_slope"]
 
@@ -39,7 +39,10 @@ def nominal_rms_slope(roughness) -> tuple[float, float]:
     Gaussian ``√2 σ/ℓ``, exponential ``σ/ℓ``, power law ``√(2H) σ/ℓ``; a measured map
     (:mod:`emscatter.surfaces.measured`) its own finite-difference rms slopes."""
     rough = check_roughness(roughness)
-    if isinstance(rough, MeasuredRoughness):
+    # a MeasuredRoughness exists only once its module is loaded: no import here (the surfaces
+    # package brings scipy.optimize, ~0.2–0.8 s of a first IEM call; issue 22)
+    measured = sys.modules.get("emscatter.surfaces.measured")
+    if measured is not None and isinstance(rough, measured.MeasuredRoughness):
         sx, sy = rough.mean_square_slope()
         return math.sqrt(sx), math.sqrt(sy if rough.dimension == 2 else sx)
     if isinstance(rough, GaussianCorrelation):

@@ -13,6 +13,7 @@ the explicit cutoff of :func:`emscatter.solvers.spm.model.bistatic` (validation/
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -190,9 +191,77 @@ def _wave_fields(eps, k, c, K, amp_h, amp_v, qz, medium2):
     return (ex, ey, ez), (hx_, hy_, hz_)
 
 
+#: One coherent angle counted as this many geometries by the compiled gate
+#: (:func:`emscatter.kernels.gate.worth_it`): ~1000–5000 nodes, 2–8 ms in numpy, so a call
+#: of ≥ 64 angles (or any call once the kernels are loaded) pays for loading numba.
+ANGLE_WEIGHT = 64
+
+
 def _second_order_R(rough, eps, k, theta_i, nr, npsi, transmitted=False, phi_i=None, k_max=None):
-    """(R0, R2/σ²) for incident h and v at each θi (flat array), φi = 0 frame; with
-    ``transmitted=True`` also the down-going (T0, T2/σ²) amplitudes (energy checks)."""
+    """(R0, R2/σ²) for incident h and v at each θi (flat array [rad]), φi = 0 frame; with
+    ``transmitted=True`` also the down-going (T0, T2/σ²) amplitudes (energy checks).
+
+    The compiled node loop (:mod:`.kernel_coherent`) runs when the numba backend is selected
+    and the call is worth it (:data:`ANGLE_WEIGHT`), else the numpy reference
+    :func:`_second_order_R_numpy` (the same values to ≤ 1e-13 relative)."""
+    theta_i = np.asarray(theta_i, dtype=float).ravel()
+    out = _compiled_R(rough, eps, k, theta_i, nr, npsi, phi_i, k_max)
+    if out is None:
+        return _second_order_R_numpy(rough, eps, k, theta_i, nr, npsi, transmitted, phi_i, k_max)
+    return out if transmitted else out[:2]
+
+
+def _compiled_R(rough, eps, k, theta_i, nr, npsi, phi_i, k_max):
+    """``(R0, R2, T0, T2)`` from :mod:`.kernel_coherent`, or None (numpy backend, a small
+    call before numba is loaded, no angles)."""
+    from emscatter.kernels import backend
+    from emscatter.kernels.gate import worth_it
+
+    n = theta_i.size
+    if n == 0 or backend() != "numba" or not worth_it(n * ANGLE_WEIGHT):
+        return None
+    from emscatter.solvers.spm.kernel_coherent import second_order_amplitudes
+
+    pec = is_pec(eps)
+    e = PEC if pec else complex(eps)
+    phis = np.zeros(n) if phi_i is None else np.broadcast_to(phi_i, theta_i.shape)
+    cut = None if k_max is None else float(k_max)
+    try:
+        hash(rough)
+        nodes = _angle_nodes
+    except TypeError:  # a roughness that cannot key a cache: nodes built afresh
+        nodes = _angle_nodes.__wrapped__
+    parts = [
+        nodes(rough, e, float(k), float(th), int(nr), int(npsi), float(ph), cut)
+        for th, ph in zip(theta_i, phis, strict=True)
+    ]  # the nodes' layout differs per angle (breakpoints); memoized across calls
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum([p[0].size for p in parts], out=offsets[1:])
+    kx, ky, wt = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    return second_order_amplitudes(theta_i, kx, ky, wt, offsets, float(k), e, pec)
+
+
+@functools.lru_cache(maxsize=256)
+def _angle_nodes(rough, eps, k, theta, nr, npsi, phi, k_max):
+    """``(kx, ky, weight)`` of one incidence angle (read-only; :func:`_nodes_2d` /
+    :func:`_nodes_1d`), kept for the next call with the same surface, ε, k and angle (an
+    emissivity curve recomputed with the result cache off; ~0.3 ms and ≤ 0.2 MB each)."""
+    kix = k * math.sin(theta)
+    if rough.dimension == 2:
+        nodes = _nodes_2d(rough, eps, k, kix, 0.0, nr, npsi, phi, k_max)
+    else:
+        nodes = _nodes_1d(rough, eps, k, kix, nr, k_max)
+    out = tuple(np.ascontiguousarray(a, dtype=float) for a in nodes)
+    for a in out:
+        a.flags.writeable = False
+    return out
+
+
+def _second_order_R_numpy(
+    rough, eps, k, theta_i, nr, npsi, transmitted=False, phi_i=None, k_max=None
+):
+    """The numpy reference of :func:`_second_order_R` (one vectorized pass over the nodes
+    per angle and polarization)."""
     pec = is_pec(eps)
     out0 = np.empty((2, theta_i.size), dtype=complex)
     out2 = np.empty((2, theta_i.size), dtype=complex)

@@ -322,6 +322,14 @@ def transition_ratios(T, l):
 
 
 @inline
+def log_transition_ratios(Q, Kr, spec, dim, log_rtol):
+    """:func:`transition_ratios` from the log-space :func:`transition_sums` at ``Q`` (any
+    size; the sums to ``log_rtol`` − 4.6, i.e. 1e-2 of the series tolerance)."""
+    l1, l2, l4 = transition_sums(math.log(Q), Kr, spec, dim, log_rtol - 4.6)
+    return math.exp(min(l2 - l1 - Q, 700.0)), math.exp(min(l4 - l1 - 2.0 * Q, 700.0))
+
+
+@inline
 def fresnel_setup(s, c, eps, pec):
     """``(q₂, 1/q₂, R_h, R_v)`` at incidence θ (PEC: ``R_h = −1, R_v = 1``, ``q₂ = 0``)."""
     if pec:
@@ -336,9 +344,10 @@ def fresnel_setup(s, c, eps, pec):
 @inline
 def transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0):
     """``(R_h, R_v, γ_h, γ_v)`` with Wu et al. 2001's transition, from the sum ratios
-    ``e₂ = S(2Q)/S(Q) e^{−Q}``, ``e₄ = S(4Q)/S(Q) e^{−2Q}``: ``γ_p = 1 − |F + 8R₀|² / (|F|² +
-    8 Re(F R₀*) e₂ + 16|R₀|² e₄)``, ``F_h = −F_v = −8 R₀² sin²θ (cosθ + q₂)/q₂`` (real
-    arithmetic)."""
+    ``e₂ = S(2Q)/S(Q) e^{−Q}``, ``e₄ = S(4Q)/S(Q) e^{−2Q}`` at ``Q = (kσ)²``
+    (:func:`emscatter.solvers.iem.terms.transition_from_sums`: why not ``(kσ cosθ)²``):
+    ``γ_p = 1 − |F + 8R₀|² / (|F|² + 8 Re(F R₀*) e₂ + 16|R₀|² e₄)``,
+    ``F_h = −F_v = −8 R₀² sin²θ (cosθ + q₂)/q₂`` (real arithmetic)."""
     ftc = r08sq * s2 * (c * iq + 1.0)
     ff = ftc.real * ftc.real + ftc.imag * ftc.imag
     cr = 8.0 * (ftc.real * r0.real + ftc.imag * r0.imag) * e2
@@ -404,20 +413,16 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
     rh_t, rv_t = rh, rv
     gh = gv = 0.0
     if transition and not pec:
-        Q = ks2 * c * c
+        Q = ks2  # the transition's phase variable (kσ)² (terms.transition_q)
         e2, e4 = 2.0, 4.0
-        if c > 0:
+        if fast:
+            T[TQ], T[TK2], T[TACT] = Q, Kr * Kr, 1.0
+            walk_transition(T, 1, spec, dim, rtol * 1e-2, tr_ok)
+            fast = tr_ok[0]
             if fast:
-                T[TQ], T[TK2], T[TACT] = Q, Kr * Kr, 1.0
-                walk_transition(T, 1, spec, dim, rtol * 1e-2, tr_ok)
-                fast = tr_ok[0]
-                if fast:
-                    e2, e4 = transition_ratios(T, 0)
-            if not fast:
-                lq = math.log(Q)
-                l1, l2, l4 = transition_sums(lq, Kr, spec, dim, log_rtol - 4.6)
-                e2 = math.exp(min(l2 - l1 - Q, 700.0))
-                e4 = math.exp(min(l4 - l1 - 2.0 * Q, 700.0))
+                e2, e4 = transition_ratios(T, 0)
+        if not fast:
+            e2, e4 = log_transition_ratios(Q, Kr, spec, dim, log_rtol)
         rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
     e_k = -2.0 * ks2 * c * c
     if fung92:
@@ -484,8 +489,8 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             if not use_fast:
                 continue
             lq2[l], liq[l], lrh[l], lrv[l] = fresnel_setup(s, c, eps, pec)
-            if with_tr and c > 0:
-                T[TQ + l] = ks2 * c * c
+            if with_tr:  # the transition's Q = (kσ)² (terms.transition_q)
+                T[TQ + l] = ks2
                 T[TK2 + l] = K[r] * K[r]
                 T[TACT + l] = 1.0
                 any_tr = True
@@ -502,11 +507,10 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             rh_t, rv_t = rh, rv
             gh = gv = 0.0
             if with_tr:
-                e2, e4 = 2.0, 4.0
-                if c > 0:
-                    if not tr_ok[l]:
-                        continue  # log-space path
+                if tr_ok[l]:
                     e2, e4 = transition_ratios(T, l)
+                else:  # linear sums out of range (kσ ≳ 9): log-space sums, lane stays fast
+                    e2, e4 = log_transition_ratios(ks2, K[r], spec, dim, log_rtol)
                 rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq,
                                                       a0)  # fmt: skip
             e_k = -2.0 * ks2 * c * c
