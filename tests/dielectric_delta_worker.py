@@ -76,7 +76,8 @@ def main(arg: str) -> None:
     si = dr.zeros(mi.SurfaceInteraction3f, vv.shape[0])
     si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
     si.wi = mi.Vector3f(*(mi.Float(c) for c in vv.T))
-    si.wavelengths = mi.Spectrum(550.0) if "spectral" in args["variant"] else si.wavelengths
+    if "spectral" in args["variant"]:
+        si.wavelengths = mi.UnpolarizedSpectrum(550.0)
     u1 = mi.Float(rng.random(vv.shape[0]))
     u2 = mi.Point2f(mi.Float(rng.random(vv.shape[0])), mi.Float(rng.random(vv.shape[0])))
     res = {"flags": int(em.flags()), "components": int(em.component_count())}
@@ -100,7 +101,8 @@ def main(arg: str) -> None:
             bp = np.array(bs.pdf, dtype=float)
             ok = (bp > 0) & ~delta
             res["pdf_err"] = float(np.max(np.abs(pdf[ok] / bp[ok] - 1))) if ok.any() else 0.0
-            res["pdf_bad_fraction"] = float(np.mean(np.abs(pdf[ok] / bp[ok] - 1) > 1e-3))
+            bad = np.abs(pdf[ok] / bp[ok] - 1) > 1e-3
+            res["pdf_bad_fraction"] = float(np.mean(bad)) if ok.any() else 0.0
             res["delta_fraction"] = float(np.mean(delta))
             ev = np.array(b.eval(ctx, si, bs.wo)[0, 0][0] if pol else b.eval(ctx, si, bs.wo)[0])
             res["digest"] = [float(np.sum(np.abs(x), dtype=float)) for x in (
@@ -110,7 +112,7 @@ def main(arg: str) -> None:
         elif pol:
             res["mueller_ref"] = [[s0_elem(w, r, c, n) for c in range(4)] for r in range(4)]
     if res["components"] > 3:  # one delta component at a time: weight = its coherent part
-        k = res["components"] - (3 if inner is not None and out.coherent is not None else 2)
+        k = 3  # after the three glossy components (inner given)
         half = th.size // 2
         for name, b, comps in (("d", em, (k, k + 1, k + 2)), ("d_ref", ref, (0, 1, 0))):
             ws = []
@@ -119,13 +121,21 @@ def main(arg: str) -> None:
                 cx.component = c
                 bs, w = b.sample(cx, si, u1, u2)
                 ws.append(s0(w).reshape(-1, n)[:, 0])
+                if pol:  # the full matrix of each viewer's first sample, channel 0
+                    res.setdefault(name + "M", []).append(
+                        [[np.array(w[r, c][0], float).reshape(-1, n)[:, 0].tolist()
+                          for c in range(4)] for r in range(4)])  # fmt: skip
             r = np.where(np.arange(th.size) < half, ws[0], ws[2])
             res[name + "R"], res[name + "T"] = r.tolist(), ws[1].tolist()
+    out = getattr(out, "table", out)  # a MuellerTable's unpolarized table
     t = out.albedo().total[0]
     ti = out.theta_i
     r_sum = np.interp(th[: th.size // 2], ti, t)
     t_sum = np.interp(th[: th.size // 2], bt.theta_i, bt.albedo()[0])
     res["table_sum"] = (r_sum + t_sum).tolist()
+    c_r = np.interp(th[: th.size // 2], ti, np.asarray(t - out.albedo().incoherent[0]))
+    c_t = 0.0 if bt.coherent is None else np.interp(th[: th.size // 2], bt.theta_i, bt.coherent[0])
+    res["table_coherent"] = (c_r + c_t).tolist()
     side = int(args.get("render", 0))
     if side:
         res.update(render(mi, key, coh, side, int(args.get("spp", 64))))

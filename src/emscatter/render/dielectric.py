@@ -73,6 +73,7 @@ PLUGIN_NAME = "emscatter_dielectric"
 _SETS: dict[str, dict] = {}
 _CLASSES: dict[str, type] = {}
 _COUNTER = itertools.count()
+_ALPHA_WIDE = 0.5  # Beckmann α of the defensive transmission sampler (PO/SPM tables)
 
 
 def _s0(t):
@@ -204,6 +205,11 @@ def _bsdf_class(mi):
             self._eta = math.sqrt(self._eps)
             sx, sy = bt.metadata["slope_variance"]
             self._alpha = math.sqrt(sx + sy)  # Beckmann α² = 2s (isotropic: s = (sx + sy)/2)
+            # PO/SPM tables (a coherent part): their glossy lobe is wider than the slopes say
+            # (SPM: the roughness spectrum at the Bragg wavenumbers), so half the refracted
+            # normals come from a wide Beckmann lobe (defensive mixture; GO tables: none)
+            has_coh = bt.coherent is not None and bool(np.any(bt.coherent > 0))
+            self._q_wide = 0.5 if has_coh and self._alpha < _ALPHA_WIDE else 0.0
             lum = RGB_LUMINANCE @ spectrum_to_rgb_weights(bt.wavelengths)
             t_alb = lum @ bt.incoherent_albedo()  # what the lobe holds (PO: no delta lobe)
             r_alb = np.interp(bt.theta_i, s["theta_r"], lum @ s["r_albedo"])
@@ -325,6 +331,10 @@ def _bsdf_class(mi):
             c2 = dr.square(m.z)
             a2 = self._alpha**2
             d = dr.exp(-(1.0 - c2) / (c2 * a2)) / (math.pi * a2 * dr.square(c2))
+            if self._q_wide:  # the defensive wide normals (``__init__``)
+                q, w2 = self._q_wide, _ALPHA_WIDE**2
+                d_w = dr.exp(-(1.0 - c2) / (c2 * w2)) / (math.pi * w2 * dr.square(c2))
+                d = (1.0 - q) * d + q * d_w
             jac = dr.square(n_o) * dr.abs(om) / dr.maximum(dr.square(n_i * vm + n_o * om), 1e-30)
             return dr.select(ok, d * m.z * jac, 0.0)
 
@@ -355,6 +365,11 @@ def _bsdf_class(mi):
         def _sample_t(self, v, u):
             """A refracted direction through a Beckmann normal (Walter et al. 2007 eq. 28)."""
             a2 = self._alpha**2
+            if self._q_wide:  # the defensive wide normals with probability q
+                q = self._q_wide
+                wide = u.x < q
+                u = mi.Point2f(dr.select(wide, u.x / q, (u.x - q) / (1.0 - q)), u.y)
+                a2 = dr.select(wide, _ALPHA_WIDE**2, a2)
             tan2 = -a2 * dr.log(dr.maximum(1.0 - u.x, 1e-30))
             c = dr.rsqrt(1.0 + tan2)
             s = dr.sqrt(dr.maximum(1.0 - c * c, 0.0))
@@ -442,10 +457,13 @@ def _bsdf_class(mi):
             def look(t, axis, z, m):
                 return self._spec(t.eval(mi.Point1f(coord(theta(z), axis)), m), si, kind)
 
+            f_r = mi.fresnel(v.z, self._eta)[0]  # ratios × Fresnel (.dielectric_delta)
             r = look(self._tex_r, d.ax_r, v.z, active & is_r & out)
             if self._tex_ri is not None:
                 r = dr.select(out, r, look(self._tex_ri, d.ax_ri, v.z, active & is_r & ~out))
+            r = r * f_r
             t = look(self._tex_tc, d.ax_t, dr.select(out, v.z, wo.z), active & ~is_r)
+            t = t * (1.0 - f_r)
             if ctx.mode == mi.TransportMode.Radiance:  # dielectric's η_ti²
                 inv = self._inv_eps(si, kind)
                 t = t * dr.select(out, inv, 1.0 / inv)

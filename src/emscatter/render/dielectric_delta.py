@@ -23,6 +23,14 @@ energy is ``1 − R_coh,in − T_coh,in``: the inside BTDF's albedo is not tabul
 reflection vs refraction by ``R_coh / (R_coh + T_coh)``; the glossy lobes with ``1 − P_δ`` and
 the plugin's glossy rule. A sample's weight is the coherent part over its discrete
 probability, its ``pdf`` that probability (Mitsuba's delta convention).
+
+Interpolation in θ: the coherent parts are interpolated as their ratios to the smooth
+interface's Fresnel powers ``R_F``, ``T_F = 1 − R_F`` (unpolarized, at the mean ``ε``),
+multiplied back by the exact Fresnel power at the sampled angle: the ratio is the smooth
+roughness factor (``exp(−(2kσcosθ)²)`` for PO's reflection), while ``R_F`` jumps to 1 at the
+critical angle inside and rises steeply at grazing incidence (a 3° grid interpolated directly
+made ``R + T`` reach 1.34 just below the critical angle). At the tables' nodes the product is
+the table's value for the mean ``ε`` (exact for one wavelength).
 """
 
 from __future__ import annotations
@@ -31,6 +39,7 @@ import math
 
 import numpy as np
 
+from ..fresnel import reflectivity
 from .plugin_data import Axis
 
 __all__ = ["DeltaData", "delta_data"]
@@ -40,7 +49,9 @@ _RESAMPLE = 361  # nodes of the uniform θ grid a non-uniform axis is resampled 
 
 class DeltaData:
     """Float32 arrays on uniform θ axes: ``r_out`` / ``t_out`` / ``r_in`` ``(n_θ, C)``
-    coherent parts per plugin channel (``r_in`` None without an inner table), ``p_out`` /
+    coherent parts per plugin channel over the smooth interface's Fresnel power at the mean
+    ``ε`` (``R_coh/R_F``, ``T_coh/T_F``, ``R_coh,in/R_F,in``; ``r_in`` None without an inner
+    table), ``p_out`` /
     ``p_in`` ``(n_θ, 2)`` = ``(P_δ, P(reflection | δ))`` at the viewer's θ (outside: on the
     BTDF's θi axis; inside: on the inner table's, or a 1° grid without it)."""
 
@@ -92,13 +103,19 @@ def delta_data(reflection, transmission, inner, mat, lum, eta: float) -> DeltaDa
     else:
         r_d_in = lum @ ric
     p_in = _probabilities(r_d_in, t_d_in, np.clip(1.0 - r_d_in - t_d_in, 0.0, 1.0))
-    ax_r, r_out = _uniform(theta_r, rc.T @ mat.T)
-    ax_t, t_out = _uniform(ti, tc.T @ mat.T)
+    # stored as ratios to the smooth Fresnel powers at the mean ε (the plugin multiplies them
+    # back): smooth in θ where R_F, T_F are not (the critical angle, grazing incidence)
+    eps = eta**2
+    f_out = reflectivity(eps, theta_r).mean(0)
+    t_f = 1.0 - reflectivity(eps, ti).mean(0)
+    ax_r, r_out = _uniform(theta_r, (rc / f_out).T @ mat.T)
+    ax_t, t_out = _uniform(ti, (tc / np.where(t_f > 1e-9, t_f, np.inf)).T @ mat.T)
     ax_pi, p_in = _uniform(th_in, p_in)
     ax_po, p_out = _uniform(ti, p_out)
     r_in = ax_ri = None
     if inner is not None and ric is not None:
-        ax_ri, r_in = _uniform(inner.theta_i, ric.T @ mat.T)
+        f_in = reflectivity(1.0 / eps, np.asarray(inner.theta_i, float)).mean(0)
+        ax_ri, r_in = _uniform(inner.theta_i, (ric / f_in).T @ mat.T)
     f32 = np.float32
     return DeltaData(
         ax_r=ax_r, r_out=r_out.astype(f32), ax_t=ax_t, t_out=t_out.astype(f32),
