@@ -81,6 +81,9 @@ def main(arg: str) -> None:
     u1 = mi.Float(rng.random(vv.shape[0]))
     u2 = mi.Point2f(mi.Float(rng.random(vv.shape[0])), mi.Float(rng.random(vv.shape[0])))
     res = {"flags": int(em.flags()), "components": int(em.component_count())}
+    names = ("Delta", "DeltaReflection", "DeltaTransmission", "GlossyReflection",
+             "GlossyTransmission")  # fmt: skip
+    res["flag_values"] = {k: int(getattr(mi.BSDFFlags, k)) for k in names}
 
     def s0(w):
         w00 = w[0, 0] if pol else w
