@@ -30,12 +30,26 @@ in importance mode (adjoint transport) without the ``1/ε``, and the inside case
 ``1/ε`` instead. Components: 0 glossy reflection (outside), 1 glossy transmission, 2 glossy
 reflection inside (when ``inner`` is given); flags front and back side, non-symmetric.
 
+Coherent (delta) lobes (``coherent``, bool, default true; PO/SPM tables, :mod:`.dielectric_delta`):
+the reflection table's ``R_coh`` (mirror), the BTDF's ``T_coh`` (Snell direction, Mitsuba's
+``dielectric`` radiance scale ``1/ε`` outside, ``ε`` inside), the inner table's ``R_coh``
+and, from inside, ``T_coh`` at the Snell-mapped outside angle; components after the glossy
+ones: ``DeltaReflection`` (outside), ``DeltaTransmission``, ``DeltaReflection`` (inside, with
+an inner coherent part). Chosen by energy against the glossy lobes; ``coherent=false`` (or GO
+tables, which have none) renders the glossy lobes only, exactly as before the delta lobes
+(the reflection lobes are ``"emscatter"`` plugins with ``coherent=false``: the delta parts
+are this plugin's).
+
 Sampling: reflection vs transmission by their albedos at the viewer's θ (outside: ``R`` of the
 reflection table, ``T`` of the BTDF table, both exact integrals of the interpolants; inside:
 ``R_in`` of ``inner`` and ``1 − R_in``), the reflection lobes by the ``"emscatter"`` plugin's
 sampler, the transmission by Beckmann microfacet normals refracted (Walter et al. 2007,
 eqs. 17, 28, 40: ``p(wo) = D(m) cosθm |wo·m| η_o² / (η_i v·m + η_o wo·m)²``) with the table's
 slope variance (``α² = 2s``); ``pdf`` is that density exactly, times the lobe probability.
+Tables with a coherent transmission (PO/SPM) draw half the normals from a wide Beckmann lobe
+(α = 0.5, a defensive mixture; the pdf is the mixture's): an SPM lobe is the roughness
+spectrum at the Bragg wavenumbers, far wider than its slopes (kσ = 0.13, ℓ = 1 µm:
+α = 0.023 sampled 6 % of the glossy transmission at normal incidence, the mixture all of it).
 
 Spectral variants: the BTDF is kept per table wavelength (one texture channel each) and
 interpolated linearly to the sampled wavelengths, flat beyond the table's range — the
@@ -141,10 +155,14 @@ def register(name: str = PLUGIN_NAME) -> None:
         mi.register_bsdf(name, lambda props: _CLASSES[variant](props))
 
 
-def bsdf_dict(reflection, transmission, inner=None) -> dict:
-    """A ``mi.load_dict`` entry (registers the plugin and the tables)."""
+def bsdf_dict(reflection, transmission, inner=None, *, coherent: bool = True) -> dict:
+    """A ``mi.load_dict`` entry (registers the plugin and the tables); ``coherent``: render the
+    tables' coherent (delta) parts (module docstring)."""
+    if not isinstance(coherent, bool):
+        raise ValueError(f"coherent must be True or False, got {coherent!r}")
     register()
-    return {"type": PLUGIN_NAME, "tables": register_dielectric(reflection, transmission, inner)}
+    key = register_dielectric(reflection, transmission, inner)
+    return {"type": PLUGIN_NAME, "tables": key, "coherent": coherent}
 
 
 def _channels(wavelengths, channels: str) -> np.ndarray:

@@ -34,6 +34,11 @@ transport the other way round); the matrix maps Stokes vectors in
   left-handed ``(Px, Py)``; flipping ``y`` back gives ``D M D``, ``D = diag(1, 1, −1, −1)``,
   in bases with x axes ``P·stokes_basis(mirrored k)``, rotated onto Mitsuba's bases.
 
+* delta lobes (:mod:`.dielectric_delta`): Mitsuba's polarized ``dielectric`` — the Fresnel
+  Mueller matrices (``mi.mueller.specular_reflection`` / ``specular_transmission`` at the
+  light's cosine, mean ``η``) rotated from the s/p frames onto the Stokes bases — times the
+  table's coherent part over the Fresnel power, so ``M₀₀`` is the unpolarized plugin's.
+
 Spectral variants interpolate every element linearly between the table's wavelengths (the
 unpolarized plugin's rule); RGB ones use the table's sRGB weights per element.
 """
