@@ -127,3 +127,10 @@ def test_go_tables_unchanged():
     assert a["digest"] == b["digest"] and a["flags"] == b["flags"]
     assert a["components"] == 3 and not a["flags"] & _Flags(a).Delta
     assert a["delta_fraction"] == 0.0
+
+
+def test_bsdf_dict_coherent_must_be_bool():
+    from emscatter.render import dielectric as em_d
+
+    with pytest.raises(ValueError, match="coherent must be True or False, got 'yes'"):
+        em_d.bsdf_dict(None, None, coherent="yes")
