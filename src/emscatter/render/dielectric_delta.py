@@ -30,7 +30,8 @@ multiplied back by the exact Fresnel power at the sampled angle: the ratio is th
 roughness factor (``exp(−(2kσcosθ)²)`` for PO's reflection), while ``R_F`` jumps to 1 at the
 critical angle inside and rises steeply at grazing incidence (a 3° grid interpolated directly
 made ``R + T`` reach 1.34 just below the critical angle). At the tables' nodes the product is
-the table's value for the mean ``ε`` (exact for one wavelength).
+the table's value at every table wavelength (the ratio there is ``coh_λ / R_F(ε̄)``); between
+nodes it follows the mean ``ε``'s Fresnel curve.
 """
 
 from __future__ import annotations
