@@ -30,12 +30,26 @@ in importance mode (adjoint transport) without the ``1/ε``, and the inside case
 ``1/ε`` instead. Components: 0 glossy reflection (outside), 1 glossy transmission, 2 glossy
 reflection inside (when ``inner`` is given); flags front and back side, non-symmetric.
 
+Coherent (delta) lobes (``coherent``, bool, default true; PO/SPM tables, :mod:`.dielectric_delta`):
+the reflection table's ``R_coh`` (mirror), the BTDF's ``T_coh`` (Snell direction, Mitsuba's
+``dielectric`` radiance scale ``1/ε`` outside, ``ε`` inside), the inner table's ``R_coh``
+and, from inside, ``T_coh`` at the Snell-mapped outside angle; components after the glossy
+ones: ``DeltaReflection`` (outside), ``DeltaTransmission``, ``DeltaReflection`` (inside, with
+an inner coherent part). Chosen by energy against the glossy lobes; ``coherent=false`` (or GO
+tables, which have none) renders the glossy lobes only, exactly as before the delta lobes
+(the reflection lobes are ``"emscatter"`` plugins with ``coherent=false``: the delta parts
+are this plugin's).
+
 Sampling: reflection vs transmission by their albedos at the viewer's θ (outside: ``R`` of the
 reflection table, ``T`` of the BTDF table, both exact integrals of the interpolants; inside:
 ``R_in`` of ``inner`` and ``1 − R_in``), the reflection lobes by the ``"emscatter"`` plugin's
 sampler, the transmission by Beckmann microfacet normals refracted (Walter et al. 2007,
 eqs. 17, 28, 40: ``p(wo) = D(m) cosθm |wo·m| η_o² / (η_i v·m + η_o wo·m)²``) with the table's
 slope variance (``α² = 2s``); ``pdf`` is that density exactly, times the lobe probability.
+Tables with a coherent transmission (PO/SPM) draw half the normals from a wide Beckmann lobe
+(α = 0.5, a defensive mixture; the pdf is the mixture's): an SPM lobe is the roughness
+spectrum at the Bragg wavenumbers, far wider than its slopes (kσ = 0.13, ℓ = 1 µm:
+α = 0.023 sampled 6 % of the glossy transmission at normal incidence, the mixture all of it).
 
 Spectral variants: the BTDF is kept per table wavelength (one texture channel each) and
 interpolated linearly to the sampled wavelengths, flat beyond the table's range — the
@@ -55,6 +69,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import sys
 
 import numpy as np
 
@@ -63,6 +78,7 @@ from ..brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
 from ..brdf.mueller import MuellerTable
 from ..brdf.table import BrdfTable
 from . import mitsuba as em_mi
+from .dielectric_delta import delta_data, refract
 from .plugin_data import Axis
 
 __all__ = ["PLUGIN_NAME", "bsdf_dict", "register", "register_dielectric"]
@@ -71,6 +87,7 @@ PLUGIN_NAME = "emscatter_dielectric"
 _SETS: dict[str, dict] = {}
 _CLASSES: dict[str, type] = {}
 _COUNTER = itertools.count()
+_ALPHA_WIDE = 0.5  # Beckmann α of the defensive transmission sampler (PO/SPM tables)
 
 
 def _s0(t):
@@ -82,7 +99,8 @@ def register_dielectric(reflection, transmission, inner=None, key: str | None = 
     """Register the tables of one interface (module docstring); returns the key for
     ``{"type": "emscatter_dielectric", "tables": key}``. ``reflection`` and ``inner`` may be
     :class:`~emscatter.brdf.mueller.MuellerTable` objects (needed in polarized variants,
-    :mod:`.dielectric_polarized`; their ``M₀₀`` elsewhere)."""
+    :mod:`.dielectric_polarized`; their ``M₀₀`` elsewhere). With a Mitsuba variant set it
+    also registers the plugin (:func:`register`), as :func:`.mitsuba.register_table`."""
     refl_obj, inner_obj = reflection, inner
     reflection, inner = _s0(reflection), _s0(inner)
     if not isinstance(reflection, BrdfTable) or not reflection.isotropic:
@@ -114,11 +132,16 @@ def register_dielectric(reflection, transmission, inner=None, key: str | None = 
         "polarized_tables": isinstance(refl_obj, MuellerTable)
         and (inner is None or isinstance(inner_obj, MuellerTable)),
         "transmission": transmission,
-        "r_albedo": reflection.albedo().total,
-        "r_in_albedo": None if inner is None else inner.albedo().total,
+        "r_albedo": reflection.albedo().incoherent,  # the delta lobes: .dielectric_delta
+        "r_in_albedo": None if inner is None else inner.albedo().incoherent,
+        "reflection_table": reflection,
+        "inner_table": inner,
         "theta_r": reflection.theta_i,
         "theta_in": None if inner is None else inner.theta_i,
     }
+    mi = sys.modules.get("mitsuba")  # as register_table: loads as written with a variant set
+    if mi is not None and mi.variant() is not None:
+        register()
     return key
 
 
@@ -132,10 +155,14 @@ def register(name: str = PLUGIN_NAME) -> None:
         mi.register_bsdf(name, lambda props: _CLASSES[variant](props))
 
 
-def bsdf_dict(reflection, transmission, inner=None) -> dict:
-    """A ``mi.load_dict`` entry (registers the plugin and the tables)."""
+def bsdf_dict(reflection, transmission, inner=None, *, coherent: bool = True) -> dict:
+    """A ``mi.load_dict`` entry (registers the plugin and the tables); ``coherent``: render the
+    tables' coherent (delta) parts (module docstring)."""
+    if not isinstance(coherent, bool):
+        raise ValueError(f"coherent must be True or False, got {coherent!r}")
     register()
-    return {"type": PLUGIN_NAME, "tables": register_dielectric(reflection, transmission, inner)}
+    key = register_dielectric(reflection, transmission, inner)
+    return {"type": PLUGIN_NAME, "tables": key, "coherent": coherent}
 
 
 def _channels(wavelengths, channels: str) -> np.ndarray:
@@ -152,6 +179,8 @@ def _bsdf_class(mi):
     f = mi.BSDFFlags
     sides = f.FrontSide | f.BackSide | f.NonSymmetric
     refl, trans = f.GlossyReflection | sides, f.GlossyTransmission | sides
+    d_refl = f.DeltaReflection | f.FrontSide | f.BackSide  # as Mitsuba's ``dielectric``
+    d_trans = f.DeltaTransmission | sides
 
     def tex(cls, a):
         return cls(
@@ -194,22 +223,43 @@ def _bsdf_class(mi):
             self._eta = math.sqrt(self._eps)
             sx, sy = bt.metadata["slope_variance"]
             self._alpha = math.sqrt(sx + sy)  # Beckmann α² = 2s (isotropic: s = (sx + sy)/2)
+            # PO/SPM tables (a coherent part): their glossy lobe is wider than the slopes say
+            # (SPM: the roughness spectrum at the Bragg wavenumbers), so half the refracted
+            # normals come from a wide Beckmann lobe (defensive mixture; GO tables: none)
+            has_coh = bt.coherent is not None and bool(np.any(bt.coherent > 0))
+            self._q_wide = 0.5 if has_coh and self._alpha < _ALPHA_WIDE else 0.0
             lum = RGB_LUMINANCE @ spectrum_to_rgb_weights(bt.wavelengths)
             t_alb = lum @ bt.incoherent_albedo()  # what the lobe holds (PO: no delta lobe)
             r_alb = np.interp(bt.theta_i, s["theta_r"], lum @ s["r_albedo"])
             p_t = t_alb / np.maximum(t_alb + r_alb, 1e-12)
             self._pt_out = tex(mi.Texture1f, p_t[:, None])
             self._ax_pt = Axis.of(bt.theta_i)
-            self._refl = mi.load_dict({"type": "emscatter", "table": s["reflection"]})
+            glossy_only = {"type": "emscatter", "coherent": False}  # deltas: below
+            self._refl = mi.load_dict({**glossy_only, "table": s["reflection"]})
             self._inner = None
             if s["inner"] is not None:
-                self._inner = mi.load_dict({"type": "emscatter", "table": s["inner"]})
+                self._inner = mi.load_dict({**glossy_only, "table": s["inner"]})
                 r_in = np.clip(lum @ s["r_in_albedo"], 0.0, 1.0)
                 self._pt_in = tex(mi.Texture1f, np.clip(1.0 - r_in, 0.02, 1.0)[:, None])
                 self._ax_in = Axis.of(s["theta_in"])
             comps = [refl, trans] + ([refl] if self._inner is not None else [])
+            self._dd = None
+            if bool(props.get("coherent", True)):
+                tabs = (s["reflection_table"], bt, s["inner_table"])
+                self._dd = delta_data(*tabs, mat, lum, self._eta)
+            flags = refl | trans
+            if self._dd is not None:  # components 3, 4 (dielectric's 0, 1), 5 (inside)
+                d = self._dd
+                self._k_dr = len(comps)
+                comps = comps + [d_refl, d_trans] + ([d_refl] if d.r_in is not None else [])
+                self._tex_r = tex(mi.Texture1f, d.r_out)
+                self._tex_tc = tex(mi.Texture1f, d.t_out)
+                self._tex_ri = None if d.r_in is None else tex(mi.Texture1f, d.r_in)
+                self._tex_po = tex(mi.Texture1f, d.p_out)
+                self._tex_pi = tex(mi.Texture1f, d.p_in)
+                flags = flags | d_refl | d_trans
             self.m_components = comps
-            self.m_flags = refl | trans
+            self.m_flags = flags
 
         def _spec(self, chans, si, kind=None):
             """Channels → ``kind`` (default ``mi.Spectrum``; the polarized class asks for
@@ -299,10 +349,14 @@ def _bsdf_class(mi):
             c2 = dr.square(m.z)
             a2 = self._alpha**2
             d = dr.exp(-(1.0 - c2) / (c2 * a2)) / (math.pi * a2 * dr.square(c2))
+            if self._q_wide:  # the defensive wide normals (``__init__``)
+                q, w2 = self._q_wide, _ALPHA_WIDE**2
+                d_w = dr.exp(-(1.0 - c2) / (c2 * w2)) / (math.pi * w2 * dr.square(c2))
+                d = (1.0 - q) * d + q * d_w
             jac = dr.square(n_o) * dr.abs(om) / dr.maximum(dr.square(n_i * vm + n_o * om), 1e-30)
             return dr.select(ok, d * m.z * jac, 0.0)
 
-        def pdf(self, ctx, si, wo, active=True):
+        def _pdf_glossy(self, ctx, si, wo, active=True):
             v = si.wi
             active = active & (v.z != 0) & (wo.z != 0)
             reflect = v.z * wo.z > 0
@@ -329,6 +383,11 @@ def _bsdf_class(mi):
         def _sample_t(self, v, u):
             """A refracted direction through a Beckmann normal (Walter et al. 2007 eq. 28)."""
             a2 = self._alpha**2
+            if self._q_wide:  # the defensive wide normals with probability q
+                q = self._q_wide
+                wide = u.x < q
+                u = mi.Point2f(dr.select(wide, u.x / q, (u.x - q) / (1.0 - q)), u.y)
+                a2 = dr.select(wide, _ALPHA_WIDE**2, a2)
             tan2 = -a2 * dr.log(dr.maximum(1.0 - u.x, 1e-30))
             c = dr.rsqrt(1.0 + tan2)
             s = dr.sqrt(dr.maximum(1.0 - c * c, 0.0))
@@ -342,7 +401,7 @@ def _bsdf_class(mi):
             wo = m * (vm / eta - dr.mulsign(dr.sqrt(dr.maximum(k, 0.0)), vm)) - v / eta
             return dr.normalize(wo), ok, eta
 
-        def sample(self, ctx, si, sample1, sample2, active=True):
+        def _sample_glossy(self, ctx, si, sample1, sample2, active=True):
             v = si.wi
             active = active & (v.z != 0)
             has_r0 = ctx.is_enabled(f.GlossyReflection, 0)
@@ -385,11 +444,95 @@ def _bsdf_class(mi):
             out.pdf = dr.select(valid, out.pdf, 0.0)
             return out, dr.select(valid, weight, mi.Spectrum(0.0))
 
+        # ------------------------------------------------ delta lobes (.dielectric_delta)
+        def _p_delta(self, ctx, v, active):
+            """``(P_δ, P(reflection | δ))`` at the viewer ``v`` for the enabled components."""
+            k = self._k_dr
+            g = ctx.is_enabled(f.GlossyReflection, 0) or ctx.is_enabled(f.GlossyTransmission, 1)
+            g = g or (self._inner is not None and ctx.is_enabled(f.GlossyReflection, 2))
+            dt = ctx.is_enabled(f.DeltaTransmission, k + 1)
+            out = v.z > 0
+            pd, pr = [], []
+            for has_r, tex_p, axis in (
+                (ctx.is_enabled(f.DeltaReflection, k), self._tex_po, self._dd.ax_po),
+                (self._tex_ri is not None and ctx.is_enabled(f.DeltaReflection, k + 2),
+                 self._tex_pi, self._dd.ax_pi),
+            ):  # fmt: skip
+                p = tex_p.eval(mi.Point1f(coord(theta(v.z), axis)), active)
+                p_d = p[0] if g else mi.Float(1.0)
+                p_r = p[1] if (has_r and dt) else mi.Float(1.0 if has_r else 0.0)
+                pd.append(p_d if (has_r or dt) else mi.Float(0.0))
+                pr.append(p_r)
+            return dr.select(out, pd[0], pd[1]), dr.select(out, pr[0], pr[1])
+
+        def _delta_coh(self, ctx, si, wo, is_r, active, kind=None):
+            """The coherent part of a delta sample ``wo`` (the radiance scale included):
+            ``R_coh`` (``is_r``) or ``T_coh``, as ``kind`` (default ``mi.Spectrum``)."""
+            v = si.wi
+            out = v.z > 0
+            d = self._dd
+
+            def look(t, axis, z, m):
+                return self._spec(t.eval(mi.Point1f(coord(theta(z), axis)), m), si, kind)
+
+            f_r = mi.fresnel(v.z, self._eta)[0]  # ratios × Fresnel (.dielectric_delta)
+            r = look(self._tex_r, d.ax_r, v.z, active & is_r & out)
+            if self._tex_ri is not None:
+                r = dr.select(out, r, look(self._tex_ri, d.ax_ri, v.z, active & is_r & ~out))
+            r = r * f_r
+            t = look(self._tex_tc, d.ax_t, dr.select(out, v.z, wo.z), active & ~is_r)
+            t = t * (1.0 - f_r)
+            if ctx.mode == mi.TransportMode.Radiance:  # dielectric's η_ti²
+                inv = self._inv_eps(si, kind)
+                t = t * dr.select(out, inv, 1.0 / inv)
+            return dr.select(is_r, r, t)
+
+        def _delta_weight(self, ctx, si, wo, is_r, active):
+            return self._delta_coh(ctx, si, wo, is_r, active)
+
+        def pdf(self, ctx, si, wo, active=True):
+            p = self._pdf_glossy(ctx, si, wo, active)
+            if self._dd is None:
+                return p
+            return p * (1.0 - self._p_delta(ctx, si.wi, active)[0])
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            if self._dd is None:
+                return self._sample_glossy(ctx, si, sample1, sample2, active)
+            v = si.wi
+            active = active & (v.z != 0)
+            p_d, p_r = self._p_delta(ctx, v, active)
+            pick_d = active & (sample1 < p_d)
+            xi = dr.clip((sample1 - p_d) / dr.maximum(1.0 - p_d, 1e-30), 0.0, 1.0)
+            bs, w = self._sample_glossy(ctx, si, xi, sample2, active & ~pick_d)
+            bs.pdf = bs.pdf * (1.0 - p_d)
+            w = w / dr.maximum(1.0 - p_d, 1e-30)
+            is_r = sample1 < p_d * p_r
+            out = v.z > 0
+            wo_t, ok_t, eta_it = refract(mi, dr, v, self._eta)
+            wo_d = dr.select(is_r, mi.Vector3f(-v.x, -v.y, v.z), wo_t)
+            prob = p_d * dr.select(is_r, p_r, 1.0 - p_r)
+            ok_d = pick_d & (is_r | ok_t) & (prob > 0)
+            w_d = self._delta_weight(ctx, si, wo_d, is_r, ok_d) / dr.maximum(prob, 1e-30)
+            k = self._k_dr
+            bs.wo = dr.select(pick_d, wo_d, bs.wo)
+            bs.pdf = dr.select(pick_d, dr.select(ok_d, prob, 0.0), bs.pdf)
+            bs.eta = dr.select(pick_d, dr.select(is_r, 1.0, eta_it), bs.eta)
+            t_d = dr.select(is_r, mi.UInt32(+f.DeltaReflection), mi.UInt32(+f.DeltaTransmission))
+            bs.sampled_type = dr.select(pick_d, t_d, bs.sampled_type)
+            c_d = dr.select(is_r, dr.select(out, mi.UInt32(k), mi.UInt32(k + 2)), k + 1)
+            bs.sampled_component = dr.select(pick_d, c_d, bs.sampled_component)
+            w = dr.select(pick_d, dr.select(ok_d, w_d, dr.zeros(mi.Spectrum)), w)
+            return bs, w
+
         def traverse(self, callback):
             pass
 
         def to_string(self):
-            return f"EmscatterDielectricBSDF[η = {self._eta:.6g}, α = {self._alpha:.4g}]"
+            return (
+                f"EmscatterDielectricBSDF[η = {self._eta:.6g}, α = {self._alpha:.4g}, "
+                f"delta lobes={self._dd is not None}]"
+            )
 
     if "polarized" in mi.variant():
         from .dielectric_polarized import polarized_dielectric_class

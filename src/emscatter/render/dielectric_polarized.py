@@ -34,6 +34,11 @@ transport the other way round); the matrix maps Stokes vectors in
   left-handed ``(Px, Py)``; flipping ``y`` back gives ``D M D``, ``D = diag(1, 1, −1, −1)``,
   in bases with x axes ``P·stokes_basis(mirrored k)``, rotated onto Mitsuba's bases.
 
+* delta lobes (:mod:`.dielectric_delta`): Mitsuba's polarized ``dielectric`` — the Fresnel
+  Mueller matrices (``mi.mueller.specular_reflection`` / ``specular_transmission`` at the
+  light's cosine, mean ``η``) rotated from the s/p frames onto the Stokes bases — times the
+  table's coherent part over the Fresnel power, so ``M₀₀`` is the unpolarized plugin's.
+
 Spectral variants interpolate every element linearly between the table's wavelengths (the
 unpolarized plugin's rule); RGB ones use the table's sRGB weights per element.
 """
@@ -214,6 +219,29 @@ def polarized_dielectric_class(mi, base, coord, theta, sets):
                 fixed = self._inner_mueller(weight, ctx, si, bs.wo)
                 weight = dr.select(inner, fixed, weight)
             return bs, weight
+
+        def _delta_weight(self, ctx, si, wo, is_r, active):
+            """A delta sample's Mueller matrix: Mitsuba's ``dielectric`` (Fresnel matrices
+            at the light's cosine, its Stokes frames ⟂ the plane of incidence) scaled by the
+            table's coherent part over the Fresnel power (``R_coh/R_F``, ``T_coh/T_F``: s0
+            is the unpolarized plugin's; the radiance scale is in the coherent part)."""
+            coh = self._delta_coh(ctx, si, wo, is_r, active, mi.UnpolarizedSpectrum)
+            light, view = (wo, si.wi) if ctx.mode == radiance else (si.wi, wo)
+            m_r = mi.mueller.specular_reflection(light.z, mi.Complex2f(self._eta, 0.0))
+            m_t = mi.mueller.specular_transmission(light.z, mi.Float(self._eta))
+            m4 = dr.select(is_r, m_r, m_t)  # Matrix4f (the mean η, as the refraction)
+            ratio = coh / dr.maximum(m4[0, 0], 1e-12)
+            m = dr.zeros(mi.Spectrum)
+            for r in range(4):
+                for c in range(4):
+                    m[r, c] = ratio * m4[r, c]
+            n = mi.Vector3f(0, 0, 1)
+            s_in, s_out = dr.cross(n, -light), dr.cross(n, view)
+            normal = dr.all(s_in == 0)
+            s_in = dr.select(normal, mi.Vector3f(1, 0, 0), dr.normalize(s_in))
+            s_out = dr.select(normal, mi.Vector3f(1, 0, 0), dr.normalize(s_out))
+            m = mi.mueller.rotate_mueller_basis(m, -light, s_in, sb(-light), view, s_out, sb(view))
+            return m
 
         def to_string(self):
             return base.to_string(self).replace("EmscatterDielectricBSDF[", "Polarized[")

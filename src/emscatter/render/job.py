@@ -155,7 +155,7 @@ def _dielectric_bsdf(job: RenderJob, table) -> tuple[dict, dict]:
     bt = read_btdf_npz(job.btdf)
     inner = None if job.inner is None else _read_table(job.inner)
     try:
-        bsdf = em_d.bsdf_dict(table, bt, inner)
+        bsdf = em_d.bsdf_dict(table, bt, inner, coherent=job.coherent)
     except TypeError as exc:  # a table of the wrong kind: bad input, one line
         raise ValueError(f"dielectric tables: {exc}") from None
     described = {"kind": "dielectric plugin", "table": table.describe(), "btdf": bt.describe()}
@@ -168,7 +168,8 @@ def _xml_bsdf(bsdf: dict) -> str:
     if bsdf["type"] == "emscatter_dielectric":
         return (
             f'<bsdf type="{bsdf["type"]}" id="emscatter"><string name="tables" '
-            f'value="{bsdf["tables"]}"/></bsdf>'
+            f'value="{bsdf["tables"]}"/><boolean name="coherent" '
+            f'value="{str(bsdf["coherent"]).lower()}"/></bsdf>'
         )
     if bsdf["type"] == "measured":
         return (
