@@ -319,8 +319,8 @@ def test_po_tables_in_the_dielectric_plugin():
     """The PO BRDF and BTDF go through ``emscatter_dielectric`` exactly as GO's do: per
     direction pair the plugin's ``eval`` over the table value is the same (geometric,
     convention) factor for both (Mitsuba run for real in a worker process; float32 textures).
-    The plugin renders the lobes only: the PO tables' coherent parts are not in it, and its
-    lobe choice uses :meth:`BtdfTable.incoherent_albedo`."""
+    This checks the glossy lobes (their choice uses :meth:`BtdfTable.incoherent_albedo`); the
+    coherent parts are the plugin's delta lobes (tests/test_render_dielectric_delta.py)."""
     import importlib.util
     import sys
     from pathlib import Path
