@@ -48,7 +48,6 @@ from .transmittance import check_transmission, finish_energy
 __all__ = ["build_table", "default_theta", "default_phi_d", "default_phi", "material_eps"]
 
 
-
 def default_theta(n: int) -> np.ndarray:
     """``n`` uniform θ nodes ``k·90°/n``, k = 0 … n−1 [rad] (0° … 89° for n = 90)."""
     n = _check_count("n_theta", n, 2)
