@@ -5,12 +5,10 @@ JSON object ``{check: result}`` on its last line. Used by tests/test_radio_sionn
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import sys
 import tempfile
-import traceback
 import warnings
 from pathlib import Path
 
@@ -1059,21 +1057,9 @@ CHECKS["roughen_diffuse_transmission"] = check_roughen_diffuse_transmission
 
 
 def main(argv):
-    results = {}
-    for name in argv:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            try:
-                results[name] = {"result": CHECKS[name]()}
-            except Exception:  # the test shows the traceback
-                results[name] = {"error": traceback.format_exc()}
-        results[name]["warnings"] = [
-            f"{w.category.__name__}: {w.message}"
-            for w in caught
-            if w.category.__module__.startswith("emscatter") or "emscatter" in str(w.filename)
-        ]
-    print(json.dumps(results, default=str))
-    return 0
+    from worker_checks import run_checks  # beside this script (its folder is on sys.path)
+
+    return run_checks(CHECKS, argv)
 
 
 if __name__ == "__main__":

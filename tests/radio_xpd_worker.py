@@ -5,10 +5,7 @@ tests/test_radio_xpd_map.py."""
 
 from __future__ import annotations
 
-import json
 import sys
-import traceback
-import warnings
 
 import numpy as np
 
@@ -101,21 +98,9 @@ CHECKS = {"xpd_map_plate": check_xpd_map_plate}
 
 
 def main(argv):
-    results = {}
-    for name in argv:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            try:
-                results[name] = {"result": CHECKS[name]()}
-            except Exception:  # the test shows the traceback
-                results[name] = {"error": traceback.format_exc()}
-        results[name]["warnings"] = [
-            f"{w.category.__name__}: {w.message}"
-            for w in caught
-            if w.category.__module__.startswith("emscatter") or "emscatter" in str(w.filename)
-        ]
-    print(json.dumps(results, default=str))
-    return 0
+    from worker_checks import run_checks  # beside this script (its folder is on sys.path)
+
+    return run_checks(CHECKS, argv)
 
 
 if __name__ == "__main__":
