@@ -9,6 +9,8 @@ import json
 import math
 from pathlib import Path
 
+import summary_speed
+
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
 
@@ -190,7 +192,7 @@ def rows() -> list[tuple]:
             out.append(
                 (f"run time vs error: {st['label']}", "(Pareto)", pts, "", pa["command"], "pareto")
             )
-    return out
+    return out + summary_speed.rows()
 
 
 def write_summary() -> Path:
