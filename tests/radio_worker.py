@@ -34,6 +34,22 @@ def _add_devices(scene, tx, rxs, pol="V"):
         scene.add(rt.Receiver(f"rx{i}", position=list(p)))
 
 
+def _both_solvers(scene):
+    """Path powers (PathSolver) and radio-map path gains (RadioMapSolver, 6 m × 6 m at 1.5 m
+    height, 0.5 m cells) of ``scene`` with two bounces and diffuse reflection."""
+    import mitsuba as mi
+    import sionna.rt as rt
+
+    paths = rt.PathSolver()(scene, max_depth=2, samples_per_src=50_000, diffuse_reflection=True)
+    p, _ = _paths_power(paths)
+    rm = rt.RadioMapSolver()(
+        scene, center=mi.Point3f(0, 0, 1.5), orientation=mi.Point3f(0, 0, 0),
+        size=mi.Point2f(6, 6), cell_size=mi.Point2f(0.5, 0.5), samples_per_tx=50_000,
+        max_depth=2, diffuse_reflection=True,
+    )  # fmt: skip
+    return p, np.asarray(rm.path_gain.numpy())
+
+
 def check_flat_builtin():
     """Flat emscatter material vs Sionna's RadioMaterial, per path and per radio-map cell."""
     import mitsuba as mi
@@ -96,8 +112,6 @@ def check_flat_builtin():
 
 def check_xml_plugin():
     """An XML scene names the class; rough material runs in both solvers with diffuse on."""
-    import mitsuba as mi
-    import sionna.rt as rt
 
     import emscatter.radio.material as m
     from emscatter.radio import scenes
@@ -121,14 +135,7 @@ def check_xml_plugin():
         scene = scenes.load(d / "scene.xml", 28e9)
     mat = scene.get("rough-floor")
     _add_devices(scene, (0, 0, 2.0), [(2.0, 0.5, 1.5)])
-    paths = rt.PathSolver()(scene, max_depth=2, samples_per_src=50_000, diffuse_reflection=True)
-    p, _ = _paths_power(paths)
-    rm = rt.RadioMapSolver()(
-        scene, center=mi.Point3f(0, 0, 1.5), orientation=mi.Point3f(0, 0, 0),
-        size=mi.Point2f(6, 6), cell_size=mi.Point2f(0.5, 0.5), samples_per_tx=50_000,
-        max_depth=2, diffuse_reflection=True,
-    )  # fmt: skip
-    pg = np.asarray(rm.path_gain.numpy())
+    p, pg = _both_solvers(scene)
     return {
         "type": type(mat).__name__,
         "surface_sigma": float(mat.surface.sigma),
@@ -857,14 +864,7 @@ def check_textured_scenes():
         scene = scenes.load(d / "scene.xml", 28e9)
     mat = scene.get("grooved")
     _add_devices(scene, (0, 0, 2.0), [(2.0, 0.5, 1.5), (-2.0, 2.0, 1.0)])
-    paths = rt.PathSolver()(scene, max_depth=2, samples_per_src=50_000, diffuse_reflection=True)
-    p, _ = _paths_power(paths)
-    rm = rt.RadioMapSolver()(
-        scene, center=mi.Point3f(0, 0, 1.5), orientation=mi.Point3f(0, 0, 0),
-        size=mi.Point2f(6, 6), cell_size=mi.Point2f(0.5, 0.5), samples_per_tx=50_000,
-        max_depth=2, diffuse_reflection=True,
-    )  # fmt: skip
-    pg = np.asarray(rm.path_gain.numpy())
+    p, pg = _both_solvers(scene)
     out["xml"] = {
         "lengths": [mat.surface.length, mat.surface.length_y],
         "direction": [float(v) for v in mat._texture],

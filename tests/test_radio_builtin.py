@@ -8,11 +8,7 @@ import dataclasses
 import importlib.util
 import json
 import math
-import os
-import subprocess
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,8 +17,8 @@ import emscatter as em
 from emscatter import radio
 from emscatter.fresnel import fresnel_cos
 from emscatter.radio import builtin
+from test_radio_sionna import _run  # the worker launcher (never imports Sionna here)
 
-HERE = Path(__file__).parent
 CONCRETE = em.GaussianCorrelation(sigma=0.4e-3, length=4e-3)  # emscatter's indoor table
 
 
@@ -205,14 +201,7 @@ def test_fitted_builtin_material_in_sionna_plate():
     the plate at 45°. Valid case (140 GHz): specular path within 0.1 dB, diffuse power within
     0.5 dB (measured 0.02 and 0.08–0.11 dB). Flagged case (28 GHz, polarization): the diffuse
     power is off by more than 1 dB per polarization, as the flag said."""
-    path = os.pathsep.join([str(HERE.parent / "src"), os.environ.get("PYTHONPATH", "")])
-    env = {**os.environ, "PYTHONPATH": path}
-    proc = subprocess.run(
-        [sys.executable, str(HERE / "radio_worker.py"), "builtin_plate"],
-        capture_output=True, text=True, env=env, timeout=900,
-    )  # fmt: skip
-    assert proc.returncode == 0, proc.stderr[-4000:]
-    res = json.loads(proc.stdout.strip().splitlines()[-1])["builtin_plate"]
+    res = _run("builtin_plate")["builtin_plate"]  # tests/radio_worker.py, a fresh interpreter
     assert "error" not in res, res["error"]
     r = res["result"]
     ok, bad = r["concrete_140GHz"], r["concrete_28GHz"]

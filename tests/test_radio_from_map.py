@@ -11,12 +11,7 @@ from; the Sionna solve runs in a fresh interpreter (tests/radio_worker.py, ``hei
 from __future__ import annotations
 
 import importlib.util
-import json
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,11 +22,11 @@ from emscatter.radio.from_map import surface_from_map
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 from emscatter.surfaces.heightmap import HeightMapError, height_map
 from emscatter.surfaces.measured import measured_roughness
+from test_radio_sionna import _run  # the worker launcher (never imports Sionna here)
 
 F = 28e9
 GAUSS = GaussianCorrelation(0.4e-3, 4e-3)
 EXPO = ExponentialCorrelation(0.4e-3, 4e-3)
-HERE = Path(__file__).parent
 
 
 def _map(rough, rng=2, n=1024, dx=0.5e-3):
@@ -143,14 +138,7 @@ def test_sionna_plate_with_the_map_material():
     −0.18 dB (HH)."""
     if importlib.util.find_spec("sionna") is None:  # not imported here: Dr.Jit variants are
         pytest.skip("Sionna RT not installed")  # per process, the worker runs it
-    path = os.pathsep.join([str(HERE.parent / "src"), os.environ.get("PYTHONPATH", "")])
-    env = {**os.environ, "PYTHONPATH": path}
-    proc = subprocess.run(
-        [sys.executable, str(HERE / "radio_worker.py"), "height_map_plate"],
-        capture_output=True, text=True, env=env, timeout=900,
-    )  # fmt: skip
-    assert proc.returncode == 0, proc.stderr[-4000:]
-    out = json.loads(proc.stdout.strip().splitlines()[-1])["height_map_plate"]
+    out = _run("height_map_plate")["height_map_plate"]  # tests/radio_worker.py, a fresh interpreter
     assert "error" not in out, out["error"]
     r = out["result"]
     for pair in ("VV", "HH"):

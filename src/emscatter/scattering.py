@@ -85,6 +85,41 @@ class Scattering:
         obj.__dict__.update(fields)
         return obj
 
+    @classmethod
+    def from_geometry(
+        cls, geometry, *, sigma0, coherent, method: str, k, dimension: int | None = None,
+        info: dict | None = None,
+    ) -> Scattering:  # fmt: skip
+        """A solver's result on a checked, broadcast geometry (the ``Geometry`` of
+        :func:`emscatter.solvers.kirchhoff.common.geometry`, or any object with the same
+        attributes).
+
+        From ``geometry`` it fills :attr:`theta_i`, :attr:`theta_s`, :attr:`phi_s`,
+        :attr:`phi_i` (its arrays broadcast to ``geometry.shape`` [rad], stored as they are: no
+        copy) and :attr:`dimension` (``geometry.dimension`` unless ``dimension`` is given).
+        ``sigma0`` must have the shape ``(2, 2, *geometry.shape)`` (ValueError naming both
+        shapes otherwise); ``coherent`` is an array ``(2, *geometry.shape)`` or a zero-argument
+        callable (lazy, class docstring); ``k`` [rad/m]; ``info`` defaults to an empty dict.
+        """
+        shape = tuple(geometry.shape)
+        if np.shape(sigma0) != (2, 2, *shape):
+            raise ValueError(
+                f"sigma0 must have the shape (2, 2, *geometry.shape) = {(2, 2, *shape)} "
+                f"(indexed [pol_s, pol_i]), got {np.shape(sigma0)}"
+            )
+        return cls(
+            sigma0=sigma0,
+            coherent=coherent,
+            method=method,
+            theta_i=geometry.theta_i,
+            theta_s=geometry.theta_s,
+            phi_s=geometry.phi_s,
+            phi_i=geometry.phi_i,
+            k=k,
+            dimension=geometry.dimension if dimension is None else dimension,
+            info={} if info is None else info,
+        )
+
     @property
     def coherent_computed(self) -> bool:
         """Whether :attr:`coherent` has been computed (False while it is still lazy)."""

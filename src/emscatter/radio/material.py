@@ -39,7 +39,9 @@ reflection) and warns once
 existing results and PathSolver users stay as they were, the model holds only where GO does
 (outside it the material's ``out_of_range`` policy applies and the lobe is indicative), and the
 tables cost a ``slab_diffuse`` build (~1–4 s per material and frequency). Flat materials ignore
-it (the flat limit is Sionna's slab); half-spaces refuse it.
+it (the flat limit is Sionna's slab); half-spaces refuse it. The transmission events (option
+checks, tables, PathSolver rule, event probabilities) live in
+:mod:`emscatter.radio.material_transmission`.
 
 **Anisotropic roughness** (walls with a texture direction, ``texture_direction=``): the
 tables get the incidence-azimuth axis and the lobe lookup works in the texture frame of each hit
@@ -62,7 +64,6 @@ face), which saves the slab arithmetic per ray; flat materials always keep Sionn
 from __future__ import annotations
 
 import math
-import warnings
 
 import drjit as dr
 import mitsuba as mi
@@ -87,6 +88,12 @@ from sionna.rt.utils import (
 from .. import solvers
 from .convention import sionna_permittivity
 from .material_slice import _parse_props, _Slice
+from .material_transmission import (
+    check_transmission,
+    diffuse_tables,
+    event_probabilities,
+    through_on,
+)
 from .medium import check_thickness, resolve_medium
 from .tables import TableOptions, build_tables, check_policy, check_surface
 from .texture import build_textured_tables, check_direction, check_textured_surface
@@ -99,7 +106,6 @@ from .texture_jit import (
     textured_lookup,
     to_texture_frame,
 )
-from .transmission_tables import DiffuseTransmissionWarning, build_transmission_tables
 
 __all__ = ["EmscatterRadioMaterial", "PLUGIN_NAME"]
 
@@ -203,7 +209,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
                 f"method must be 'auto' or one of {solvers.available()}, got {method!r}"
             )
         self._method = method
-        self._transmission = self._check_transmission(transmission, thickness)
+        self._transmission = check_transmission(transmission, thickness, self._texture)
         self._path_warned = False
         self._out_of_range = out_of_range
         self._options = table_options or TableOptions()
@@ -231,24 +237,6 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     def transmission(self) -> str:
         """``"coherent"`` (default) or ``"diffuse"`` (class docstring)."""
         return self._transmission
-
-    def _check_transmission(self, transmission, thickness) -> str:
-        allowed = ("coherent", "diffuse")
-        if transmission not in allowed:
-            raise ValueError(f"transmission must be one of {allowed}, got {transmission!r}")
-        if transmission == "diffuse":
-            if thickness is None:
-                raise ValueError(
-                    "transmission='diffuse' needs a slab: thickness=None is a half-space, which "
-                    "transmits nothing; give thickness [m] > 0"
-                )
-            if self._texture is not None:
-                raise ValueError(
-                    "transmission='diffuse' needs isotropic roughness without texture_direction "
-                    "(the slab transport of emscatter.radio.slab_diffuse is isotropic), got "
-                    f"texture_direction={tuple(self._texture)!r}"
-                )
-        return transmission
 
     @property
     def surface(self):
@@ -332,12 +320,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         if self._texture is not None:
             self._active = self._tables[self._frequency] = TexturedSlice(tables)
             return self._active
-        through = None
-        if self._transmission == "diffuse" and not self._opaque_wall:
-            through = build_transmission_tables(
-                self._surface, self._eps, self._frequency, self._thickness, tables,
-                out_of_range=self._out_of_range,
-            )  # fmt: skip
+        through = diffuse_tables(self, tables)
         self._active = self._tables[self._frequency] = _Slice(tables, through)
         return self._active
 
@@ -475,24 +458,6 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         root_omega = dr.sqrt(dr.maximum(solid_angle, 0.0))
         return mi.Matrix2f(dr.sqrt(hh), -dr.sqrt(hv), dr.sqrt(vh), dr.sqrt(vv)) * root_omega
 
-    def _event_probabilities(self, coefs, enabled, through_on=False):
-        """Probabilities of specular reflection, diffuse reflection, transmission and (with
-        ``through_on``) diffuse transmission, in proportion to their powers (mean of the two
-        polarizations) among the enabled events (diffuse transmission: diffuse and refraction
-        both enabled)."""
-        r_te, r_tm, t_te, t_tm, diffuse_power, through = coefs
-        r = dr.squared_norm(r_te) + dr.squared_norm(r_tm)
-        t = dr.squared_norm(t_te) + dr.squared_norm(t_tm)
-        prs = dr.select((enabled & InteractionType.SPECULAR) > 0, r, 0.0)
-        prd = dr.select((enabled & InteractionType.DIFFUSE) > 0, diffuse_power, 0.0)
-        pt = dr.select((enabled & InteractionType.REFRACTION) > 0, t, 0.0)
-        both = InteractionType.DIFFUSE | InteractionType.REFRACTION
-        pdt = dr.select((enabled & both) == both, through, 0.0) if through_on else 0.0
-        total = prs + prd + pt + pdt
-        none = total <= 0.0
-        norm = dr.select(none, 1.0, dr.rcp(total))
-        return prs * norm, prd * norm, pt * norm, pdt * norm, none
-
     def _context(self, si):
         ki = si.wi
         cos_i = dr.clip(-ki.z, 0.0, 1.0)
@@ -555,8 +520,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         enabled = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         diffraction = mi.Bool(active) & (enabled == InteractionType.DIFFRACTION)
         coefs = self._coefficients(cos_i, sl, active, ki, tex)
-        through_on = self._through_on(sl, ctx)
-        prs, prd, pt, pdt, none = self._event_probabilities(coefs, enabled, through_on)
+        prs, prd, pt, pdt, none = event_probabilities(coefs, enabled, through_on(self, sl, ctx))
         specular = sample1 < prs
         diffuse = (sample1 >= prs) & (sample1 < prs + prd)
         through = (sample1 >= prs + prd) & (sample1 < prs + prd + pdt)
@@ -621,37 +585,13 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         ki, cos_i, _, tex = self._context(si)
         event = dr.reinterpret_array(mi.UInt, si.dp_du.z)
         every = InteractionType.SPECULAR | InteractionType.DIFFUSE | InteractionType.REFRACTION
-        prs, prd, pt, pdt, _ = self._event_probabilities(
-            self._coefficients(cos_i, sl, active, ki, tex), mi.UInt(every), self._through_on(sl)
+        prs, prd, pt, pdt, _ = event_probabilities(
+            self._coefficients(cos_i, sl, active, ki, tex), mi.UInt(every), through_on(self, sl)
         )
         p = dr.select(event == InteractionType.SPECULAR, prs, prd)
         p = dr.select((event == InteractionType.DIFFUSE) & (si.to_local(wo).z < 0.0), pdt, p)
         p = dr.select(event == InteractionType.REFRACTION, pt, p)
         return dr.select(event == InteractionType.DIFFRACTION, 1.0, p)
-
-    def _through_on(self, sl, ctx=None) -> bool:
-        """Whether diffuse transmission can be sampled in this call (host side, trace time).
-
-        Sionna's PathSolver samples with ``NO_JONES_MATRIX`` and connects a diffuse event only
-        to receivers on the incident side of the surface (``sionna.rt`` ``sb_candidate_generator``):
-        it cannot carry diffusely transmitted power, so there the material samples as with
-        ``transmission="coherent"`` (the internal light out of the front face stays in the
-        diffuse reflection) and warns once."""
-        if sl is None or sl.n_psi or not sl.stacked:
-            return False
-        if ctx is not None and (ctx.component & NO_JONES_MATRIX) != 0:
-            if not self._path_warned:
-                self._path_warned = True
-                warnings.warn(
-                    "radio materials with transmission='diffuse' are carried by "
-                    "RadioMapSolver only; Sionna's PathSolver connects diffuse events to "
-                    "receivers on the incident side, so its paths hold no diffusely transmitted "
-                    "power (coherent transmission and diffuse reflection are complete)",
-                    DiffuseTransmissionWarning,
-                    stacklevel=3,
-                )
-            return False
-        return True
 
     def traverse(self, callback):
         """Nothing differentiable: the tables come from emscatter on the host."""

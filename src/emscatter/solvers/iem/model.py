@@ -373,18 +373,7 @@ def bistatic(
     else:
         coh = np.full((2, *g.shape), np.nan)
     info = _info(opt, reciprocal, shadow_mode, slope, crosspol and dim == 2, nonrec, prec, coherent)
-    return Scattering(
-        sigma0=sig,
-        coherent=coh,
-        method="iem",
-        theta_i=g.theta_i,
-        theta_s=g.theta_s,
-        phi_s=g.phi_s,
-        phi_i=g.phi_i,
-        k=k,
-        dimension=dim,
-        info=info,
-    )
+    return Scattering.from_geometry(g, sigma0=sig, coherent=coh, method="iem", k=k, info=info)
 
 
 def _info(opt, reciprocal, shadow_mode, slope, crosspol, nonrec, prec, coherent) -> dict:

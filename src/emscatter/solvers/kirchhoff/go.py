@@ -361,17 +361,8 @@ def _bistatic(
     }
     if not want_coh:
         info["coherent"] = "not computed (coherent=False)"
-    return Scattering(
-        sigma0=sigma0,
-        coherent=coh.reshape(2, *shape),
-        method="kirchhoff-go",
-        theta_i=g.theta_i,
-        theta_s=g.theta_s,
-        phi_s=g.phi_s,
-        phi_i=g.phi_i,
-        k=k,
-        dimension=dim,
-        info=info,
+    return Scattering.from_geometry(
+        g, sigma0=sigma0, coherent=coh.reshape(2, *shape), method="kirchhoff-go", k=k, info=info
     )
 
 

@@ -547,15 +547,6 @@ def bistatic(
     info = {"rtol": rtol, "polarization_factors": "local specular (stationary phase)"}
     if not want_coh:
         info["coherent"] = "not computed (coherent=False)"
-    return Scattering(
-        sigma0=sigma0,
-        coherent=coh,
-        method="kirchhoff-po",
-        theta_i=g.theta_i,
-        theta_s=g.theta_s,
-        phi_s=g.phi_s,
-        phi_i=g.phi_i,
-        k=k,
-        dimension=dim,
-        info=info,
+    return Scattering.from_geometry(
+        g, sigma0=sigma0, coherent=coh, method="kirchhoff-po", k=k, info=info
     )
