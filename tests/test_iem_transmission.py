@@ -201,3 +201,87 @@ def test_policies_and_bad_inputs():
     res = tiem.bistatic_transmission(rough, 2.25, K, th, 0.3, 0.0, out_of_range="nan")
     assert np.all(np.isfinite(res.sigma0[..., 0])) and np.all(np.isnan(res.sigma0[..., 1]))
     assert np.isnan(res.coherent[0, 1]) and list(res.info["out_of_range"]) == [False, True]
+
+
+# ----------------------------------------------------------------------------- IEM BTDF tables
+LAM = 1e-6
+GLASS = GaussianCorrelation(sigma=0.16e-6, length=1.6e-6, dimension=2)  # kσ 1.0, kℓ 10
+
+
+@pytest.fixture(scope="module")
+def iem_table():
+    from emscatter.brdf.btdf_table import build_btdf_table
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # θi nodes > 70° are outside the IEM: tested below
+        return build_btdf_table(GLASS, 2.25, [LAM], method="iem", n_theta=18, n_phi=91)
+
+
+def test_iem_table_equals_the_solver_at_nodes(iem_table):
+    """At the (θi, θt, Δφ) nodes the table holds bistatic_transmission's f_t exactly (1e-12),
+    its coherent part is coherent_transmissivity, and albedo = incoherent + coherent."""
+    from emscatter.brdf import frames
+
+    t = iem_table
+    assert t.metadata["solver"] == "iem-transmission"
+    i, jt, jp = np.meshgrid([0, 3, 7], [5, 20, 40], [0, 45, 90], indexing="ij")
+    ti, tt, dp = t.theta_i[i.ravel()], t.theta_t[jt.ravel()], t.phi_d[jp.ravel()]
+    res = tiem.bistatic_transmission(GLASS, 2.25, 2 * math.pi / LAM, ti, tt, dp, math.pi)
+    ref = res.unpolarized() / (4 * math.pi * np.cos(ti) * np.cos(tt))
+    np.testing.assert_allclose(t.values[0, i.ravel(), jt.ravel(), jp.ravel()], ref, rtol=1e-12)
+    wi = frames.directions(ti, np.zeros(ti.size))
+    wo = frames.directions(math.pi - tt, dp)
+    np.testing.assert_allclose(t.evaluate(wi, wo, LAM), ref, rtol=1e-6, atol=1e-12 * ref.max())
+    coh = tiem.coherent_transmissivity(GLASS, 2.25, 2 * math.pi / LAM, t.theta_i).mean(axis=0)
+    np.testing.assert_allclose(t.coherent[0], coh, rtol=1e-9)
+    np.testing.assert_allclose(t.albedo() - t.incoherent_albedo(), t.coherent)
+
+
+def test_iem_brdf_and_btdf_energy(iem_table):
+    """An IEM reflection table and this BTDF (kσ 1, kℓ 10): R + T ≤ 1 + 3e-3 (the grids'
+    quadrature error) and ≥ 0.99 at every θi ≤ 60° node (measured 0.9963–1.0012)."""
+    from emscatter.brdf import build_table
+    from emscatter.brdf.btdf_table import energy_budget
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        br = build_table(
+            GLASS, 2.25, [LAM], method="iem", resolution=(18, 72), energy="off",
+            transmission="off",
+        )  # fmt: skip
+    b = energy_budget(br, iem_table)
+    ok = b["theta_i_deg"] <= 60
+    total = (b["R"] + b["T"])[0, ok]
+    assert np.all(total <= 1 + 3e-3), total
+    assert np.all(total >= 0.99), total
+
+
+def test_iem_table_policies_and_cli(tmp_path):
+    """Bad options are clear errors; the IEM validity warns once per wavelength naming the
+    θi nodes; ``emscatter brdf --transmission --method iem`` writes an IEM BTDF."""
+    from emscatter.brdf.btdf_table import build_btdf_table
+    from emscatter.brdf.export_npz import read_btdf_npz
+    from emscatter.cli import main
+
+    kw = {"method": "iem", "n_theta": 6, "n_theta_t": 12, "n_phi": 13}
+    with pytest.raises(ValueError, match="polarized=True is not available"):
+        build_btdf_table(GLASS, 2.25, [LAM], polarized=True, **kw)
+    with pytest.raises(ValueError, match="unknown option"):
+        build_btdf_table(GLASS, 2.25, [LAM], shadowing=True, **kw)
+    with pytest.raises(ValueError, match="first_order"):
+        build_btdf_table(GLASS, 2.25, [LAM], first_order="exact", **kw)
+    with pytest.warns(UserWarning, match="outside the IEM's") as rec:
+        build_btdf_table(GLASS, 2.25, [LAM], **kw)
+    assert len([w for w in rec if "IEM's" in str(w.message)]) == 1
+    with pytest.raises(ValueError, match="theta_i"):
+        build_btdf_table(GLASS, 2.25, [LAM], out_of_range="raise", **kw)
+    argv = [
+        "brdf", str(tmp_path / "g.npz"), "--material", "2.25", "--sigma", "1.6e-7", "--length",
+        "1.6e-6", "--wavelengths-nm", "1000", "--method", "iem", "--n-theta", "8", "--n-phi",
+        "25", "--out-of-range", "ignore", "--transmission", "--quiet",
+    ]  # fmt: skip
+    assert main(argv) == 0
+    bt = read_btdf_npz(tmp_path / "g_btdf.npz")
+    assert bt.metadata["solver"] == "iem-transmission"
+    assert bt.coherent is not None and bt.coherent[0, 0] > 0.3
+    assert main([*argv, "--polarized"]) != 0  # a clear error, not a traceback
