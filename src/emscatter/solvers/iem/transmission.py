@@ -193,9 +193,9 @@ def bistatic_transmission(
     Returns
     -------
     :class:`~emscatter.scattering.Scattering`: ``sigma0`` (2, 2, *shape), ``coherent``
-    (2, *shape) the coherent transmissivity (a delta lobe at the refracted direction),
-    ``theta_s``/``phi_s`` holding ``θt``/``φt``, ``info["direction"] = "transmission"``,
-    ``info["validity"]`` (the IEM report at ``theta_i``).
+    (2, *shape) the coherent transmissivity (a delta lobe at the refracted direction; computed
+    on first read), ``theta_s``/``phi_s`` holding ``θt``/``φt``, ``info["direction"] =
+    "transmission"``, ``info["validity"]`` (the IEM report at ``theta_i``).
     """
     rough, k = _check(roughness, k, out_of_range, first_order, complementary)
     e = _eps(eps)
@@ -211,16 +211,19 @@ def bistatic_transmission(
         t1, att = _first_kirchhoff_term(rough, e, k, ti, tt, pt, pi_)
         spm1 = np.abs(tspm.jones(rough, e, k, ti, tt, pt, pi_)) ** 2
         sigma0 = np.maximum(sigma0 - t1, 0.0) + att * spm1
-    coh = coherent_transmissivity(rough, e, k, ti, first_order=first_order)
     if np.any(bad):
         sigma0 = np.where(bad, np.nan, sigma0)
-        coh = np.where(bad, np.nan, coh)
     elif not np.all(np.isfinite(sigma0)):
         raise ValueError("IEM transmission produced NaN/inf (please report the inputs)")
+
+    def coh():  # on first read (Scattering.coherent): SPM's second order per distinct θi
+        c = coherent_transmissivity(rough, e, k, ti, first_order=first_order)
+        return np.where(bad, np.nan, c)
+
     info = {
         "direction": "transmission",
-        "model": "IEM Kirchhoff series" + (" + first-order SPM term" if first_order == "spm"
-                                           else ""),  # fmt: skip
+        "model": "IEM Kirchhoff series"
+        + (" + first-order SPM term" if first_order == "spm" else ""),  # fmt: skip
         "first_order": first_order,
         "complementary": None,
         "rtol": rtol,
