@@ -3,19 +3,23 @@ its first-order (SPM) amplitude, between first-order SPM and physical optics.
 
 What the literature gives, and what this module is
 --------------------------------------------------
-The IEM transmitted field (Fung, *Microwave Scattering and Emission Models and Their
-Applications*, 1994, ch. 4 "transmitted field" and appendix 4D, eqs. 4D.1–4D.3 for the
-transmitted Kirchhoff coefficients; pp. 254–255 for the transmitted single-scattering
-coefficient) has the same structure as the reflected one (Fung, Li & Chen 1992)::
+The IEM transmitted field is in Fung, *Microwave Scattering and Emission Models and Their
+Applications* (1994), ch. 4 and appendix 4D (eqs. 4D.1–4D.3, the transmitted Kirchhoff
+coefficients ``f_t``; pp. 254–255, the transmitted single- and multiple-scattering terms) —
+located through a public third-party implementation that cites those equations; the book
+itself was not available to us. Its single-scattering form has the structure of the
+reflected one (Fung, Li & Chen 1992), written here with the height phase that makes its
+n-sum the Kirchhoff series below (``e^{−Q}``)::
 
     σ⁰_t,qp = ½ |k₂|² e^{−σ²(k_z² + k_tz²)} Σ_{n≥1} σ^{2n}/n! |I_t,n|² Wₙ(k_t⊥ − k_i⊥)
-    I_t,n   = (k_z − k_tz)ⁿ f_t,qp e^{σ² k_z k_tz} + (complementary terms)
+    I_t,n   = (k_z − k_tz)ⁿ f_t,qp e^{+σ² k_z k_tz} + (complementary terms)
 
 (``k_z = k cosθi``, ``k_tz = k₂ cosθt``, ``k₂ = ηk``). The transmitted *complementary*
-coefficients ``F_t`` are printed there only for the 1992 IEM (phase of the Green's function
-dropped), in a form we could not obtain and check against an independent source; no AIEM
-transmitted complementary field with the bases and phases of :mod:`emscatter.solvers.iem.terms`
-is published to our knowledge. This module therefore implements, honestly named:
+coefficients ``F_t`` (of the 1992 IEM, Green's-function phase dropped) we could neither
+read at the source nor check against an independent one (the third-party code marks its own
+complementary fields as wrong), and no AIEM transmitted complementary field with the bases
+and phases of :mod:`emscatter.solvers.iem.terms` is published to our knowledge. This module
+therefore implements, honestly named:
 
 * **The Kirchhoff series** (the IEM's ``f_t`` term with the n-fold spectrum series): the
   tangent-plane transmitted field, summed over all orders, which is exactly the physical-
