@@ -37,6 +37,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..solvers.iem import transmission as tiem
 from ..solvers.kirchhoff.common import slope_variances
 from ..solvers.kirchhoff.transmission import go as gt
 from ..solvers.kirchhoff.transmission import po as tpo
@@ -270,8 +271,10 @@ def build_btdf_table(
     :mod:`emscatter.solvers.spm.transmission` (fine polish, ``kσ ≲ 0.3``), whose second-order
     coherent transmissivity goes to ``coherent`` (``R + T = 1`` to ``O((kσ)²)`` with the SPM
     reflection) and whose Mueller part (``polarized=True``) is the products of its complex
-    amplitudes. ``out_of_range`` (PO, SPM): ``"warn"`` (once per wavelength, naming the θi nodes
-    outside the method's validity), ``"raise"`` or ``"ignore"``; recorded in
+    amplitudes, ``"iem"`` the IEM transmission of :mod:`emscatter.solvers.iem.transmission`
+    (the Kirchhoff series with the first-order SPM term, kσ ≈ 0.3–3; no Mueller part: it is a
+    power-level model). ``out_of_range`` (PO, SPM, IEM): ``"warn"`` (once per wavelength,
+    naming the θi nodes outside the method's validity), ``"raise"`` or ``"ignore"``; recorded in
     ``metadata["per_wavelength"]``.
 
     ``surface``: a 2-D isotropic :class:`emscatter.spectra.Roughness`; ``material``: a real
@@ -288,10 +291,18 @@ def build_btdf_table(
     ``memory_limit_bytes``: the stored grid may not exceed it (None: what the process may allocate,
     :func:`.sizing.memory_limit`). ``options`` (GO): ``shadowing`` (True/"correlated",
     "separable" = Mitsuba's ``roughdielectric``, False), ``slope_variance``, ``k_max``; (PO):
-    ``rtol``, ``max_terms`` of the series.
+    ``rtol``, ``max_terms`` of the series; (IEM): those and ``first_order``.
     """
-    if method not in ("go", "po", "spm"):
-        raise ValueError(f"method must be 'go', 'po' or 'spm' for a BTDF table, got {method!r}")
+    if method not in ("go", "po", "spm", "iem"):
+        raise ValueError(
+            f"method must be 'go', 'po' or 'spm', or 'iem', for a BTDF table, got {method!r}"
+        )
+    if method == "iem" and polarized is True:
+        raise ValueError(
+            "polarized=True is not available for method='iem': the IEM transmission adds its "
+            "first-order term in power, so it has no amplitudes (no Mueller matrix); use "
+            "method='go', 'po' or 'spm' for a polarized BTDF"
+        )
     if out_of_range not in ("warn", "raise", "ignore"):
         raise ValueError(
             f"out_of_range must be 'warn', 'raise' or 'ignore' for a table, got {out_of_range!r}"
@@ -324,9 +335,10 @@ def build_btdf_table(
             rough, options.get("k_max"), options.get("slope_variance"), k=2 * math.pi / wl[0]
         )
         m = math.sqrt(float(np.mean(sx + sy)))
-        if method == "spm":  # the lobe is the spectrum's width, Δ(sinθt) ≈ 2/(ηkℓ)
+        if method in ("spm", "iem"):  # the lobe is the spectrum's width, Δ(sinθt) ≈ 2/(ηkℓ)
             eta0 = math.sqrt(e0)
-            m = 2 * wl[0] / (2 * math.pi * eta0 * rough.length) * eta0 / abs(eta0 - 1)
+            m_spm = 2 * wl[0] / (2 * math.pi * eta0 * rough.length) * eta0 / abs(eta0 - 1)
+            m = m_spm if method == "spm" else min(m, m_spm)  # IEM: the narrower of the two
         auto_t, auto_p = default_resolution(m, e0, n_theta)
         n_theta_t = auto_t if n_theta_t is None else n_theta_t
         n_phi = auto_p if n_phi is None else n_phi
@@ -375,10 +387,20 @@ def build_btdf_table(
         elif method == "spm":
             per_wl.append(_po_validity(rough, eps[j], k, ti, float(lam), out_of_range, "spm"))
             coherent[j] = tspm.coherent_transmissivity(rough, eps[j], k, ti).mean(axis=0)
+        elif method == "iem":
+            per_wl.append(_po_validity(rough, eps[j], k, ti, float(lam), out_of_range, "iem"))
+            opts = {"first_order": po_opts.get("first_order", "spm")}
+            coherent[j] = tiem.coherent_transmissivity(rough, eps[j], k, ti, **opts).mean(axis=0)
         for lo in range(0, ti.size, rows):
             a, b, c = np.meshgrid(ti[lo : lo + rows], tt, pd, indexing="ij")
             # renderer Δφ → emscatter: φi = π (k̂_i = −wi with φ(wi) = 0), φt = Δφ
-            if method == "po":
+            if method == "iem":
+                res = tiem.bistatic_transmission(
+                    rough, eps[j], k, a, b, c, math.pi, out_of_range="ignore", **po_opts
+                )
+                slopes = [float(x) for x in slope_variances(rough, None, None, k=k)]
+                unpol = res.unpolarized()
+            elif method == "po":
                 res = tpo.bistatic_transmission(
                     rough, eps[j], k, a, b, c, math.pi, out_of_range="ignore", **po_opts
                 )  # the slopes of the same spectrum: the plugin samples Beckmann normals
@@ -430,6 +452,17 @@ def build_btdf_table(
             coherent="coherent transmissivity to second order in k sigma (delta lobe at the "
             "refracted direction, not in values)",
         )
+    if method == "iem":
+        meta.update(
+            solver="iem-transmission",
+            source="IEM Kirchhoff series with the first-order SPM term, no complementary field "
+            "(emscatter.solvers.iem.transmission)",
+            shadowing=None,
+            first_order=po_opts.get("first_order", "spm"),
+            coherent="Kirchhoff mean field with the second-order SPM correction (delta lobe at "
+            "the refracted direction, not in values)",
+            per_wavelength=per_wl,
+        )
     return BtdfTable(
         wavelengths=wl, theta_i=ti, theta_t=tt, phi_d=pd, values=values, eps=eps,
         mueller=mueller, metadata=meta, coherent=coherent,
@@ -441,29 +474,37 @@ _PO_OPTIONS = ("rtol", "max_terms")
 
 def _po_surface(surface, options, method="po"):
     """The roughness and the series options of a PO (SPM: none) BTDF table (clear errors)."""
-    allowed = _PO_OPTIONS if method == "po" else ()
+    allowed = {"po": _PO_OPTIONS, "iem": (*_PO_OPTIONS, "first_order")}.get(method, ())
     unknown = set(options) - set(allowed)
     if unknown:
         raise ValueError(
             f"unknown option(s) {sorted(unknown)} for the {method.upper()} BTDF; allowed: "
             f"{list(allowed)}"
         )
+    fo = options.get("first_order", "spm")
+    if isinstance(fo, bool) or fo not in tiem.FIRST_ORDER:
+        raise ValueError(f"first_order must be one of {tiem.FIRST_ORDER}, got {fo!r}")
     return checked_surface(surface, {}, "a BTDF table"), dict(options)
 
 
 def _po_validity(rough, eps, k, theta, lam, out_of_range, method="po") -> dict:
     """PO's (SPM's) validity at the θi nodes for one wavelength: the ``out_of_range`` policy
     (one warning naming the failing nodes, or a ValueError) and a record for the metadata."""
+    from ..solvers.iem import validity as iem_validity
     from ..solvers.kirchhoff import po as rpo
     from ..solvers.spm import validity as spm_validity
 
-    check = rpo.check_validity if method == "po" else spm_validity.check_validity
+    check = {"po": rpo.check_validity, "iem": iem_validity.check_validity}.get(
+        method, spm_validity.check_validity
+    )
     rep_ = check(rough, k, eps=eps, theta_i=theta)
     bad = ~np.broadcast_to(np.asarray(rep_.get("angle_valid", True), dtype=bool), theta.shape)
     if not rep_["valid"] and out_of_range != "ignore":
         nodes = np.degrees(theta[bad])
         where = f"θi {nodes.min():.3g}–{nodes.max():.3g}° ({bad.sum()} nodes)" if bad.any() else ""
-        theory = "Kirchhoff approximation's" if method == "po" else "small-perturbation method's"
+        theory = {"po": "Kirchhoff approximation's", "iem": "IEM's"}.get(
+            method, "small-perturbation method's"
+        )
         msg = (
             f"build_btdf_table(method={method!r}) at λ = {lam:.6g} m is outside the {theory} "
             f"validity {where}: {'; '.join(rep_['reasons'])}"

@@ -150,6 +150,11 @@ def _check_transmission(a, fmt_name, rough, wl) -> None:
         raise ValueError("--transmission needs an isotropic surface (BTDF tables are θi, θt, Δφ)")
     if a.tol is not None:
         raise ValueError("--transmission takes a fixed grid (--n-theta/--n-phi), not --tol")
+    if a.polarized and a.method == "iem":
+        raise ValueError(
+            "--transmission --method iem has no --polarized BTDF (the IEM "
+            "transmission is a power-level model); use --method go, po or spm"
+        )
     for lam in wl:
         try:
             check_transmission_eps(material_eps(a.material, float(lam)))
@@ -168,7 +173,7 @@ def _run_transmission(a, rough, wl, resolution, table_kw):
     from ..brdf.build import material_eps
 
     n_theta = 90 if resolution is None else resolution[0]
-    tm = a.method if a.method in ("po", "spm") else "go"  # PO/SPM BTDF beside PO/SPM, else GO
+    tm = a.method if a.method in ("po", "spm", "iem") else "go"  # the same method's BTDF, else GO
     bt = build_btdf_table(
         rough, a.material, wl, n_theta=n_theta, polarized=a.polarized,
         dtype=table_kw["dtype"], method=tm,
@@ -297,8 +302,8 @@ def register(subparsers) -> None:
     p.add_argument(
         "--transmission",
         action="store_true",
-        help="a rough dielectric (real ε > 0, ≠ 1): also write its BTDF (GO; PO or SPM with "
-        "--method po / spm) as OUT_btdf.npz and "
+        help="a rough dielectric (real ε > 0, ≠ 1): also write its BTDF (GO; PO, SPM or IEM "
+        "with --method po / spm / iem) as OUT_btdf.npz and "
         "the inside reflection (1/ε) as OUT_inner.npz (.npz output, isotropic; the reflection "
         "capped at 1 − T of that BTDF); render them with emscatter render OUT.npz --btdf …",
     )
