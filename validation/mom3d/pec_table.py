@@ -23,15 +23,24 @@ Columns: those of validation/validity_maps/validity_pec.csv plus ``theta_i_deg``
 ``correlation``, ``dimension`` (2), ``length_wavelengths``, ``energy_min`` (smallest
 per-realization energy ratio of the cell, 1 for a PEC). Schema ``mom3d_pec_table/1``.
 
+Per-realization data (``pec_table_samples.json``, schema ``mom3d_pec_samples/1``): per cell
+each realization's pooled co-pol bins of mom3d (``info["sigma0_samples"]`` through the same
+row mean and bin means: ``mom[j][pol][bin]``, pol 0 = h, 1 = v) and the models' bins
+(``models[m][pol][bin]``) with their validity, so that the error's Monte Carlo uncertainty
+can be bootstrapped over the realizations
+(:func:`emscatter.validation.measured_table_3d.write_measured_3d` writes auto's 3-D table
+from it).
+
 Run: PYTHONPATH=src python validation/mom3d/pec_table.py [--theta-i 20 40] [--k-sigma …]
      [--k-l …] [--realizations 4] [--length 6] [--client local]
-Rows of a θi already in pec_table.csv are replaced, others kept (run θi one at a time to keep
-each command short); pec_table.md is rewritten from the whole CSV.
+Rows (and samples) of the cells run are replaced, others kept (run a few cells at a time to
+keep each command short); pec_table.md is rewritten from the whole CSV.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import time
 import warnings
@@ -47,6 +56,7 @@ from emscatter.validation.maps import _bin_means, _sigma0_error
 
 HERE = Path(__file__).resolve().parent
 CSV, MD = HERE / "pec_table.csv", HERE / "pec_table.md"
+SAMPLES = HERE / "pec_table_samples.json"
 K = 2 * math.pi  # λ = 1 m
 PPW = 8.0
 MODELS = {"spm1": "spm", "po": "po", "go": "go", "iem": "iem"}
@@ -86,6 +96,10 @@ def cell(ks, kl, tdeg, realizations, length, seed, client):
     mom = per.mean(axis=0)
     se = per.std(axis=0, ddof=1) / math.sqrt(realizations)
     out = []
+    sample = {"theta_i_deg": tdeg, "k_sigma": ks, "k_l": kl, "realizations": realizations,
+              "seed": seed, "length_wavelengths": length,
+              "mom": _g(np.stack([per[:, 0, 0], per[:, 1, 1]], axis=1)),
+              "models": {}, "valid": {}}  # fmt: skip
     for m, name in MODELS.items():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -100,6 +114,8 @@ def cell(ks, kl, tdeg, realizations, length, seed, client):
         except (ValueError, Warning):
             valid = False
         approx = binned(s.sigma0)
+        sample["models"][m] = _g(np.stack([approx[0, 0], approx[1, 1]]))
+        sample["valid"][m] = valid
         for pol, a in (("h", 0), ("v", 1)):
             e = _sigma0_error(mom[a, a], se[a, a], approx[a, a])
             out.append({
@@ -119,7 +135,34 @@ def cell(ks, kl, tdeg, realizations, length, seed, client):
     e_min = res.info["energy"].min()
     print(f"kσ={ks:g} kℓ={kl:g} θi={tdeg:g}°: {seconds:.0f} s, energy ≥ {e_min:.4f}, "
           f"best {best} {worst[best]:.2f} dB", flush=True)  # fmt: skip
-    return out
+    return out, sample
+
+
+def _g(a):
+    """A float array as nested lists of 7 significant digits (compact JSON)."""
+    return np.vectorize(lambda x: float(f"{x:.7g}"), otypes=[object])(a).tolist()
+
+
+def _key(d):
+    return (float(d["theta_i_deg"]), float(d["k_sigma"]), float(d["k_l"]))
+
+
+def load_samples() -> list[dict]:
+    """The per-realization cells of ``pec_table_samples.json`` (empty when missing)."""
+    if not SAMPLES.exists():
+        return []
+    return json.loads(SAMPLES.read_text())["cells"]
+
+
+def save_samples(cells: list[dict]) -> None:
+    doc = {"schema": "mom3d_pec_samples/1",
+           "about": "per-realization pooled co-pol bins of mom3d (mom[j][pol][bin], pol 0 = h, "
+                    "1 = v) and the models' bins, per cell of pec_table.csv; written by "
+                    "validation/mom3d/pec_table.py",
+           "bins_deg": EDGES.tolist(), "ky_rows": list(KY), "points_per_wavelength": PPW,
+           "cells": sorted(cells, key=_key)}  # fmt: skip
+    with atomic_path(SAMPLES) as tmp:
+        Path(tmp).write_text(json.dumps(doc, ensure_ascii=False, separators=(",", ":")) + "\n")
 
 
 def _load():
@@ -190,16 +233,19 @@ def main(argv=None) -> None:
     ap.add_argument("--seed", type=int, default=19)
     ap.add_argument("--client", default=None, help="None (serial) or 'local' / 'tcp://…'")
     args = ap.parse_args(argv)
-    rows, meta = _load()
-    rows = [r for r in rows if float(r["theta_i_deg"]) not in args.theta_i]
+    rows = _load()[0]
+    meta = {"points_per_wavelength": PPW, "seed": args.seed, "emscatter": em.__version__,
+            "models": MODELS, "ky_rows": KY, "bins_deg": EDGES.tolist()}  # fmt: skip
+    samples = load_samples()
     for tdeg in args.theta_i:
         for ks in args.k_sigma:
             for kl in args.k_l:
-                rows += cell(ks, kl, tdeg, args.realizations, args.length, args.seed,
-                             args.client)  # fmt: skip
-    meta = {"points_per_wavelength": PPW, "seed": args.seed, "emscatter": em.__version__,
-            "models": MODELS, "ky_rows": KY, "bins_deg": EDGES.tolist()}  # fmt: skip
-    save(rows, meta)
+                new, sample = cell(ks, kl, tdeg, args.realizations, args.length, args.seed,
+                                   args.client)  # fmt: skip
+                rows = [r for r in rows if _key(r) != _key(sample)] + new
+                samples = [c for c in samples if _key(c) != _key(sample)] + [sample]
+                save_samples(samples)  # after each cell: a stopped run keeps what it made
+                save(rows, meta)
 
 
 if __name__ == "__main__":
