@@ -28,7 +28,7 @@ import numpy as np
 from ..io import atomic_path
 from .maps import AUTO_TO_MAP, CAP_DB, DYNAMIC_RANGE_DB, _sigma0_error
 
-__all__ = ["N_BOOT", "bootstrap_cell", "measured_maps_3d", "write_measured_3d"]
+__all__ = ["N_BOOT", "TAGS", "bootstrap_cell", "measured_maps_3d", "write_measured_3d"]
 
 #: Bootstrap resamples per cell.
 N_BOOT = 2000
@@ -81,10 +81,22 @@ def bootstrap_cell(mom: np.ndarray, models: dict, *, n_boot: int = N_BOOT, seed:
     return {"errors": errors, "se": out_se, "pair_se": pair}
 
 
+#: Map tag per correlation.
+TAGS = {"gaussian": "pec3d", "exponential": "pec3d_exp"}
+
+
 def measured_maps_3d(cells: list[dict], *, n_boot: int = N_BOOT) -> list[dict]:
-    """The 3-D map (one: Gaussian PEC) from the sample cells of pec_table_samples.json: grids
-    ``theta_i_deg × k_sigma × k_l`` and per candidate ``errors`` / ``se`` [dB], per pair
-    ``pair_se`` [dB], and ``realizations`` per cell (None where a cell is missing)."""
+    """The 3-D maps (PEC; one per correlation, cells without one are Gaussian) from the sample
+    cells of pec_table_samples.json: grids ``theta_i_deg × k_sigma × k_l`` and per candidate
+    ``errors`` / ``se`` [dB], per pair ``pair_se`` [dB], and ``realizations`` per cell (None
+    where a cell is missing)."""
+    groups: dict = {}
+    for c in cells:
+        groups.setdefault(str(c.get("correlation", "gaussian")), []).append(c)
+    return [_map_3d(corr, groups[corr], n_boot) for corr in TAGS if corr in groups]
+
+
+def _map_3d(correlation: str, cells: list[dict], n_boot: int) -> dict:
     inverse = {row: name for name, row in AUTO_TO_MAP.items()}
     ti = sorted({float(c["theta_i_deg"]) for c in cells})
     ks = sorted({float(c["k_sigma"]) for c in cells})
@@ -110,22 +122,20 @@ def measured_maps_3d(cells: list[dict], *, n_boot: int = N_BOOT) -> list[dict]:
             se[name][i][j][m] = round(s, 3) if math.isfinite(s) else None
         for p, v in got["pair_se"].items():
             pairs[p][i][j][m] = round(v, 3) if math.isfinite(v) else None
-    return [
-        {
-            "tag": "pec3d",
-            "correlation": "gaussian",
-            "medium": "conductor",
-            "eps": "pec",
-            "dimension": 2,
-            "theta_i_deg": ti,
-            "k_sigma": ks,
-            "k_l": kl,
-            "realizations": real,
-            "errors": errors,
-            "se": se,
-            "pair_se": pairs,
-        }
-    ]
+    return {
+        "tag": TAGS[correlation],
+        "correlation": correlation,
+        "medium": "conductor",
+        "eps": "pec",
+        "dimension": 2,
+        "theta_i_deg": ti,
+        "k_sigma": ks,
+        "k_l": kl,
+        "realizations": real,
+        "errors": errors,
+        "se": se,
+        "pair_se": pairs,
+    }
 
 
 def write_measured_3d(samples, path=None, *, n_boot: int = N_BOOT) -> Path:
