@@ -231,3 +231,25 @@ def test_shipped_table_prefers_the_iem_to_first_order_spm_at_k_sigma_0_3():
     assert name == "iem" and rep["picked_by"] == "measured-3d" and rep["valid"]
     spm = dict(ranked)["spm"]
     assert spm["valid"] and spm["measured_3d_error_dB"] - rep["measured_3d_error_dB"] > 1.0
+
+
+def test_writer_and_loader_name_what_is_wrong(tmp_path):
+    with pytest.raises(FileNotFoundError, match="samples=.*no such file"):
+        write_measured_3d(tmp_path / "none.json", tmp_path / "t.json")
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"schema": "other/1", "cells": []}))
+    with pytest.raises(ValueError, match="schema 'other/1', expected 'mom3d_pec_samples/1'"):
+        write_measured_3d(bad, tmp_path / "t.json")
+    broken = tmp_path / "broken.json"
+    broken.write_text(json.dumps({"maps": [{"tag": "x", "k_sigma": [0.1]}]}))
+    with pytest.raises(ValueError, match="map without 'theta_i_deg'"):
+        measured.load_table_3d(str(broken))
+
+
+def test_lookup_takes_a_table_by_path(table):
+    path = table({"spm": 1.5, "iem": 0.5}, {"spm": 0.2, "iem": 0.1}, {"spm|iem": 0.05})
+    got = measured.measured_errors_3d(ROUGH, K, "pec", TI, path=path)
+    assert got["map"] == "synthetic" and got["errors"]["spm"] == 1.5
+    assert measured.combined_se(got, "iem", "spm") == 0.05
+    assert measured.significant_pick(got, "spm", NAMES) == "iem"
+    assert measured.significant_pick(got, "iem", NAMES) is None
