@@ -1,7 +1,10 @@
 """The 3-D PEC method of moments against SPM, PO, GO and the IEM over kσ × kℓ × θi: a small
 validation table in the format of the 1-D validity maps (issue 19).
 
-Gaussian perfect conductor, kσ ∈ ``--k-sigma`` (default 0.1 0.3 1), kℓ ∈ ``--k-l`` (3 7),
+Perfect conductor of ``--correlation`` ``gaussian`` (default) or ``exponential`` (not in the
+stored table: at 8 points/λ its energy per realization is 0.93 at kσ = 0.3, kℓ = 3 and 0.65 at
+kσ = 1 — the exponential's fine-scale roughness needs a denser grid than this dense solver
+holds at 6λ), kσ ∈ ``--k-sigma`` (default 0.1 0.3 1), kℓ ∈ ``--k-l`` (3 7),
 θi ∈ ``--theta-i`` (20° 40°); per cell ``--realizations`` surfaces (default 4, seeds
 ``SeedSequence(seed).spawn``) on a ``--length`` λ square patch (default 6) at 8 points/λ
 through ``emscatter.solvers.mom3d.bistatic`` (``--client local`` runs the realizations on a
@@ -23,15 +26,24 @@ Columns: those of validation/validity_maps/validity_pec.csv plus ``theta_i_deg``
 ``correlation``, ``dimension`` (2), ``length_wavelengths``, ``energy_min`` (smallest
 per-realization energy ratio of the cell, 1 for a PEC). Schema ``mom3d_pec_table/1``.
 
+Per-realization data (``pec_table_samples.json``, schema ``mom3d_pec_samples/1``): per cell
+each realization's pooled co-pol bins of mom3d (``info["sigma0_samples"]`` through the same
+row mean and bin means: ``mom[j][pol][bin]``, pol 0 = h, 1 = v) and the models' bins
+(``models[m][pol][bin]``) with their validity, so that the error's Monte Carlo uncertainty
+can be bootstrapped over the realizations
+(:func:`emscatter.validation.measured_table_3d.write_measured_3d` writes auto's 3-D table
+from it).
+
 Run: PYTHONPATH=src python validation/mom3d/pec_table.py [--theta-i 20 40] [--k-sigma …]
      [--k-l …] [--realizations 4] [--length 6] [--client local]
-Rows of a θi already in pec_table.csv are replaced, others kept (run θi one at a time to keep
-each command short); pec_table.md is rewritten from the whole CSV.
+Rows (and samples) of the cells run are replaced, others kept (run a few cells at a time to
+keep each command short); pec_table.md is rewritten from the whole CSV.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import time
 import warnings
@@ -42,17 +54,19 @@ import numpy as np
 import emscatter as em
 from emscatter.io import atomic_path, read_csv, write_csv
 from emscatter.solvers import mom3d
-from emscatter.spectra import GaussianCorrelation
+from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 from emscatter.validation.maps import _bin_means, _sigma0_error
 
 HERE = Path(__file__).resolve().parent
 CSV, MD = HERE / "pec_table.csv", HERE / "pec_table.md"
+SAMPLES = HERE / "pec_table_samples.json"
 K = 2 * math.pi  # λ = 1 m
 PPW = 8.0
 MODELS = {"spm1": "spm", "po": "po", "go": "go", "iem": "iem"}
 KY = (-0.14, 0.0, 0.14)
 SIGNED = np.arange(-60.0, 61.0, 2.0)
 EDGES = np.arange(-60.0, 61.0, 10.0)
+CORRELATIONS = {"gaussian": GaussianCorrelation, "exponential": ExponentialCorrelation}
 HEADER = [
     "k_sigma", "k_l", "rms_slope", "method", "pol", "error_dB", "max_error_dB", "n_bins",
     "mom_se_dB", "valid", "auto", "status", "realizations", "unknowns", "seconds",
@@ -74,8 +88,10 @@ def binned(sig):
     return _bin_means(SIGNED, sig.mean(axis=-2), EDGES)
 
 
-def cell(ks, kl, tdeg, realizations, length, seed, client):
-    rough = GaussianCorrelation(ks / K, kl / K)
+def cell(ks, kl, tdeg, realizations, length, seed, client, correlation="gaussian"):
+    rough = CORRELATIONS[correlation](ks / K, kl / K)
+    # rms slope per axis: √2 σ/ℓ (Gaussian); unbounded for the exponential (nan)
+    slope = math.sqrt(2) * ks / kl if correlation == "gaussian" else math.nan
     ti = math.radians(tdeg)
     ts, ps = directions()
     t0 = time.perf_counter()
@@ -86,6 +102,10 @@ def cell(ks, kl, tdeg, realizations, length, seed, client):
     mom = per.mean(axis=0)
     se = per.std(axis=0, ddof=1) / math.sqrt(realizations)
     out = []
+    sample = {"correlation": correlation, "theta_i_deg": tdeg, "k_sigma": ks, "k_l": kl,
+              "realizations": realizations, "seed": seed, "length_wavelengths": length,
+              "mom": _g(np.stack([per[:, 0, 0], per[:, 1, 1]], axis=1)),
+              "models": {}, "valid": {}}  # fmt: skip
     for m, name in MODELS.items():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -100,15 +120,17 @@ def cell(ks, kl, tdeg, realizations, length, seed, client):
         except (ValueError, Warning):
             valid = False
         approx = binned(s.sigma0)
+        sample["models"][m] = _g(np.stack([approx[0, 0], approx[1, 1]]))
+        sample["valid"][m] = valid
         for pol, a in (("h", 0), ("v", 1)):
             e = _sigma0_error(mom[a, a], se[a, a], approx[a, a])
             out.append({
-                "k_sigma": ks, "k_l": kl, "rms_slope": math.sqrt(2) * ks / kl, "method": m,
+                "k_sigma": ks, "k_l": kl, "rms_slope": slope, "method": m,
                 "pol": pol, "error_dB": e["error_dB"], "max_error_dB": e["max_error_dB"],
                 "n_bins": e["n_bins"], "mom_se_dB": e["se_dB"], "valid": str(valid),
                 "status": "ok" if e["n_bins"] else "no MoM bin above noise",
                 "realizations": realizations, "unknowns": res.info["unknowns"],
-                "seconds": seconds, "theta_i_deg": tdeg, "correlation": "gaussian",
+                "seconds": seconds, "theta_i_deg": tdeg, "correlation": correlation,
                 "dimension": 2, "length_wavelengths": length,
                 "energy_min": float(res.info["energy"].min()),
             })  # fmt: skip
@@ -117,9 +139,37 @@ def cell(ks, kl, tdeg, realizations, length, seed, client):
     for r in out:
         r["auto"] = best
     e_min = res.info["energy"].min()
-    print(f"kσ={ks:g} kℓ={kl:g} θi={tdeg:g}°: {seconds:.0f} s, energy ≥ {e_min:.4f}, "
+    print(f"{correlation} kσ={ks:g} kℓ={kl:g} θi={tdeg:g}°: {seconds:.0f} s, energy ≥ {e_min:.4f}, "
           f"best {best} {worst[best]:.2f} dB", flush=True)  # fmt: skip
-    return out
+    return out, sample
+
+
+def _g(a):
+    """A float array as nested lists of 7 significant digits (compact JSON)."""
+    return np.vectorize(lambda x: float(f"{x:.7g}"), otypes=[object])(a).tolist()
+
+
+def _key(d):
+    corr = str(d.get("correlation", "gaussian"))
+    return (corr, float(d["theta_i_deg"]), float(d["k_sigma"]), float(d["k_l"]))
+
+
+def load_samples() -> list[dict]:
+    """The per-realization cells of ``pec_table_samples.json`` (empty when missing)."""
+    if not SAMPLES.exists():
+        return []
+    return json.loads(SAMPLES.read_text())["cells"]
+
+
+def save_samples(cells: list[dict]) -> None:
+    doc = {"schema": "mom3d_pec_samples/1",
+           "about": "per-realization pooled co-pol bins of mom3d (mom[j][pol][bin], pol 0 = h, "
+                    "1 = v) and the models' bins, per cell of pec_table.csv; written by "
+                    "validation/mom3d/pec_table.py",
+           "bins_deg": EDGES.tolist(), "ky_rows": list(KY), "points_per_wavelength": PPW,
+           "cells": sorted(cells, key=_key)}  # fmt: skip
+    with atomic_path(SAMPLES) as tmp:
+        Path(tmp).write_text(json.dumps(doc, ensure_ascii=False, separators=(",", ":")) + "\n")
 
 
 def _load():
@@ -138,7 +188,7 @@ def save(rows, meta):
         cols.append(np.array(vals, dtype=object if h in TEXT else float))
     write_csv(CSV, HEADER, cols, metadata=meta, schema="mom3d_pec_table/1")
     lines = [
-        "# mom3d (PEC, 3-D) vs SPM1 / PO / GO / IEM — Gaussian correlation",
+        "# mom3d (PEC, 3-D) vs SPM1 / PO / GO / IEM — Gaussian and exponential correlation",
         "",
         "rms dB error of each model against the exact 3-D σ⁰ (co-pol, 10° bins of θs ∈ "
         "[−60°, 60°] in the plane of incidence, pooled over k_y/k ∈ {−0.14, 0, 0.14}); "
@@ -152,15 +202,15 @@ def save(rows, meta):
         "one smoothed over that width, the models' are not, which raises the error of every "
         "model where σ⁰ falls steeply away from specular (kℓ = 7).",
         "",
-        "| θi | kσ | kℓ | slope | real. | L/λ | energy ≥ | s | "
+        "| corr. | θi | kσ | kℓ | slope | real. | L/λ | energy ≥ | s | "
         + " | ".join(MODELS)
         + " | mom3d SE dB |",
-        "|---" * (9 + len(MODELS)) + "|",
+        "|---" * (10 + len(MODELS)) + "|",
     ]
-    keys = sorted({(float(r["theta_i_deg"]), float(r["k_sigma"]), float(r["k_l"])) for r in rows})
-    for t, ks, kl in keys:
-        sub = [r for r in rows if (float(r["theta_i_deg"]), float(r["k_sigma"]),
-                                   float(r["k_l"])) == (t, ks, kl)]  # fmt: skip
+    keys = sorted({_key(r) for r in rows})
+    for key in keys:
+        corr, t, ks, kl = key
+        sub = [r for r in rows if _key(r) == key]
         r0 = sub[0]
         cells = []
         for m in MODELS:
@@ -170,7 +220,7 @@ def save(rows, meta):
             txt = f"**{txt}**\\*" if r0["auto"] == m else txt
             cells.append(txt if str(v) == "True" else f"({txt})")
         lines.append(
-            f"| {t:g}° | {ks:g} | {kl:g} | {float(r0['rms_slope']):.2f} | "
+            f"| {corr[:3]} | {t:g}° | {ks:g} | {kl:g} | {float(r0['rms_slope']):.2f} | "
             f"{int(float(r0['realizations']))} | {float(r0['length_wavelengths']):g} | "
             f"{float(r0['energy_min']):.3f} | {float(r0['seconds']):.0f} | "
             + " | ".join(cells)
@@ -188,18 +238,22 @@ def main(argv=None) -> None:
     ap.add_argument("--realizations", type=int, default=4)
     ap.add_argument("--length", type=float, default=6.0)
     ap.add_argument("--seed", type=int, default=19)
+    ap.add_argument("--correlation", choices=sorted(CORRELATIONS), default="gaussian")
     ap.add_argument("--client", default=None, help="None (serial) or 'local' / 'tcp://…'")
     args = ap.parse_args(argv)
-    rows, meta = _load()
-    rows = [r for r in rows if float(r["theta_i_deg"]) not in args.theta_i]
+    rows = _load()[0]
+    meta = {"points_per_wavelength": PPW, "seed": args.seed, "emscatter": em.__version__,
+            "models": MODELS, "ky_rows": KY, "bins_deg": EDGES.tolist()}  # fmt: skip
+    samples = load_samples()
     for tdeg in args.theta_i:
         for ks in args.k_sigma:
             for kl in args.k_l:
-                rows += cell(ks, kl, tdeg, args.realizations, args.length, args.seed,
-                             args.client)  # fmt: skip
-    meta = {"points_per_wavelength": PPW, "seed": args.seed, "emscatter": em.__version__,
-            "models": MODELS, "ky_rows": KY, "bins_deg": EDGES.tolist()}  # fmt: skip
-    save(rows, meta)
+                new, sample = cell(ks, kl, tdeg, args.realizations, args.length, args.seed,
+                                   args.client, args.correlation)  # fmt: skip
+                rows = [r for r in rows if _key(r) != _key(sample)] + new
+                samples = [c for c in samples if _key(c) != _key(sample)] + [sample]
+                save_samples(samples)  # after each cell: a stopped run keeps what it made
+                save(rows, meta)
 
 
 if __name__ == "__main__":

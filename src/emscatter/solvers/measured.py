@@ -15,6 +15,19 @@ The table is ``emscatter/solvers/data/measured_errors.json``, written from the m
 :func:`emscatter.validation.measured_table.write_measured` (the command is in
 validation/validity_maps/README.md). Outside the box, for other spectra (power law, band-limited,
 anisotropic) or media of unknown class the lookup returns ``None`` and the criteria decide.
+
+**3-D cells** (:func:`measured_errors_3d`): the 3-D method of moments' validation cells
+(validation/mom3d/pec_table.py: 2-D Gaussian PEC surfaces, θi ∈ {20°, 40°}, kσ ∈ {0.1, 0.3,
+1}, kℓ ∈ {3, 7}) measure what the 1-D maps cannot — 2-D surfaces, where polarizations
+couple. Their table, ``data/measured_errors_3d.json`` (written by
+:func:`emscatter.validation.measured_table_3d.write_measured_3d`), carries per cell and
+candidate the error [dB] and its Monte Carlo standard error (bootstrap over the realizations)
+and per pair of candidates the SE of their difference. The lookup applies to 2-D isotropic
+roughness of the table's correlation and medium class only, at the nearest cell in
+``(θi, log kσ, log kℓ)`` — every requested θi nearest to the same table θi, none more than
+half a step beyond the ends — and returns None elsewhere (then the 1-D maps apply as before).
+:func:`significant_pick` is the rule the ranking applies to it (no tolerance to calibrate:
+a difference counts only beyond :data:`SIGNIFICANCE` combined standard errors).
 """
 
 from __future__ import annotations
@@ -34,11 +47,20 @@ __all__ = [
     "load_table",
     "cell_roughness",
     "interpolated_errors",
+    "TABLE_3D_PATH",
+    "SIGNIFICANCE",
+    "load_table_3d",
+    "measured_errors_3d",
+    "significant_pick",
+    "combined_se",
 ]
 
 TABLE_PATH = Path(__file__).with_name("data") / "measured_errors.json"
 #: A candidate is "within tolerance" where its measured error is at most this [dB].
 TOL_DB = 1.0
+TABLE_3D_PATH = Path(__file__).with_name("data") / "measured_errors_3d.json"
+#: A 3-D cell reorders only where a difference exceeds this many combined standard errors.
+SIGNIFICANCE = 2.0
 
 
 @lru_cache(maxsize=1)
@@ -167,3 +189,102 @@ def interpolated_errors(roughness, k: float, eps) -> dict | None:
         errors[name] = sum(w * float(e) for w, e in have) / weight if weight > 0 else math.nan
         avail[name] = fade * weight
     return {"errors": errors, "availability": avail, "map": m["tag"]}
+
+
+# ----------------------------------------------------------------------------- 3-D cells
+@lru_cache(maxsize=4)
+def load_table_3d(path: str | None = None) -> dict:
+    """The 3-D table (``{"maps": [...]}``, module docstring) at ``path`` (default
+    :data:`TABLE_3D_PATH`); empty when the file is missing."""
+    p = Path(path) if path else TABLE_3D_PATH
+    if not p.exists():
+        return {"maps": []}
+    doc = json.loads(p.read_text())
+    for m in doc.get("maps", []):
+        for key in ("theta_i_deg", "k_sigma", "k_l", "errors", "se"):
+            if key not in m:
+                raise ValueError(f"measured 3-D table {str(p)!r}: map without {key!r}")
+    return doc
+
+
+def _nearest_linear(grid: np.ndarray, values: np.ndarray) -> int | None:
+    """The one grid index nearest to every value (linear scale), None if they differ or one
+    lies beyond half a step outside."""
+    step = float(np.min(np.diff(grid))) if grid.size > 1 else 20.0
+    if np.any(values < grid[0] - step / 2) or np.any(values > grid[-1] + step / 2):
+        return None
+    idx = np.unique(np.argmin(np.abs(values[:, None] - grid[None, :]), axis=1))
+    return int(idx[0]) if idx.size == 1 else None
+
+
+def measured_errors_3d(roughness, k: float, eps, theta_i, path: str | None = None) -> dict | None:
+    """The 3-D cell for this roughness, ``k`` [rad/m], medium and incidence ``theta_i`` [rad]
+    (any shape): ``{"errors", "se": {method: dB or nan}, "pair_se": {(a, b): dB},
+    "cell": (θi°, kσ, kℓ), "realizations", "map"}``; None where no cell applies (module
+    docstring). ``path``: another table (default :data:`TABLE_3D_PATH`)."""
+    family, medium = _family(roughness), medium_class(eps)
+    if family is None or medium is None or theta_i is None or roughness.dimension != 2:
+        return None
+    ti = np.degrees(np.ravel(np.asarray(theta_i, dtype=float)))
+    if ti.size == 0 or not np.all(np.isfinite(ti)):
+        return None
+    for m in load_table_3d(str(path) if path else None)["maps"]:
+        if m["correlation"] != family or m["medium"] != medium:
+            continue
+        a = _nearest_linear(np.asarray(m["theta_i_deg"], dtype=float), ti)
+        i = _nearest(np.asarray(m["k_sigma"], dtype=float), k * roughness.sigma)
+        j = _nearest(np.asarray(m["k_l"], dtype=float), k * roughness.length)
+        if a is None or i is None or j is None:
+            return None
+
+        def at(grid, a=a, i=i, j=j):
+            v = grid[a][i][j]
+            return math.nan if v is None else float(v)
+
+        errors = {n: at(g) for n, g in m["errors"].items()}
+        if not any(math.isfinite(e) for e in errors.values()):
+            return None  # the cell was not computed
+        pairs = {}
+        for key, g in m.get("pair_se", {}).items():
+            x, y = key.split("|")
+            pairs[(x, y)] = pairs[(y, x)] = at(g)
+        real = m.get("realizations")
+        return {
+            "errors": errors,
+            "se": {n: at(g) for n, g in m["se"].items()},
+            "pair_se": pairs,
+            "cell": (m["theta_i_deg"][a], m["k_sigma"][i], m["k_l"][j]),
+            "realizations": None if real is None else real[a][i][j],
+            "map": m["tag"],
+        }
+    return None
+
+
+def combined_se(meas: dict, a: str, b: str) -> float:
+    """The SE [dB] of ``error(a) − error(b)`` in a 3-D cell: the paired bootstrap one where
+    the table has it, else ``√(se_a² + se_b²)`` (independent errors: larger)."""
+    s = meas["pair_se"].get((a, b), math.nan)
+    if math.isfinite(s):
+        return s
+    return math.hypot(meas["se"].get(a, math.nan), meas["se"].get(b, math.nan))
+
+
+def significant_pick(meas: dict, first: str, candidates) -> str | None:
+    """The candidate to put before ``first`` by a 3-D cell, or None: among ``candidates``
+    (in order; others than ``first``) those measured lower than ``first`` by more than
+    :data:`SIGNIFICANCE` combined standard errors (:func:`combined_se`), the one measured
+    lowest (ties: the earlier). None where ``first`` or every other has no measurement, or
+    no difference is significant."""
+    err = meas["errors"]
+    e0 = err.get(first, math.nan)
+    if not math.isfinite(e0):
+        return None
+    best, best_err = None, math.inf
+    for n in candidates:
+        e = err.get(n, math.nan)
+        if n == first or not math.isfinite(e):
+            continue
+        s = combined_se(meas, first, n)
+        if math.isfinite(s) and e0 - e > SIGNIFICANCE * s and e < best_err:
+            best, best_err = n, e
+    return best

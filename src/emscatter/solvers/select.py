@@ -25,6 +25,18 @@ within 1 dB, the candidates without angle-specific failures are ordered by measu
 carries ``measured_error_dB`` and the first one ``measured`` (map, cell) and ``picked_by``
 (``"criteria"`` or ``"measured"``).
 
+**3-D cells** (:func:`.measured.measured_errors_3d`, the 3-D method of moments' cells for 2-D
+surfaces): they take precedence over the 1-D maps, with a rule that needs no tolerance: in the
+same regime test, the criteria's first method gives way only to a candidate measured lower by
+more than 2 combined standard errors of the Monte Carlo (:func:`.measured.significant_pick`:
+the paired bootstrap SE of the difference) and with no angle-specific failure; then
+``picked_by = "measured-3d"`` and the 1-D correction is skipped. Where the cell applies but
+no difference is significant, the 1-D correction runs as before — unless the 3-D cell
+measures the 1-D correction's pick significantly worse than the criteria's first (then that
+stays, ``picked_by = "measured-3d"``). Every report then carries
+``measured_3d_error_dB`` and ``measured_3d_se_dB`` and the first one ``measured_3d``
+(map, cell (θi°, kσ, kℓ), realizations).
+
 :func:`check_options` maps the solver options a caller passed to the method actually used:
 an option of that method is kept; an accuracy or execution knob that a closed-form method
 satisfies anyway (``threads``, ``rtol``, ``max_terms``) is dropped; ``shadowing=False`` is
@@ -102,7 +114,13 @@ def rank_methods(
 
     Raises ValueError when no method supports the roughness."""
     ranked, reports = _criteria_rank(roughness, k, eps, theta_i, methods)
-    ranked = _measured_correction(ranked, reports, roughness, k, eps, theta_i, methods)
+    ranked, meas3 = _measured_3d(ranked, reports, roughness, k, eps, theta_i, methods)
+    if not reports[ranked[0]].get("picked_by") == "measured-3d":
+        kept, saved = list(ranked), dict(reports)
+        ranked = _measured_correction(ranked, reports, roughness, k, eps, theta_i, methods)
+        if meas3 is not None and _vetoed(meas3, ranked[0], kept[0]):
+            ranked, reports = kept, saved  # the 3-D cell measures the 1-D pick worse
+            reports[kept[0]] = {**reports[kept[0]], "picked_by": "measured-3d"}
     ranked += [n for n in methods if reports[n].get("unsupported")]
     return [(n, reports[n]) for n in ranked]
 
@@ -127,31 +145,75 @@ def _criteria_rank(roughness, k, eps, theta_i, methods) -> tuple[list[str], dict
     return sorted(supported, key=key), reports
 
 
+def _same_regime(ranked, reports, roughness, k, eps, theta_i, methods, cell) -> bool:
+    """A cell speaks for this roughness only if the criteria put its centre ``cell``
+    ``(kσ, kℓ)`` in the same regime (same first method, equally valid)."""
+    from .measured import cell_roughness
+
+    center, center_reports = _criteria_rank(
+        cell_roughness(roughness, k, cell), k, eps, theta_i, methods
+    )
+    first = ranked[0]
+    return center[:1] == [first] and center_reports[first]["valid"] == reports[first]["valid"]
+
+
+def _angles_ok(r: dict) -> bool:
+    """No angle-specific failure (an angle check failing by more than the roughness checks)."""
+    a = r.get("angle_valid")
+    if a is None or bool(np.all(a)):
+        return True
+    worst = float(np.max(r.get("angle_excess", math.inf)))
+    return worst <= r.get("roughness_excess", 0.0) + 1e-9
+
+
+def _vetoed(meas3: dict, pick: str, first: str) -> bool:
+    """Whether a 3-D cell measures the 1-D correction's ``pick`` significantly worse than the
+    criteria's ``first`` (then ``first`` stays: 3-D cells take precedence)."""
+    from .measured import significant_pick
+
+    return pick != first and significant_pick(meas3, pick, [first]) == first
+
+
+def _measured_3d(ranked, reports, roughness, k, eps, theta_i, methods):
+    """The 3-D cells' correction (module docstring): the ranking and the cell (None where no
+    cell applies); the first report's ``picked_by`` is ``"measured-3d"`` where it decided."""
+    from .measured import measured_errors_3d, significant_pick
+
+    meas = measured_errors_3d(roughness, k, eps, theta_i)
+    if meas is None or not ranked:
+        return ranked, None
+    if not _same_regime(ranked, reports, roughness, k, eps, theta_i, methods, meas["cell"][1:]):
+        return ranked, None
+    for n in ranked:
+        reports[n] = {**reports[n], "measured_3d_error_dB": meas["errors"].get(n, math.nan),
+                      "measured_3d_se_dB": meas["se"].get(n, math.nan)}  # fmt: skip
+    info = {"map": meas["map"], "cell": meas["cell"], "realizations": meas["realizations"]}
+    first = ranked[0]
+    pick = significant_pick(meas, first, [n for n in ranked if _angles_ok(reports[n])])
+    if pick is None:
+        reports[first] = {**reports[first], "measured_3d": info}
+        return ranked, meas
+    ranked = [pick] + [n for n in ranked if n != pick]
+    reports[pick] = {**reports[pick], "measured_3d": info, "picked_by": "measured-3d"}
+    return ranked, meas
+
+
 def _measured_correction(ranked, reports, roughness, k, eps, theta_i, methods) -> list[str]:
     """The criteria's ranking corrected by the measured map errors (module docstring)."""
-    from .measured import TOL_DB, cell_roughness, measured_errors
+    from .measured import TOL_DB, measured_errors
 
     meas = measured_errors(roughness, k, eps)
     if meas is None or not ranked:
         return ranked
-    # the cell speaks for this roughness only if the criteria put both in the same regime
-    center, center_reports = _criteria_rank(
-        cell_roughness(roughness, k, meas["cell"]), k, eps, theta_i, methods
-    )
     first = ranked[0]
-    if center[:1] != [first] or center_reports[first]["valid"] != reports[first]["valid"]:
+    if not _same_regime(ranked, reports, roughness, k, eps, theta_i, methods, meas["cell"]):
         return ranked
     err = {n: meas["errors"].get(n, math.nan) for n in ranked}
     for n in ranked:
         reports[n] = {**reports[n], "measured_error_dB": err[n]}
 
-    def angles_ok(n):  # no angle-specific failure (one worse than the roughness checks')
-        r = reports[n]
-        a = r.get("angle_valid")
-        if a is None or bool(np.all(a)):
-            return True
-        worst = float(np.max(r.get("angle_excess", math.inf)))
-        return worst <= r.get("roughness_excess", 0.0) + 1e-9
+    def angles_ok(n):
+        return _angles_ok(reports[n])
 
     good = [n for n in methods if n in err and err[n] <= TOL_DB and angles_ok(n)]
     picked_by = "criteria"
