@@ -274,10 +274,14 @@ def significant_pick(meas: dict, first: str, candidates) -> str | None:
     (in order; others than ``first``) those measured lower than ``first`` by more than
     :data:`SIGNIFICANCE` combined standard errors (:func:`combined_se`), the one measured
     lowest (ties: the earlier). None where ``first`` or every other has no measurement, or
-    no difference is significant."""
+    no difference is significant. The 1-D maps' tolerance :data:`TOL_DB` applies as there:
+    ``first`` keeps its place while it is measured within it, and a candidate takes it only
+    when measured within it or better than ``first`` by more than it — differences below it
+    are smaller than the cells' systematic errors (the 6λ beam's smoothing, the bin rule),
+    which the bootstrap does not see."""
     err = meas["errors"]
     e0 = err.get(first, math.nan)
-    if not math.isfinite(e0):
+    if not math.isfinite(e0) or e0 <= TOL_DB:
         return None
     best, best_err = None, math.inf
     for n in candidates:
@@ -285,6 +289,7 @@ def significant_pick(meas: dict, first: str, candidates) -> str | None:
         if n == first or not math.isfinite(e):
             continue
         s = combined_se(meas, first, n)
-        if math.isfinite(s) and e0 - e > SIGNIFICANCE * s and e < best_err:
+        material = e <= TOL_DB or e0 - e > TOL_DB  # within tolerance, or better by more
+        if math.isfinite(s) and e0 - e > SIGNIFICANCE * s and material and e < best_err:
             best, best_err = n, e
     return best

@@ -27,9 +27,10 @@ carries ``measured_error_dB`` and the first one ``measured`` (map, cell) and ``p
 
 **3-D cells** (:func:`.measured.measured_errors_3d`, the 3-D method of moments' cells for 2-D
 surfaces): they take precedence over the 1-D maps, with a rule that needs no tolerance: in the
-same regime test, the criteria's first method gives way only to a candidate measured lower by
-more than 2 combined standard errors of the Monte Carlo (:func:`.measured.significant_pick`:
-the paired bootstrap SE of the difference) and with no angle-specific failure; then
+same regime test, the criteria's first method, when measured more than 1 dB off, gives way
+only to a candidate measured lower by more than 2 combined standard errors of the Monte Carlo
+(:func:`.measured.significant_pick`: the paired bootstrap SE of the difference), measured within
+1 dB or better by more than 1 dB (the 1-D maps' tolerance), and with no angle-specific failure; then
 ``picked_by = "measured-3d"`` and the 1-D correction is skipped. Where the cell applies but
 no difference is significant, the 1-D correction runs as before — unless the 3-D cell
 measures the 1-D correction's pick significantly worse than the criteria's first (then that
