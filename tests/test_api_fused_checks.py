@@ -95,3 +95,19 @@ def test_numpy_backend_and_small_or_strided_inputs_take_the_plain_checks(monkeyp
     assert api._checked_copy(ti.astype(np.float32), 0.0, math.pi / 2) is None
     monkeypatch.setenv("EMSCATTER_KERNELS", "numpy")
     assert api._checked_copy(ti, 0.0, math.pi / 2) is None
+
+
+def test_azimuth_gate_one_pass_agrees_with_min_max():
+    from emscatter.kernels.gate import MAX_AZIMUTH, azimuth_ok
+
+    _, _, ps = _angles()
+    ps = ps.copy()
+    ps[2] = 0.5
+    assert azimuth_ok(ps)
+    for bad in (math.nan, MAX_AZIMUTH * (1 + 1e-15), -math.inf):
+        p = ps.copy()
+        p[N - 1] = bad
+        assert not azimuth_ok(p)
+    p = ps.copy()
+    p[0] = -MAX_AZIMUTH  # the bound itself is inside
+    assert azimuth_ok(p)

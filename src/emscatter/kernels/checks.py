@@ -15,7 +15,7 @@ import numpy as np
 
 from ._runtime import jit
 
-__all__ = ["copy_in_range"]
+__all__ = ["copy_in_range", "all_in_range"]
 
 
 @jit
@@ -34,3 +34,19 @@ def copy_in_range(value: np.ndarray, low: float, high: float) -> np.ndarray | No
     out = np.empty_like(value)
     ok = _copy_in_range(value.reshape(-1), out.reshape(-1), float(low), float(high))
     return out if ok else None
+
+
+@jit
+def _all_in_range(src, low, high):
+    ok = True
+    for j in range(src.size):
+        v = src[j]
+        ok &= (v >= low) & (v <= high)  # NaN: False
+    return ok
+
+
+def all_in_range(value: np.ndarray, low: float, high: float) -> bool:
+    """Whether every element of the C-contiguous float64 array ``value`` lies in
+    ``[low, high]`` (NaN does not): ``low <= value.min() and value.max() <= high`` in one
+    pass instead of two."""
+    return bool(_all_in_range(value.reshape(-1), float(low), float(high)))
