@@ -19,7 +19,10 @@ the process CPU time (``cpu_median_s``, all threads): on a shared machine the ra
 GO rows add the kernel writing into a fresh output array each call (``kernel_fresh_out``: the
 floor of a call that returns new arrays — the page faults of 32 MB at 1e6) and a plain numpy
 Cook–Torrance (:func:`cook_torrance`, one polarization), the peer
-the compiled path is compared with.
+the compiled path is compared with. ``api_numba_plain_checks`` is the compiled API with its
+input checks done by numpy (``check_angle``: min, max, then a copy) instead of the fused
+check-and-copy pass of :mod:`emscatter.kernels.checks` — the before/after of that change in one
+process (``api_plain_checks_over_api_numba``).
 
 cold — per method, a fresh Python process times ``import emscatter`` and then its first call:
 ``backscatter`` at 91 angles (the default kernel selection) and ``bistatic`` at 1e5 geometries
@@ -146,6 +149,18 @@ def _contenders(method, n):
     for backend in ("numba", "numpy"):
         runs[f"solver_{backend}"] = (backend, solver)
         runs[f"api_{backend}"] = (backend, api)
+    from emscatter import api as api_mod
+
+    fused = api_mod._checked_copy
+
+    def api_plain_checks():  # the API before the fused check + copy (the numpy checks)
+        api_mod._checked_copy = lambda *a, **k: None
+        try:
+            api()
+        finally:
+            api_mod._checked_copy = fused
+
+    runs["api_numba_plain_checks"] = ("numba", api_plain_checks)
     return runs
 
 
@@ -182,6 +197,9 @@ def speed(sizes, repeat, methods=("spm", "go", "po")) -> dict:
                 row["api_over_kernel"] = row["api_numba"]["median_s"] / row["kernel"]["median_s"]
             row["api_numba_over_numpy"] = (
                 row["api_numpy"]["median_s"] / row["api_numba"]["median_s"]
+            )
+            row["api_plain_checks_over_api_numba"] = (
+                row["api_numba_plain_checks"]["median_s"] / row["api_numba"]["median_s"]
             )
             if "cook_torrance_numpy" in row:
                 row["api_numba_over_cook_torrance"] = (

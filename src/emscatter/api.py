@@ -290,11 +290,32 @@ def bistatic(
     k = wavenumber(frequency, wavelength)
     select.check_out_of_range(out_of_range)
     method = _check_method(method)
-    ti = check_angle("theta_i", theta_i)
-    ts = check_angle("theta_s", theta_s)
-    ps = check_finite("phi_s", phi_s).astype(float)
+    ti = _checked_copy(theta_i, 0.0, math.pi / 2)
+    ti = check_angle("theta_i", theta_i) if ti is None else ti
+    ts = _checked_copy(theta_s, 0.0, math.pi / 2)
+    ts = check_angle("theta_s", theta_s) if ts is None else ts
+    ps = _checked_copy(phi_s)
+    ps = check_finite("phi_s", phi_s).astype(float) if ps is None else ps
     pi_ = check_finite("phi_i", phi_i).astype(float)
     return _bistatic_checked(rough, eps, k, (ti, ts, ps, pi_), method, out_of_range, options)
+
+
+def _checked_copy(value, low=-math.inf, high=math.inf):
+    """The checked copy of a large C-contiguous float64 array in ``[low, high]`` (finite) in
+    one compiled pass (:mod:`emscatter.kernels.checks`; bit for bit what ``check_angle`` /
+    ``check_finite(...).astype(float)`` return), or None: a small or other array, the numpy
+    backend, or a value that fails (the usual check then raises its message)."""
+    from .kernels import backend
+    from .kernels.gate import MIN_GEOMETRIES
+
+    if not (
+        type(value) is np.ndarray and value.dtype.char == "d" and value.size >= MIN_GEOMETRIES
+        and value.flags.c_contiguous and backend() == "numba"
+    ):  # fmt: skip
+        return None
+    from .kernels.checks import copy_in_range
+
+    return copy_in_range(value, low, high)
 
 
 def _bistatic_checked(
@@ -330,7 +351,8 @@ def backscatter(
 ) -> Scattering:
     """Monostatic (backscatter) coefficients: ``θs = θi``, ``φs = φi + π``. Parameters as
     :func:`bistatic`."""
-    ti = check_angle("theta_i", theta_i)
+    ti = _checked_copy(theta_i, 0.0, math.pi / 2)
+    ti = check_angle("theta_i", theta_i) if ti is None else ti
     pi_ = np.asarray(check_finite("phi_i", phi_i), dtype=float)
     # bistatic's checks, each once (θs = θi and φs = φi + π need none of their own)
     rough = _check_roughness(surface)

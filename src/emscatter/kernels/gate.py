@@ -53,4 +53,11 @@ def flat(a, n: int, shape: tuple[int, ...] | None = None) -> np.ndarray:
 
 
 def azimuth_ok(dphi: np.ndarray) -> bool:
+    if (
+        dphi.size >= MIN_GEOMETRIES and dphi.dtype.char == "d" and dphi.flags.c_contiguous
+        and "emscatter.kernels._runtime" in sys.modules
+    ):  # fmt: skip
+        from .checks import all_in_range  # one pass, not min and max (issue 22)
+
+        return all_in_range(dphi, -MAX_AZIMUTH, MAX_AZIMUTH)
     return dphi.size == 0 or -MAX_AZIMUTH <= dphi.min() and dphi.max() <= MAX_AZIMUTH
