@@ -3,7 +3,7 @@ sides and transmission through it (plugin ``"emscatter_dielectric"``).
 
 Usage, after ``mi.set_variant(...)`` with an RGB, mono or spectral LLVM variant
 (``llvm_ad_rgb`` and ``llvm_ad_spectral`` tested; ``*_polarized`` variants with Mueller tables:
-:mod:`.dielectric_polarized`)::
+:mod:`.polarized`)::
 
     from emscatter.render import dielectric as em_d
     bsdf = mi.load_dict(em_d.bsdf_dict(reflection=brdf, transmission=btdf, inner=brdf_in))
@@ -30,7 +30,7 @@ in importance mode (adjoint transport) without the ``1/ε``, and the inside case
 ``1/ε`` instead. Components: 0 glossy reflection (outside), 1 glossy transmission, 2 glossy
 reflection inside (when ``inner`` is given); flags front and back side, non-symmetric.
 
-Coherent (delta) lobes (``coherent``, bool, default true; PO/SPM tables, :mod:`.dielectric_delta`):
+Coherent (delta) lobes (``coherent``, bool, default true; PO/SPM tables, :mod:`.delta`):
 the reflection table's ``R_coh`` (mirror), the BTDF's ``T_coh`` (Snell direction, Mitsuba's
 ``dielectric`` radiance scale ``1/ε`` outside, ``ε`` inside), the inner table's ``R_coh``
 and, from inside, ``T_coh`` at the Snell-mapped outside angle; components after the glossy
@@ -61,7 +61,7 @@ interpolation error with this rule; ``tests/test_render_dielectric_dispersive.py
 sampling's refraction frame (Walter's normals refracted at ``η``) takes the mean ``ε``: its
 ``pdf`` is that density exactly, so this costs variance, not bias. RGB and mono variants use
 the mean ``ε`` throughout (one index per path); ``*_spectral_polarized`` takes ``1/ε`` per
-wavelength as here (:mod:`.dielectric_polarized`). The lobe probabilities weigh the
+wavelength as here (:mod:`.polarized`). The lobe probabilities weigh the
 wavelengths by their luminance.
 """
 
@@ -73,13 +73,13 @@ import sys
 
 import numpy as np
 
-from ..brdf.btdf_table import BtdfTable
-from ..brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
-from ..brdf.mueller import MuellerTable
-from ..brdf.table import BrdfTable
-from . import mitsuba as em_mi
-from .dielectric_delta import delta_data, refract
-from .plugin_data import Axis
+from ...brdf.btdf_table import BtdfTable
+from ...brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
+from ...brdf.mueller import MuellerTable
+from ...brdf.table import BrdfTable
+from .. import mitsuba as em_mi
+from .delta import delta_data, refract
+from ..plugin_data import Axis
 
 __all__ = ["PLUGIN_NAME", "bsdf_dict", "register", "register_dielectric"]
 
@@ -99,7 +99,7 @@ def register_dielectric(reflection, transmission, inner=None, key: str | None = 
     """Register the tables of one interface (module docstring); returns the key for
     ``{"type": "emscatter_dielectric", "tables": key}``. ``reflection`` and ``inner`` may be
     :class:`~emscatter.brdf.mueller.MuellerTable` objects (needed in polarized variants,
-    :mod:`.dielectric_polarized`; their ``M₀₀`` elsewhere). With a Mitsuba variant set it
+    :mod:`.polarized`; their ``M₀₀`` elsewhere). With a Mitsuba variant set it
     also registers the plugin (:func:`register`), as :func:`.mitsuba.register_table`."""
     refl_obj, inner_obj = reflection, inner
     reflection, inner = _s0(reflection), _s0(inner)
@@ -132,7 +132,7 @@ def register_dielectric(reflection, transmission, inner=None, key: str | None = 
         "polarized_tables": isinstance(refl_obj, MuellerTable)
         and (inner is None or isinstance(inner_obj, MuellerTable)),
         "transmission": transmission,
-        "r_albedo": reflection.albedo().incoherent,  # the delta lobes: .dielectric_delta
+        "r_albedo": reflection.albedo().incoherent,  # the delta lobes: .delta
         "r_in_albedo": None if inner is None else inner.albedo().incoherent,
         "reflection_table": reflection,
         "inner_table": inner,
@@ -444,7 +444,7 @@ def _bsdf_class(mi):
             out.pdf = dr.select(valid, out.pdf, 0.0)
             return out, dr.select(valid, weight, mi.Spectrum(0.0))
 
-        # ------------------------------------------------ delta lobes (.dielectric_delta)
+        # ------------------------------------------------ delta lobes (.delta)
         def _p_delta(self, ctx, v, active):
             """``(P_δ, P(reflection | δ))`` at the viewer ``v`` for the enabled components."""
             k = self._k_dr
@@ -475,7 +475,7 @@ def _bsdf_class(mi):
             def look(t, axis, z, m):
                 return self._spec(t.eval(mi.Point1f(coord(theta(z), axis)), m), si, kind)
 
-            f_r = mi.fresnel(v.z, self._eta)[0]  # ratios × Fresnel (.dielectric_delta)
+            f_r = mi.fresnel(v.z, self._eta)[0]  # ratios × Fresnel (.delta)
             r = look(self._tex_r, d.ax_r, v.z, active & is_r & out)
             if self._tex_ri is not None:
                 r = dr.select(out, r, look(self._tex_ri, d.ax_ri, v.z, active & is_r & ~out))
@@ -535,7 +535,7 @@ def _bsdf_class(mi):
             )
 
     if "polarized" in mi.variant():
-        from .dielectric_polarized import polarized_dielectric_class
+        from .polarized import polarized_dielectric_class
 
         return polarized_dielectric_class(mi, DielectricBSDF, coord, theta, _SETS)
     return DielectricBSDF
