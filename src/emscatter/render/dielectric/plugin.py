@@ -78,8 +78,8 @@ from ...brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
 from ...brdf.mueller import MuellerTable
 from ...brdf.table import BrdfTable
 from .. import mitsuba as em_mi
-from .delta import delta_data, refract
 from ..plugin_data import Axis
+from .delta import delta_data, refract
 
 __all__ = ["PLUGIN_NAME", "bsdf_dict", "register", "register_dielectric"]
 
