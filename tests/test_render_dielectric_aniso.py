@@ -115,3 +115,21 @@ def test_turning_the_surface_turns_the_lobe():
     assert sel.sum() > 100
     assert np.max(_rel(rot, em, sel)) < 1e-4
     assert np.percentile(_rel(turned, em, sel), 90) > 0.1
+
+
+@needs_mitsuba
+def test_polarized_variants_refuse_with_a_clear_error():
+    """Not yet in ``*_polarized`` variants: loading the plugin names the variant and the
+    variants that work (no traceback-only failure, no silent unpolarized result)."""
+    v, lt = _pairs(n=20)
+    args = {"variant": "llvm_ad_spectral_polarized", "m_x": M_X, "m_y": M_Y, "grid": "coarse",
+            "v": v.tolist(), "l": lt.tolist()}  # fmt: skip
+    res = subprocess.run(
+        [sys.executable, str(HERE / "dielectric_aniso_worker.py"), json.dumps(args)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert res.returncode != 0
+    assert "AnisotropicBtdfTable renders in scalar, RGB, mono and spectral variants" in res.stderr
+    assert "llvm_ad_spectral_polarized" in res.stderr
