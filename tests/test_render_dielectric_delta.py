@@ -1,4 +1,4 @@
-"""The coherent (delta) lobes of the ``emscatter_dielectric`` plugin (render/dielectric_delta.py):
+"""The coherent (delta) lobes of the ``emscatter_dielectric`` plugin (render/dielectric/delta.py):
 SPM glass (ε = 2.25, ℓ = 1 µm, 550 nm) against Mitsuba's smooth ``dielectric`` in the limit
 kσ → 0, energy against the tables, GO tables unchanged. Real Mitsuba in subprocesses
 (tests/dielectric_delta_worker.py): Dr.Jit variants are per process."""

@@ -1,4 +1,4 @@
-"""The emscatter_dielectric plugin in polarized variants (render/dielectric_polarized.py),
+"""The emscatter_dielectric plugin in polarized variants (render/dielectric/polarized.py),
 through tests/dielectric_polarized_worker.py (Dr.Jit variants are per process)."""
 
 from __future__ import annotations

@@ -22,7 +22,20 @@ the isotropic :class:`~.btdf_table.BtdfTable` on the same θ and Δφ nodes (tes
 :meth:`AnisotropicBtdfTable.albedo` integrates the interpolant exactly (``T`` per θi and φi
 node); :meth:`AnisotropicBtdfTable.evaluate` interpolates multilinearly in the four angles.
 Storage: ``n_wl · n_θi · n_φi · n_θt · n_Δφ`` values (``dtype`` float64 or float32), checked
-against the memory limit before any work. Not here (yet): Mueller matrices, PO, the plugin.
+against the memory limit before any work.
+
+Mueller part (``polarized=True``; ``mueller[w, :, :, i, a, t, d]``, ``(n_wl, 4, 4, …grid)``,
+``[:, 0, 0] = values``): GO's facet Fresnel transmission Jones matrix
+(:func:`emscatter.solvers.kirchhoff.transmission.go.transmission_jones`, emscatter's h/v
+bases) as a Mueller matrix scaled to ``f_t`` — exactly :func:`.btdf.mueller_btdf_at` at the
+nodes, the isotropic table's construction (:func:`.btdf_table.build_btdf_table`) with the
+anisotropic slopes. :meth:`AnisotropicBtdfTable.evaluate_mueller` folds ``φi`` as
+:func:`fold_phi`: the half turn leaves a matrix in h/v bases unchanged (the bases turn with
+the surface), each mirror maps it to ``P M P``, ``P = diag(1, 1, −1, −1)`` (a mirror reverses
+the handedness of the h/v bases; the isotropic table's rule for ``Δφ < 0``); then Mitsuba's
+Stokes frames at the true (unfolded) angles (:func:`.btdf.emscatter_to_mitsuba`). Storage ×17.
+Rendered by the ``emscatter_dielectric`` plugin (:mod:`emscatter.render.dielectric.aniso`; not
+yet in ``*_polarized`` variants). Not here (yet): PO.
 """
 
 from __future__ import annotations
@@ -35,10 +48,11 @@ import numpy as np
 from ..solvers.kirchhoff.common import slope_variances
 from ..solvers.kirchhoff.transmission import go as gt
 from . import grid
-from .btdf import checked_surface
-from .btdf_table import HALF_PI, default_resolution
+from .btdf import checked_surface, emscatter_to_mitsuba
+from .btdf_table import HALF_PI, _m00, default_resolution
 from .build import _check_count, _check_wavelengths, default_phi, default_theta, material_eps
 from .frames import angles
+from .mueller import jones_to_mueller
 from .sizing import format_bytes, memory_limit
 from .table import BrdfTable, _as_float_array
 
@@ -59,6 +73,8 @@ class AnisotropicBtdfTable:
     values : ``f_t`` [1/sr], ``(n_wl, n_ti, n_pi, n_tt, n_pd)``, ≥ 0 and finite.
     eps : (n_wl,) real relative permittivity of the lower medium (> 0, ≠ 1).
     metadata : dict.
+    mueller : optional ``(n_wl, 4, 4, n_ti, n_pi, n_tt, n_pd)`` Mueller BTDF [1/sr] in
+        emscatter's h/v bases, ``[:, 0, 0] = values`` (module docstring).
     """
 
     wavelengths: np.ndarray
@@ -69,6 +85,7 @@ class AnisotropicBtdfTable:
     values: np.ndarray
     eps: np.ndarray
     metadata: dict = field(default_factory=dict)
+    mueller: np.ndarray | None = None
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -91,6 +108,8 @@ class AnisotropicBtdfTable:
         set_(self, "eps", eps)
         if not isinstance(self.metadata, dict):
             raise TypeError(f"metadata must be a dict, got {type(self.metadata).__name__}")
+        if self.mueller is not None:
+            set_(self, "mueller", _checked_mueller(self.mueller, self.values))
 
     def replace(self, **changes) -> AnisotropicBtdfTable:
         """A copy with some fields changed (validated again)."""
@@ -130,6 +149,47 @@ class AnisotropicBtdfTable:
         to, po = angles(wo, "wo")
         return self.evaluate_angles(ti, pi_, math.pi - to, po - pi_, wavelength)
 
+    def evaluate_mueller(self, wi, wo, wavelength=None, *, frame: str = "mitsuba") -> np.ndarray:
+        """Mueller BTDF ``(4, 4, ...)`` [1/sr] at renderer directions (as :meth:`evaluate`;
+        ``wavelength``: None → every table wavelength on a leading axis, a scalar → none), in
+        Mitsuba's Stokes frames (``frame="mitsuba"``, what a ``*_polarized`` BSDF returns
+        divided by ``cosθ`` of the light) or emscatter's h/v bases (``"emscatter"``), as
+        :func:`.btdf.mueller_btdf_at`; the folding of ``φi``: module docstring. Needs
+        ``mueller`` (``polarized=True``)."""
+        if self.mueller is None:
+            raise ValueError(
+                "this anisotropic BTDF table has no Mueller part (build it with polarized=True)"
+            )
+        if frame not in ("mitsuba", "emscatter"):
+            raise ValueError(f"frame must be 'mitsuba' or 'emscatter', got {frame!r}")
+        ti, pi_ = angles(wi, "wi")
+        to, po = angles(wo, "wo")
+        ti, pi_, to, po = (a.reshape(-1) for a in np.broadcast_arrays(ti, pi_, to, po))
+        shape = np.broadcast_shapes(np.shape(wi)[:-1], np.shape(wo)[:-1])
+        tt = math.pi - to
+        p = np.remainder(pi_, math.pi)
+        flip = p > HALF_PI
+        fpi, fpd = fold_phi(pi_, po - pi_)
+        scalar, cols, mat = BrdfTable._wavelength_weights(self, wavelength, "raise")
+        locs = [
+            grid.locate_clamped(self.theta_i, ti),
+            grid.locate_clamped(self.phi_i, fpi),
+            grid.locate_clamped(self.theta_t, tt),
+            grid.locate_periodic(self.phi_d, fpd),
+        ]
+        mm = self.mueller[cols]  # (n, 4, 4, grid)
+        flat = mm.reshape(mm.shape[0] * 16, *mm.shape[3:])
+        vals = grid.multilinear(flat, locs).reshape(mm.shape[0], 4, 4, -1)
+        vals = np.einsum("wc,cijn->wijn", mat, vals)
+        pp = np.array([1.0, 1.0, -1.0, -1.0])
+        vals = np.where(flip, vals * np.outer(pp, pp)[:, :, None], vals)  # P M P (mirrored)
+        ok = (ti >= 0) & (ti < HALF_PI) & (tt >= 0) & (tt < HALF_PI)
+        vals[..., ~ok] = 0.0
+        if frame == "mitsuba":
+            vals = np.stack([emscatter_to_mitsuba(v, ti, pi_ + math.pi, tt, po) for v in vals])
+        vals = vals.reshape(*vals.shape[:3], *shape)
+        return vals[0] if scalar else vals
+
     def outgoing_weights(self) -> np.ndarray:
         """``W`` (``(n_tt, n_pd)``) with ``Σ W f[i, a] = ∫ f_t,interp cosθt dωt`` exactly."""
         return grid.theta_weights(self.theta_t)[:, None] * grid.periodic_weights(self.phi_d)
@@ -144,7 +204,27 @@ class AnisotropicBtdfTable:
         """One-line summary."""
         dims = "×".join(str(n) for n in self.values.shape[1:])
         wl = ", ".join(f"{x * 1e9:.4g}" for x in self.wavelengths[:6])
-        return f"AnisotropicBtdfTable({dims} at λ = [{wl}] nm, solver=kirchhoff-go-transmission)"
+        pol = ", Mueller" if self.mueller is not None else ""
+        return (
+            f"AnisotropicBtdfTable({dims} at λ = [{wl}] nm, solver=kirchhoff-go-transmission{pol})"
+        )
+
+
+def _checked_mueller(mueller, values) -> np.ndarray:
+    m = np.asarray(mueller)
+    m = np.asarray(m, dtype=np.float32 if m.dtype == np.float32 else float)
+    if m.flags.writeable:  # a caller's array: copy before freezing (the builder's is frozen)
+        m = m.copy()
+    want = (values.shape[0], 4, 4, *values.shape[1:])
+    if m.shape != want:
+        raise ValueError(f"mueller must have shape {want}, got {m.shape}")
+    if not np.all(np.isfinite(m)):
+        raise ValueError("mueller holds NaN or inf")
+    scale = max(float(np.max(values)), 1e-300)
+    if np.max(np.abs(m[:, 0, 0] - values)) > 1e-6 * scale:
+        raise ValueError("mueller[:, 0, 0] must equal values (the unpolarized BTDF)")
+    m.setflags(write=False)
+    return m
 
 
 def fold_phi(phi_i, phi_d) -> tuple[np.ndarray, np.ndarray]:
@@ -171,6 +251,7 @@ def build_anisotropic_btdf_table(
     phi_d=None,
     dtype="float64",
     memory_limit_bytes: int | None = None,
+    polarized: bool = False,
     **options,
 ) -> AnisotropicBtdfTable:
     """The GO BTDF table of a rough lossless dielectric with an anisotropic (or isotropic)
@@ -185,6 +266,7 @@ def build_anisotropic_btdf_table(
     :func:`.btdf_table.default_resolution`, Δφ doubled for the full circle), or explicit
     axes [rad]. The stored grid's bytes are checked first (``memory_limit_bytes``, else what
     the process may allocate): a ``MemoryError`` names the estimate and what reduces it.
+    ``polarized=True`` adds the Mueller part (module docstring; 17× the storage, checked).
     ``options``: ``shadowing``, ``slope_variance``, ``k_max`` as the isotropic table.
     """
     rough = checked_surface(surface, options, "a BTDF table")
@@ -194,6 +276,8 @@ def build_anisotropic_btdf_table(
     wl = _check_wavelengths(wavelengths)
     n_theta = _check_count("n_theta", n_theta, 2)
     n_phi_i = _check_count("n_phi_i", n_phi_i, 2)
+    if not isinstance(polarized, bool):
+        raise ValueError(f"polarized must be True or False, got {polarized!r}")
     eps = np.empty(wl.size)
     for j, lam in enumerate(wl):
         try:
@@ -213,9 +297,14 @@ def build_anisotropic_btdf_table(
         pi_ = np.linspace(0.0, HALF_PI, n_phi_i)
     else:
         pi_ = grid.check_axis("phi_i", phi_i, 0, HALF_PI)
-    tt = _axis("theta_t", theta_t, default_theta, _check_count("n_theta_t", n_theta_t, 2), HALF_PI)
-    pd = _axis("phi_d", phi_d, default_phi, _check_count("n_phi", n_phi, 4), grid.TWO_PI)
-    need = wl.size * ti.size * pi_.size * tt.size * pd.size * dt.itemsize + 40 * 8 * _CHUNK
+    if theta_t is None:
+        n_theta_t = _check_count("n_theta_t", n_theta_t, 2)
+    if phi_d is None:
+        n_phi = _check_count("n_phi", n_phi, 4)
+    tt = _axis("theta_t", theta_t, default_theta, n_theta_t, HALF_PI)
+    pd = _axis("phi_d", phi_d, default_phi, n_phi, grid.TWO_PI)
+    need = (17 if polarized else 1) * wl.size * ti.size * pi_.size * tt.size * pd.size
+    need = need * dt.itemsize + (80 if polarized else 40) * 8 * _CHUNK
     limit, where = (
         (memory_limit_bytes, "memory_limit_bytes") if memory_limit_bytes else memory_limit()
     )
@@ -223,9 +312,11 @@ def build_anisotropic_btdf_table(
         raise MemoryError(
             f"the anisotropic BTDF table needs about {format_bytes(need)}, more than {where} "
             f"allows ({format_bytes(int(limit))}); use fewer nodes (n_theta, n_phi_i, "
-            "n_theta_t, n_phi), fewer wavelengths or dtype='float32'"
+            "n_theta_t, n_phi), fewer wavelengths, dtype='float32'"
+            + (" or polarized=False (the Mueller part is 16× the table)" if polarized else "")
         )
     values = np.empty((wl.size, ti.size, pi_.size, tt.size, pd.size), dtype=dt)
+    mueller = np.empty((wl.size, 4, 4, *values.shape[1:]), dtype=dt) if polarized else None
     rows = max(1, _CHUNK // (pi_.size * tt.size * pd.size))
     slopes = None
     for j, lam in enumerate(wl):
@@ -235,8 +326,15 @@ def build_anisotropic_btdf_table(
             # renderer → emscatter: φi_em = φ(wi) + π, φt = φ(wo) = φ(wi) + Δφ
             res = gt.bistatic_transmission(rough, eps[j], k, a, b, p + c, p + math.pi, **options)
             values[j, lo : lo + rows] = res.unpolarized() / (4 * math.pi * np.cos(a) * np.cos(b))
+            if polarized:  # the facet's Jones matrix as a Mueller matrix (.btdf_table)
+                jones = gt.transmission_jones(eps[j], a, b, p + c, p + math.pi)
+                mm = jones_to_mueller(jones) * (values[j, lo : lo + rows] / _m00(jones))
+                mueller[j, :, :, lo : lo + rows] = mm
+                mueller[j, 0, 0, lo : lo + rows] = values[j, lo : lo + rows]
             slopes = [float(np.mean(x)) for x in res.info["slope_variance"]]
     values.setflags(write=False)
+    if mueller is not None:
+        mueller.setflags(write=False)
     meta = {
         "kind": "btdf-anisotropic",
         "solver": "kirchhoff-go-transmission",
@@ -250,7 +348,7 @@ def build_anisotropic_btdf_table(
     }
     return AnisotropicBtdfTable(
         wavelengths=wl, theta_i=ti, phi_i=pi_, theta_t=tt, phi_d=pd, values=values, eps=eps,
-        metadata=meta,
+        metadata=meta, mueller=mueller,
     )  # fmt: skip
 
 

@@ -4,7 +4,7 @@ for reflection on both sides and for transmission, in Mitsuba's Stokes frames.
 Tables: ``reflection`` (and ``inner``) as :class:`~emscatter.brdf.mueller.MuellerTable`
 (``build_mueller_table(..., method="go")``), the BTDF built with
 ``build_btdf_table(..., polarized=True)``. Sampling, pdf and ``M₀₀`` are the unpolarized
-plugin's (:mod:`.dielectric`); ``eval`` returns ``M · |cosθ_wo|`` (times the same radiance
+plugin's (:mod:`.plugin`); ``eval`` returns ``M · |cosθ_wo|`` (times the same radiance
 factors), a sample's weight is that matrix over the pdf.
 
 Frames — those of Mitsuba's ``dielectric`` / ``roughdielectric`` polarized code
@@ -34,7 +34,7 @@ transport the other way round); the matrix maps Stokes vectors in
   left-handed ``(Px, Py)``; flipping ``y`` back gives ``D M D``, ``D = diag(1, 1, −1, −1)``,
   in bases with x axes ``P·stokes_basis(mirrored k)``, rotated onto Mitsuba's bases.
 
-* delta lobes (:mod:`.dielectric_delta`): Mitsuba's polarized ``dielectric`` — the Fresnel
+* delta lobes (:mod:`.delta`): Mitsuba's polarized ``dielectric`` — the Fresnel
   Mueller matrices (``mi.mueller.specular_reflection`` / ``specular_transmission`` at the
   light's cosine, mean ``η``) rotated from the s/p frames onto the Stokes bases — times the
   table's coherent part over the Fresnel power, so ``M₀₀`` is the unpolarized plugin's.
@@ -49,9 +49,9 @@ import math
 
 import numpy as np
 
-from ..brdf.btdf_table import BtdfTable
-from ..brdf.mueller import D_MITSUBA
-from .polarized import _channel_mix
+from ...brdf.btdf_table import BtdfTable
+from ...brdf.mueller import D_MITSUBA
+from ..polarized import _channel_mix
 
 __all__ = ["btdf_mueller_channels", "polarized_dielectric_class"]
 
@@ -79,10 +79,10 @@ def polarized_dielectric_class(mi, base, coord, theta, sets):
     """The polarized dielectric class: ``base`` (the unpolarized dielectric class of this
     variant: sampling, pdf, lobe choice) with Mueller ``eval`` and ``sample`` weights.
     ``coord``/``theta``: the base's texture coordinate and polar angle helpers; ``sets``: the
-    registry of :func:`.dielectric.register_dielectric`."""
+    registry of :func:`.plugin.register_dielectric`."""
     import drjit as dr
 
-    from .mitsuba import channels_of_variant
+    from ..mitsuba import channels_of_variant
 
     channels = channels_of_variant(mi.variant())
     f = mi.BSDFFlags

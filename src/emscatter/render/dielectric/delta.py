@@ -1,4 +1,4 @@
-"""The coherent (delta) lobes of the ``"emscatter_dielectric"`` plugin (:mod:`.dielectric`):
+"""The coherent (delta) lobes of the ``"emscatter_dielectric"`` plugin (:mod:`.plugin`):
 their NumPy preparation (the lobe probabilities by energy, the coherent reflectivities and
 transmissivity per plugin channel) and the Dr.Jit sampling of the four specular directions.
 
@@ -40,8 +40,8 @@ import math
 
 import numpy as np
 
-from ..fresnel import reflectivity
-from .plugin_data import Axis
+from ...fresnel import reflectivity
+from ..plugin_data import Axis
 
 __all__ = ["DeltaData", "delta_data"]
 

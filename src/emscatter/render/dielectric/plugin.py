@@ -3,13 +3,15 @@ sides and transmission through it (plugin ``"emscatter_dielectric"``).
 
 Usage, after ``mi.set_variant(...)`` with an RGB, mono or spectral LLVM variant
 (``llvm_ad_rgb`` and ``llvm_ad_spectral`` tested; ``*_polarized`` variants with Mueller tables:
-:mod:`.dielectric_polarized`)::
+:mod:`.polarized`)::
 
     from emscatter.render import dielectric as em_d
     bsdf = mi.load_dict(em_d.bsdf_dict(reflection=brdf, transmission=btdf, inner=brdf_in))
 
 ``reflection``: the :class:`~emscatter.brdf.table.BrdfTable` of the outside (``ε``),
-``transmission``: the :class:`~emscatter.brdf.btdf_table.BtdfTable` of light from outside,
+``transmission``: the :class:`~emscatter.brdf.btdf_table.BtdfTable` of light from outside
+(or an :class:`~emscatter.brdf.btdf_aniso.AnisotropicBtdfTable`, :mod:`.aniso`: scalar, RGB,
+mono and spectral variants; ``reflection``/``inner`` may then be anisotropic BRDF tables),
 ``inner`` (optional): the BRDF of the inside (``1/ε``: internal reflection, total internal
 reflection included; without it nothing is reflected inside). The reflection lobes are the
 ``"emscatter"`` plugin (:mod:`.mitsuba`) of each table; this plugin adds the transmission lobe
@@ -30,7 +32,7 @@ in importance mode (adjoint transport) without the ``1/ε``, and the inside case
 ``1/ε`` instead. Components: 0 glossy reflection (outside), 1 glossy transmission, 2 glossy
 reflection inside (when ``inner`` is given); flags front and back side, non-symmetric.
 
-Coherent (delta) lobes (``coherent``, bool, default true; PO/SPM tables, :mod:`.dielectric_delta`):
+Coherent (delta) lobes (``coherent``, bool, default true; PO/SPM tables, :mod:`.delta`):
 the reflection table's ``R_coh`` (mirror), the BTDF's ``T_coh`` (Snell direction, Mitsuba's
 ``dielectric`` radiance scale ``1/ε`` outside, ``ε`` inside), the inner table's ``R_coh``
 and, from inside, ``T_coh`` at the Snell-mapped outside angle; components after the glossy
@@ -61,7 +63,7 @@ interpolation error with this rule; ``tests/test_render_dielectric_dispersive.py
 sampling's refraction frame (Walter's normals refracted at ``η``) takes the mean ``ε``: its
 ``pdf`` is that density exactly, so this costs variance, not bias. RGB and mono variants use
 the mean ``ε`` throughout (one index per path); ``*_spectral_polarized`` takes ``1/ε`` per
-wavelength as here (:mod:`.dielectric_polarized`). The lobe probabilities weigh the
+wavelength as here (:mod:`.polarized`). The lobe probabilities weigh the
 wavelengths by their luminance.
 """
 
@@ -73,13 +75,15 @@ import sys
 
 import numpy as np
 
-from ..brdf.btdf_table import BtdfTable
-from ..brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
-from ..brdf.mueller import MuellerTable
-from ..brdf.table import BrdfTable
-from . import mitsuba as em_mi
-from .dielectric_delta import delta_data, refract
-from .plugin_data import Axis
+from ...brdf.btdf_aniso import AnisotropicBtdfTable
+from ...brdf.btdf_table import BtdfTable
+from ...brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
+from ...brdf.mueller import MuellerTable
+from ...brdf.table import BrdfTable
+from .. import mitsuba as em_mi
+from ..plugin_data import Axis
+from .aniso import AnisoBtdfLookup, check_axes, reduce_albedo
+from .delta import delta_data, refract
 
 __all__ = ["PLUGIN_NAME", "bsdf_dict", "register", "register_dielectric"]
 
@@ -99,25 +103,30 @@ def register_dielectric(reflection, transmission, inner=None, key: str | None = 
     """Register the tables of one interface (module docstring); returns the key for
     ``{"type": "emscatter_dielectric", "tables": key}``. ``reflection`` and ``inner`` may be
     :class:`~emscatter.brdf.mueller.MuellerTable` objects (needed in polarized variants,
-    :mod:`.dielectric_polarized`; their ``M₀₀`` elsewhere). With a Mitsuba variant set it
+    :mod:`.polarized`; their ``M₀₀`` elsewhere). With a Mitsuba variant set it
     also registers the plugin (:func:`register`), as :func:`.mitsuba.register_table`."""
     refl_obj, inner_obj = reflection, inner
     reflection, inner = _s0(reflection), _s0(inner)
-    if not isinstance(reflection, BrdfTable) or not reflection.isotropic:
+    aniso = isinstance(transmission, AnisotropicBtdfTable)
+    kind = "a" if aniso else "an isotropic"  # an anisotropic BTDF: either BRDF kind (.aniso)
+    if not isinstance(reflection, BrdfTable) or not (aniso or reflection.isotropic):
+        raise TypeError(f"reflection must be {kind} BrdfTable, got {type(reflection).__name__}")
+    if not isinstance(transmission, (BtdfTable, AnisotropicBtdfTable)):
         raise TypeError(
-            f"reflection must be an isotropic BrdfTable, got {type(reflection).__name__}"
+            "transmission must be a BtdfTable or an AnisotropicBtdfTable, got "
+            f"{type(transmission).__name__}"
         )
-    if not isinstance(transmission, BtdfTable):
-        raise TypeError(f"transmission must be a BtdfTable, got {type(transmission).__name__}")
-    if inner is not None and (not isinstance(inner, BrdfTable) or not inner.isotropic):
-        raise TypeError(f"inner must be None or an isotropic BrdfTable, got {type(inner).__name__}")
+    if inner is not None and (not isinstance(inner, BrdfTable) or not (aniso or inner.isotropic)):
+        raise TypeError(f"inner must be None or {kind} BrdfTable, got {type(inner).__name__}")
     for name, t in (("reflection", reflection), ("inner", inner)):
         if t is not None and not np.allclose(t.wavelengths, transmission.wavelengths, rtol=1e-9):
             raise ValueError(
                 f"{name} and transmission tables must share their wavelengths, got "
                 f"{t.wavelengths.tolist()} and {transmission.wavelengths.tolist()} m"
             )
-    for name, ax in zip(("theta_i", "theta_t", "phi_d"), transmission.grid_axes, strict=True):
+    if aniso:
+        check_axes(transmission)
+    for name, ax in zip(("theta_i", "theta_t", "phi_d"), _grid_axes(transmission), strict=True):
         if not Axis.of(ax).uniform:
             raise ValueError(f"the plugin needs uniform BTDF axes; {name} is not uniform")
     slope = transmission.metadata.get("slope_variance")
@@ -132,8 +141,8 @@ def register_dielectric(reflection, transmission, inner=None, key: str | None = 
         "polarized_tables": isinstance(refl_obj, MuellerTable)
         and (inner is None or isinstance(inner_obj, MuellerTable)),
         "transmission": transmission,
-        "r_albedo": reflection.albedo().incoherent,  # the delta lobes: .dielectric_delta
-        "r_in_albedo": None if inner is None else inner.albedo().incoherent,
+        "r_albedo": reduce_albedo(reflection.albedo().incoherent),  # the delta lobes: .delta
+        "r_in_albedo": None if inner is None else reduce_albedo(inner.albedo().incoherent),
         "reflection_table": reflection,
         "inner_table": inner,
         "theta_r": reflection.theta_i,
@@ -143,6 +152,11 @@ def register_dielectric(reflection, transmission, inner=None, key: str | None = 
     if mi is not None and mi.variant() is not None:
         register()
     return key
+
+
+def _grid_axes(bt) -> tuple[np.ndarray, ...]:
+    """``(θi, θt, Δφ)`` nodes of either BTDF table kind."""
+    return (bt.theta_i, bt.theta_t, bt.phi_d)
 
 
 def register(name: str = PLUGIN_NAME) -> None:
@@ -215,9 +229,18 @@ def _bsdf_class(mi):
             self._c = mat.shape[0]
             lam = [float(x) * 1e9 for x in bt.wavelengths]
             self._lam, self._inv = lam, [1.0 / (b - a) for a, b in itertools.pairwise(lam)]
-            vals = np.clip(np.moveaxis(np.asarray(bt.values, float), 0, -1) @ mat.T, 0.0, None)
-            self._tex = tex(mi.Texture3f, np.transpose(vals, (0, 1, 2, 3)))
-            self._ax = [Axis.of(a) for a in bt.grid_axes]
+            self._aniso = None
+            if isinstance(bt, AnisotropicBtdfTable):  # 4-D: explicit gathers (.aniso)
+                if "polarized" in mi.variant():
+                    raise ValueError(
+                        "emscatter_dielectric plugin: an AnisotropicBtdfTable renders in "
+                        f"scalar, RGB, mono and spectral variants, not yet in {mi.variant()!r}"
+                    )
+                self._aniso = AnisoBtdfLookup(mi, bt, mat)
+            else:
+                vals = np.clip(np.moveaxis(np.asarray(bt.values, float), 0, -1) @ mat.T, 0, None)
+                self._tex = tex(mi.Texture3f, vals)
+            self._ax = [Axis.of(a) for a in _grid_axes(bt)]
             self._eps = float(np.mean(bt.eps))
             self._inv_eps_k = [float(x) for x in 1.0 / np.asarray(bt.eps, dtype=float)]
             self._eta = math.sqrt(self._eps)
@@ -226,10 +249,13 @@ def _bsdf_class(mi):
             # PO/SPM tables (a coherent part): their glossy lobe is wider than the slopes say
             # (SPM: the roughness spectrum at the Bragg wavenumbers), so half the refracted
             # normals come from a wide Beckmann lobe (defensive mixture; GO tables: none)
-            has_coh = bt.coherent is not None and bool(np.any(bt.coherent > 0))
+            coh = getattr(bt, "coherent", None)
+            has_coh = coh is not None and bool(np.any(coh > 0))
             self._q_wide = 0.5 if has_coh and self._alpha < _ALPHA_WIDE else 0.0
             lum = RGB_LUMINANCE @ spectrum_to_rgb_weights(bt.wavelengths)
-            t_alb = lum @ bt.incoherent_albedo()  # what the lobe holds (PO: no delta lobe)
+            t_alb = lum @ (
+                reduce_albedo(bt.albedo()) if self._aniso else bt.incoherent_albedo()
+            )  # what the lobe holds (PO: no delta lobe)
             r_alb = np.interp(bt.theta_i, s["theta_r"], lum @ s["r_albedo"])
             p_t = t_alb / np.maximum(t_alb + r_alb, 1e-12)
             self._pt_out = tex(mi.Texture1f, p_t[:, None])
@@ -244,7 +270,7 @@ def _bsdf_class(mi):
                 self._ax_in = Axis.of(s["theta_in"])
             comps = [refl, trans] + ([refl] if self._inner is not None else [])
             self._dd = None
-            if bool(props.get("coherent", True)):
+            if bool(props.get("coherent", True)) and self._aniso is None:  # GO: none
                 tabs = (s["reflection_table"], bt, s["inner_table"])
                 self._dd = delta_data(*tabs, mat, lum, self._eta)
             flags = refl | trans
@@ -289,6 +315,8 @@ def _bsdf_class(mi):
 
         def _ft(self, a, b, active, si):
             """Table BTDF f_t(a → b), ``a`` above, ``b`` below (no cosine)."""
+            if self._aniso is not None:
+                return self._spec(self._aniso(a, b, active), si)
             ti, tt = theta(a.z), theta(b.z)
             dphi = dr.abs(dr.atan2(b.y, b.x) - dr.atan2(a.y, a.x))
             dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
@@ -444,7 +472,7 @@ def _bsdf_class(mi):
             out.pdf = dr.select(valid, out.pdf, 0.0)
             return out, dr.select(valid, weight, mi.Spectrum(0.0))
 
-        # ------------------------------------------------ delta lobes (.dielectric_delta)
+        # ------------------------------------------------ delta lobes (.delta)
         def _p_delta(self, ctx, v, active):
             """``(P_δ, P(reflection | δ))`` at the viewer ``v`` for the enabled components."""
             k = self._k_dr
@@ -475,7 +503,7 @@ def _bsdf_class(mi):
             def look(t, axis, z, m):
                 return self._spec(t.eval(mi.Point1f(coord(theta(z), axis)), m), si, kind)
 
-            f_r = mi.fresnel(v.z, self._eta)[0]  # ratios × Fresnel (.dielectric_delta)
+            f_r = mi.fresnel(v.z, self._eta)[0]  # ratios × Fresnel (.delta)
             r = look(self._tex_r, d.ax_r, v.z, active & is_r & out)
             if self._tex_ri is not None:
                 r = dr.select(out, r, look(self._tex_ri, d.ax_ri, v.z, active & is_r & ~out))
@@ -535,7 +563,7 @@ def _bsdf_class(mi):
             )
 
     if "polarized" in mi.variant():
-        from .dielectric_polarized import polarized_dielectric_class
+        from .polarized import polarized_dielectric_class
 
         return polarized_dielectric_class(mi, DielectricBSDF, coord, theta, _SETS)
     return DielectricBSDF
