@@ -181,15 +181,18 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
 
 def backscatter_resummed(theta, eps: complex, k: float, sigma: float, length: float,
                          length_y: float, phi_i: float, spectrum: int, n_nodes: int,
-                         threads: int = 1):  # fmt: skip
+                         threads: int = 1, n_azimuth: int | None = None):  # fmt: skip
     """``(σ⁰_hv, computed)`` at the flat angles ``theta`` [rad] (checked by the caller):
-    values [-] and a bool mask (False: the caller's numpy reference runs that angle)."""
+    values [-] and a bool mask (False: the caller's numpy reference runs that angle).
+    ``n_nodes`` Gauss–Legendre nodes per radial segment, ``n_azimuth`` per azimuth segment
+    (default ``n_nodes``)."""
     theta = np.ascontiguousarray(theta, dtype=np.float64)
     n = theta.size
     out, flag = np.zeros(n), np.zeros(n, dtype=np.int64)
     s, ds = unit_rule(int(n_nodes))
+    sa, dsa = unit_rule(int(n_nodes if n_azimuth is None else n_azimuth))
     args = (complex(eps), float(k), float(sigma), float(length), float(length_y),
-            math.cos(phi_i), math.sin(phi_i), int(spectrum), s, ds, s, ds)  # fmt: skip
+            math.cos(phi_i), math.sin(phi_i), int(spectrum), s, ds, sa, dsa)  # fmt: skip
 
     def part(a: int, b: int) -> None:
         _kernel(theta, *args, a, b, out, flag)
