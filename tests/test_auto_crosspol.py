@@ -48,8 +48,14 @@ def test_supplement_caches_return_what_they_computed():
     again[0] = -1.0  # a fresh array each call: the cache is not touched
     np.testing.assert_array_equal(auto_crosspol.supplement(
         "spm", rough, 10 + 1j, K, ti, ti, pi_ + math.pi, pi_)[0], first)  # fmt: skip
-    direct = backscatter_resummed(rough, 10 + 1j, K, ti[:2], n_nodes=auto_crosspol.RESUMMED_NODES,
-                                  n_azimuth=auto_crosspol.RESUMMED_AZIMUTH_NODES)
+    direct = backscatter_resummed(
+        rough,
+        10 + 1j,
+        K,
+        ti[:2],
+        n_nodes=auto_crosspol.RESUMMED_NODES,
+        n_azimuth=auto_crosspol.RESUMMED_AZIMUTH_NODES,
+    )
     np.testing.assert_allclose(first[:2], direct, rtol=1e-12)
     # the branch's own SPM2 term, stored per unit σ⁴: twice σ reuses the angles' values, × 16
     own, how = auto_crosspol._today("spm", rough, 10 + 1j, K, ti, pi_)
@@ -132,8 +138,14 @@ def test_auto_iem_in_backscatter_takes_the_remembered_term(eps):
     np.testing.assert_allclose(auto.sigma0[[0, 1], [0, 1]], own.sigma0[[0, 1], [0, 1]],
                                rtol=1e-12, atol=0.0)  # fmt: skip
     if np.ndim(eps) == 0:
-        ref = backscatter_resummed(rough, eps, K, th, n_nodes=auto_crosspol.RESUMMED_NODES,
-                                  n_azimuth=auto_crosspol.RESUMMED_AZIMUTH_NODES)
+        ref = backscatter_resummed(
+            rough,
+            eps,
+            K,
+            th,
+            n_nodes=auto_crosspol.RESUMMED_NODES,
+            n_azimuth=auto_crosspol.RESUMMED_AZIMUTH_NODES,
+        )
         np.testing.assert_allclose(auto.sigma0[0, 1], ref, rtol=1e-12, atol=0.0)
         assert np.all(auto.sigma0[0, 1] > own.sigma0[0, 1])  # the IEM term is low (issue 20)
     else:
@@ -177,8 +189,14 @@ def test_every_branch_adds_the_same_resummed_hv_faded_at_its_limit(name):
     own, _ = auto_crosspol._today(name, rough, 15 + 2j, K, ti, pi_)
     ok = ti > np.arccos(3.0 / 3.2)  # kσ cosθ < 3
     res = np.zeros_like(ti)
-    res[ok] = backscatter_resummed(rough, 15 + 2j, K, ti[ok], n_nodes=auto_crosspol.RESUMMED_NODES,
-                                  n_azimuth=auto_crosspol.RESUMMED_AZIMUTH_NODES)
+    res[ok] = backscatter_resummed(
+        rough,
+        15 + 2j,
+        K,
+        ti[ok],
+        n_nodes=auto_crosspol.RESUMMED_NODES,
+        n_azimuth=auto_crosspol.RESUMMED_AZIMUTH_NODES,
+    )
     np.testing.assert_allclose(hv[0], own[0], rtol=1e-12)  # beyond: the branch's own
     np.testing.assert_allclose(hv[[1, 4, 5]], [own[1], res[4], res[5]], rtol=1e-6)  # ends
     np.testing.assert_allclose(hv[2], 0.5 * (own[2] + res[2]), rtol=1e-12)  # halfway

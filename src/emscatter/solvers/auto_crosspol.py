@@ -256,8 +256,8 @@ def _today_label(name: str) -> str:
 
 def _resummed_values(rough, eps: complex, k: float, tb, pb):
     """The resummed hv (:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed`,
-    :data:`RESUMMED_NODES` × :data:`RESUMMED_AZIMUTH_NODES` per segment) at flat backscatter angles ``tb``, ``pb`` [rad],
-    remembered per (roughness, ε, k, θi, φi)."""
+    :data:`RESUMMED_NODES` × :data:`RESUMMED_AZIMUTH_NODES` per segment) at flat backscatter
+    angles ``tb``, ``pb`` [rad], remembered per (roughness, ε, k, θi, φi)."""
     from .iem.crosspol_resummed import _values
 
     iso = rough.length == rough.length_y

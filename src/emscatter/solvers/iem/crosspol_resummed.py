@@ -111,8 +111,9 @@ def backscatter_resummed(roughness, eps, k: float, theta, phi_i: float = 0.0, *,
 
     ``roughness`` a 2-D Gaussian or exponential surface, ``eps`` one dielectric permittivity,
     ``k`` [rad/m], ``kσ cosθ ≤ 3``; ``n_nodes`` Gauss–Legendre nodes per radial segment of the
-    σ⁰⁽²²⁾ rule, ``n_azimuth`` per azimuth segment (default ``n_nodes``). ``both=True`` returns ``(hv, vh)`` stacked on a leading axis (equal in
-    backscatter by reciprocity; tested). Raises ``ValueError`` naming the parameter."""
+    σ⁰⁽²²⁾ rule, ``n_azimuth`` per azimuth segment (default ``n_nodes``). ``both=True``
+    returns ``(hv, vh)`` stacked on a leading axis (equal in backscatter by reciprocity;
+    tested). Raises ``ValueError`` naming the parameter."""
     rough, eps, k, th = _check(roughness, eps, k, theta, n_nodes)
     n_az = n_nodes if n_azimuth is None else n_azimuth
     if not isinstance(n_az, int | np.integer) or n_az < 4:
