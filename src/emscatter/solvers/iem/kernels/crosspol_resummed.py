@@ -158,8 +158,8 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
         for ir in range(nr):
             for ia in range(first, na):
                 px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-                tm[ir, ia] = _t_hat(_q2(px - kis0, py - kis1, cr, sr, lx, ly), coef, cinv, nc, spec,
-                                    area)  # fmt: skip
+                q = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
+                tm[ir, ia] = _t_hat(q, coef, cinv, nc, spec, area)
         _fill_g(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, zc, kr, nr, cpsi, spsi,
                 first, na)  # fmt: skip
         val = 0.0
