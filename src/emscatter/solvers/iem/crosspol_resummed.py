@@ -50,8 +50,8 @@ the horizon for a conductor), Gaussian or exponential 2-D surfaces.
 Cost: one σ⁰⁽²²⁾ node set per incidence angle (16 × 16 nodes per segment), the series summed at
 every node. Compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`, the default where
 numba imports; equal to the numpy reference to ≤ 1e-10 relative, seen ≤ 5e-14): 0.9–2.7 ms of
-CPU per angle at 16 nodes, 0.35–1.0 ms at the 10 that ``auto`` uses (40°, exponential kσ
-0.26–1.32, Gaussian kσ 1.3; loaded 2-core machine, thread CPU time), against 100–250 ms for
+CPU per angle at 16 nodes, 0.18–0.50 ms (mean 0.33) at the 10 radial × 8 azimuth that
+``auto`` uses (issue 20's 162-case 40° grid; loaded 2-core machine), against 100–250 ms for
 numpy (``EMSCATTER_KERNELS=numpy``). ``method="auto"`` adds it in backscatter on every branch
 (:mod:`emscatter.solvers.auto_crosspol`); the IEM solver keeps the published IEM term.
 """
