@@ -83,6 +83,7 @@ def test_node_rule_converged_at_large_roughness():
         (dict(rough=em.ExponentialCorrelation(5.0 / K, 10.0 / K)), "k\\*sigma"),
         (dict(theta=0.5 * math.pi), "theta"),
         (dict(n_nodes=2), "n_nodes"),
+        (dict(n_azimuth=3), "n_azimuth"),
         (dict(k=-1.0), "k"),
         (dict(phi_i=float("nan")), "phi_i"),
     ],
@@ -90,6 +91,6 @@ def test_node_rule_converged_at_large_roughness():
 def test_bad_input_names_the_parameter(kwargs, match):
     args = dict(rough=em.GaussianCorrelation(0.3 / K, 3.0 / K), eps=9 + 1j, k=K, theta=0.5)
     args.update(kwargs)
-    extra = {k: args.pop(k) for k in ("n_nodes", "phi_i") if k in args}
+    extra = {k: args.pop(k) for k in ("n_nodes", "n_azimuth", "phi_i") if k in args}
     with pytest.raises(ValueError, match=match):
         backscatter_resummed(args["rough"], args["eps"], args["k"], args["theta"], **extra)

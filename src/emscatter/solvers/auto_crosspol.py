@@ -13,8 +13,9 @@ every branch adds the same hv: the resummed second-order cross-pol
 (:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed` — second-order SPM's
 exact kernel over the whole spectral plane with the IEM's Gaussian height series; issue 20:
 against NMM3D at 40° its HV RMSE is 3.24 dB, bias −2.10 dB, where the IEM term below has 5.23 /
-−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: 0.35–1 ms of CPU
-per angle), on :data:`RESUMMED_NODES` nodes per segment. Without numba (or with
+−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: 0.18–0.5 ms of CPU
+per angle), on :data:`RESUMMED_NODES` radial × :data:`RESUMMED_AZIMUTH_NODES` azimuth
+nodes per segment. Without numba (or with
 ``EMSCATTER_KERNELS=numpy``) its numpy reference runs, the same values at 35–80 ms per angle
 (each angle once: remembered). So:
 
@@ -83,10 +84,15 @@ _IEM_OPTIONS = frozenset({"crosspol", "crosspol_order", "rms_slope"})  # (its cr
 #: IEM run with ``crosspol=False``: the same term, remembered per angle).
 IEM_BACKSCATTER = "iem (backscatter)"
 SPM2_NODES = 6
-#: Nodes per segment of the resummed term's rule: within 0.05 dB of its 16-node default
-#: (Gaussian and exponential, kσ 0.13–2.5, kℓ 0.5–20, ε 3 + i and 30 + 3i, 10–70°; 8 nodes:
-#: 0.07 dB, 12: 0.009 dB) at 0.4 of its cost.
+#: Nodes per radial segment of the resummed term's rule, and :data:`RESUMMED_AZIMUTH_NODES`
+#: per azimuth segment: (10, 8) is within 0.046 dB of the 16 × 16 default on the box
+#: (Gaussian and exponential, kσ 0.13–2.5, kℓ 0.5–20, ε 3 + i and 30 + 3i, 10–70°, 1176
+#: angles; 99th percentile 0.031 dB) and 0.028 dB on issue 20's 162-case grid, at 0.84 of
+#: (10, 10)'s cost, which is 0.051 / 0.028 dB; (8, 8): 0.069 dB; 6 radial nodes: 0.23 dB
+#: at ε = 30 + 3i (the radial rule of the transmitted branch point; measured 2026-12,
+#: tests/test_auto_crosspol.py checks the bound on a sample).
 RESUMMED_NODES = 10
+RESUMMED_AZIMUTH_NODES = 8
 #: The resummed term fades linearly into the branch's own term between this ``kσ cosθ`` and
 #: the resummed term's limit :data:`MAX_KSIGMA_COS` (no step where it stops).
 FADE_KSIGMA_COS = 2.5
@@ -250,9 +256,9 @@ def _today_label(name: str) -> str:
 
 def _resummed_values(rough, eps: complex, k: float, tb, pb):
     """The resummed hv (:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed`,
-    :data:`RESUMMED_NODES` per segment) at flat backscatter angles ``tb``, ``pb`` [rad],
-    remembered per (roughness, ε, k, θi, φi)."""
-    from .iem.crosspol_resummed import backscatter_resummed
+    :data:`RESUMMED_NODES` × :data:`RESUMMED_AZIMUTH_NODES` per segment) at flat backscatter
+    angles ``tb``, ``pb`` [rad], remembered per (roughness, ε, k, θi, φi)."""
+    from .iem.crosspol_resummed import _values
 
     iso = rough.length == rough.length_y
     pairs = np.stack([tb, np.zeros_like(pb) if iso else np.mod(pb, 2 * math.pi)], -1)
@@ -263,9 +269,10 @@ def _resummed_values(rough, eps: complex, k: float, tb, pb):
         vals = np.empty(idx.size)
         for f in np.unique(uniq[idx, 1]):  # one call per azimuth: every angle at once
             sel = idx[uniq[idx, 1] == f]
-            vals[np.searchsorted(idx, sel)] = backscatter_resummed(
-                rough, eps, k, uniq[sel, 0], f, n_nodes=RESUMMED_NODES
-            )
+            th = uniq[sel, 0]  # (distinct, flat, checked by the API: the unchecked path)
+            vals[np.searchsorted(idx, sel)] = _values(
+                rough, eps, float(k), th, float(f), RESUMMED_NODES, RESUMMED_AZIMUTH_NODES
+            )[0]
         return vals
 
     return _cached(keys, compute)[inv.reshape(-1)]

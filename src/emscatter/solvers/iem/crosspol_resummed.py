@@ -50,8 +50,8 @@ the horizon for a conductor), Gaussian or exponential 2-D surfaces.
 Cost: one σ⁰⁽²²⁾ node set per incidence angle (16 × 16 nodes per segment), the series summed at
 every node. Compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`, the default where
 numba imports; equal to the numpy reference to ≤ 1e-10 relative, seen ≤ 5e-14): 0.9–2.7 ms of
-CPU per angle at 16 nodes, 0.35–1.0 ms at the 10 that ``auto`` uses (40°, exponential kσ
-0.26–1.32, Gaussian kσ 1.3; loaded 2-core machine, thread CPU time), against 100–250 ms for
+CPU per angle at 16 nodes, 0.18–0.50 ms (mean 0.33) at the 10 radial × 8 azimuth that
+``auto`` uses (issue 20's 162-case 40° grid; loaded 2-core machine), against 100–250 ms for
 numpy (``EMSCATTER_KERNELS=numpy``). ``method="auto"`` adds it in backscatter on every branch
 (:mod:`emscatter.solvers.auto_crosspol`); the IEM solver keeps the published IEM term.
 """
@@ -103,33 +103,47 @@ def _check(roughness, eps, k, theta, n_nodes):
 
 
 def backscatter_resummed(roughness, eps, k: float, theta, phi_i: float = 0.0, *,
-                         n_nodes: int = 16, both: bool = False) -> np.ndarray:  # fmt: skip
+                         n_nodes: int = 16, n_azimuth: int | None = None,
+                         both: bool = False) -> np.ndarray:  # fmt: skip
     """Backscatter cross-polarized σ⁰_hv [-] (``θs = θi``, ``φs = φi + π``) at incidence angles
     ``theta`` [rad] (any shape, each ``< π/2``), azimuth ``phi_i`` [rad]: the exact second-order
     kernel with the IEM's height series (module docstring; equation there).
 
     ``roughness`` a 2-D Gaussian or exponential surface, ``eps`` one dielectric permittivity,
-    ``k`` [rad/m], ``kσ cosθ ≤ 3``; ``n_nodes`` Gauss–Legendre nodes per segment of the
-    σ⁰⁽²²⁾ rule. ``both=True`` returns ``(hv, vh)`` stacked on a leading axis (equal in
-    backscatter by reciprocity; tested). Raises ``ValueError`` naming the parameter."""
+    ``k`` [rad/m], ``kσ cosθ ≤ 3``; ``n_nodes`` Gauss–Legendre nodes per radial segment of the
+    σ⁰⁽²²⁾ rule, ``n_azimuth`` per azimuth segment (default ``n_nodes``). ``both=True``
+    returns ``(hv, vh)`` stacked on a leading axis (equal in backscatter by reciprocity;
+    tested). Raises ``ValueError`` naming the parameter."""
     rough, eps, k, th = _check(roughness, eps, k, theta, n_nodes)
+    n_az = n_nodes if n_azimuth is None else n_azimuth
+    if not isinstance(n_az, int | np.integer) or n_az < 4:
+        raise ValueError(f"n_azimuth must be an integer >= 4, got {n_azimuth!r}")
     d = float(phi_i)
     if not math.isfinite(d):
         raise ValueError(f"phi_i must be a finite angle [rad], got {phi_i!r}")
     uniq, inv = np.unique(th.ravel(), return_inverse=True)
-    out = _compiled(rough, eps, k, uniq, d, n_nodes)
-    if out is None:
-        out = _numpy(rough, eps, k, uniq, d, n_nodes)
-    elif np.isnan(out[0]).any():  # angles whose node rule lacks the point symmetry
-        miss = np.isnan(out[0])
-        out[:, miss] = _numpy(rough, eps, k, uniq[miss], d, n_nodes)
-    if not np.all(np.isfinite(out)) or np.any(out < 0):
-        raise FloatingPointError(f"resummed cross-pol not finite/positive at theta={uniq!r}")
+    out = _values(rough, eps, k, uniq, d, int(n_nodes), int(n_az))
     res = out[:, inv].reshape((2, *th.shape))
     return res if both else res[0]
 
 
-def _compiled(rough, eps, k, uniq, d, n_nodes):
+def _values(rough, eps: complex, k: float, uniq, d: float, n_nodes: int, n_azimuth: int):
+    """``(hv, vh)`` (2, n) at distinct flat angles ``uniq`` [rad] (1-D), azimuth ``d`` [rad],
+    inputs already checked (:func:`backscatter_resummed`; ``auto``'s supplement calls this
+    directly, its inputs validated by the API): compiled, the numpy reference where the rule
+    lacks the point symmetry or numba is absent; raises where a value is not finite/positive."""
+    out = _compiled(rough, eps, k, uniq, d, n_nodes, n_azimuth)
+    if out is None:
+        out = _numpy(rough, eps, k, uniq, d, n_nodes, n_azimuth)
+    elif np.isnan(out[0]).any():  # angles whose node rule lacks the point symmetry
+        miss = np.isnan(out[0])
+        out[:, miss] = _numpy(rough, eps, k, uniq[miss], d, n_nodes, n_azimuth)
+    if not np.all(np.isfinite(out)) or np.any(out < 0):
+        raise FloatingPointError(f"resummed cross-pol not finite/positive at theta={uniq!r}")
+    return out
+
+
+def _compiled(rough, eps, k, uniq, d, n_nodes, n_azimuth):
     """``(hv, vh)`` (2, n) from the compiled kernel (:mod:`.kernels.crosspol_resummed`;
     ``vh = hv`` there: reciprocity, tested on the numpy path), NaN where an angle's rule lacks
     the point symmetry, or None where the numpy reference runs (backend numpy). Any call takes it
@@ -144,13 +158,13 @@ def _compiled(rough, eps, k, uniq, d, n_nodes):
     code = kern.GAUSSIAN if type(rough) is GaussianCorrelation else kern.EXPONENTIAL
     vals, done = kern.backscatter_resummed(
         uniq, eps, k, rough.sigma, rough.length, rough.length_y, d, code, int(n_nodes),
-        threads=min(os.cpu_count() or 1, 8),
+        threads=min(os.cpu_count() or 1, 8), n_azimuth=int(n_azimuth),
     )  # fmt: skip
     vals[~done] = np.nan
     return np.stack([vals, vals])
 
 
-def _numpy(rough, eps, k, uniq, d, n_nodes):
+def _numpy(rough, eps, k, uniq, d, n_nodes, n_azimuth):
     """The numpy reference of :func:`backscatter_resummed`: ``(hv, vh)`` (2, n) at the
     distinct angles ``uniq`` [rad], azimuth ``d`` [rad] (the whole-plane σ⁰⁽²²⁾ rule, both
     polarizations of the kernel, the series by
@@ -162,7 +176,7 @@ def _numpy(rough, eps, k, uniq, d, n_nodes):
     for j, t in enumerate(uniq):  # one node set per angle, as σ⁰⁽²²⁾'s reference
         si, ci = math.sin(t), math.cos(t)
         kis, ksv = (k * si, 0.0), (-k * si, 0.0)
-        px, py, wt = spm2._nodes(rough, eps, k, kis, ksv, n_nodes, n_nodes)
+        px, py, wt = spm2._nodes(rough, eps, k, kis, ksv, n_nodes, n_azimuth)
         Q = (k * rough.sigma * ci) ** 2
 
         def w_hat(x, y, Q=Q):  # ℓₓℓᵧ T(Q, κ) of the surface-frame wavevector

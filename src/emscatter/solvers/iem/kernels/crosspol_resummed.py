@@ -18,7 +18,7 @@ plane where the surface's quadratic form is even under ``y → −y``). What dif
   ``fₙ = e^{−K²/4n}`` (Gaussian) or ``cₙ = e^{−Q} Qⁿ⁻¹/n! · (2πn²)⁻¹`` with
   ``fₙ = (1 + K²/n²)^{−3/2}`` (exponential) — the closed forms of
   ``kirchhoff.po.log_nfold`` — the ``cₙ`` once per angle by recurrence;
-* until the geometric bound of the rest is below 1e-16 of the sum (the terms are log-concave
+* until the geometric bound of the rest is below 1e-13 of the sum (the terms are log-concave
   in n from n = 2, as ``iem.kernels.series._peak`` uses: past the peak the term ratio only
   falls; the bound is first tried on ``t₃/t₂``: at K = 0 the exponential's ``t₂/t₁ = Q/8`` is
   below ``t₃/t₂ = 4Q/27``);
@@ -55,13 +55,15 @@ __all__ = ["backscatter_resummed", "GAUSSIAN", "EXPONENTIAL", "N_COEF"]
 EXPONENTIAL = 1
 #: Series coefficients kept per angle (``Q ≤ 9``: ``cₙ`` < 1e-300 of the first by n ≈ 200).
 N_COEF = 1024
-_SERIES_RTOL = 1e-16
+_SERIES_RTOL = 1e-13
 
 
 @inline
-def _coefficients(Q, spec, c):
+def _coefficients(Q, spec, c, inv):
     """``c[n − 1] = e^{−Q} Qⁿ⁻¹/n! / (4πn)`` (Gaussian) or ``/ (2πn²)`` (exponential), by
-    recurrence, until they fall below 1e-300; count returned."""
+    recurrence, until they fall below 1e-300; count returned. ``inv[n − 1]`` the argument
+    scale of ``fₙ``: ``1/(4n)`` (Gaussian) or ``1/n²`` (exponential), so that the node loop
+    multiplies instead of dividing."""
     a = math.exp(-Q)
     m = 0
     for n in range(1, c.size + 1):
@@ -70,27 +72,27 @@ def _coefficients(Q, spec, c):
         if a < 1e-300:
             break
         c[n - 1] = a / (4.0 * math.pi * n) if spec == GAUSSIAN else a / (2.0 * math.pi * n * n)
+        inv[n - 1] = 0.25 / n if spec == GAUSSIAN else 1.0 / (n * n)
         m = n
     return m
 
 
 @inline
-def _t_hat(K2, c, nc, spec, area):
-    """``ℓₓℓᵧ T(Q, K)`` at ``K² = K2`` from the angle's coefficients ``c[:nc]`` (module
-    docstring: linear-space sum, geometric tail bound)."""
+def _t_hat(K2, c, inv, nc, spec, area):
+    """``ℓₓℓᵧ T(Q, K)`` at ``K² = K2`` from the angle's coefficients ``c[:nc]``, ``inv[:nc]``
+    (module docstring: linear-space sum, geometric tail bound ``t r/(1 − r) ≤ rtol·sum`` with
+    ``r = t/t_prev``, written ``t² ≤ rtol (t_prev − t) sum``: no division)."""
     acc, prev = 0.0, 0.0
     for i in range(nc):
-        n = i + 1.0
         if spec == GAUSSIAN:
-            f = math.exp(-K2 / (4.0 * n))
+            f = math.exp(-K2 * inv[i])
         else:
-            u = 1.0 + K2 / (n * n)
+            u = 1.0 + K2 * inv[i]
             f = 1.0 / (u * math.sqrt(u))
         t = c[i] * f
         acc += t
         if i >= 2 and t < prev:  # past the peak: the ratio only falls (log-concave from n = 2)
-            r = t / prev
-            if t * r <= _SERIES_RTOL * (1.0 - r) * acc:
+            if t * t <= _SERIES_RTOL * (prev - t) * acc:
                 break
         prev = t
     return area * acc
@@ -120,6 +122,7 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
     tm = np.empty((kr.size, psi.size))
     zc = np.empty(6, dtype=np.complex128)
     coef = np.empty(N_COEF)
+    cinv = np.empty(N_COEF)
     inv_k2 = 1.0 / (sq_eps * k)
     area = lx * ly
     for j in range(start, stop):
@@ -151,12 +154,12 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
                     first += 1
         # the height series at T̂(p − k_i⊥) of every node computed (the upper half if half)
         Q = (k * sigma * ci) ** 2
-        nc = _coefficients(Q, spec, coef)
+        nc = _coefficients(Q, spec, coef, cinv)
         for ir in range(nr):
             for ia in range(first, na):
                 px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-                tm[ir, ia] = _t_hat(_q2(px - kis0, py - kis1, cr, sr, lx, ly), coef, nc, spec,
-                                    area)  # fmt: skip
+                q = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
+                tm[ir, ia] = _t_hat(q, coef, cinv, nc, spec, area)
         _fill_g(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, zc, kr, nr, cpsi, spsi,
                 first, na)  # fmt: skip
         val = 0.0
@@ -181,15 +184,18 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
 
 def backscatter_resummed(theta, eps: complex, k: float, sigma: float, length: float,
                          length_y: float, phi_i: float, spectrum: int, n_nodes: int,
-                         threads: int = 1):  # fmt: skip
+                         threads: int = 1, n_azimuth: int | None = None):  # fmt: skip
     """``(σ⁰_hv, computed)`` at the flat angles ``theta`` [rad] (checked by the caller):
-    values [-] and a bool mask (False: the caller's numpy reference runs that angle)."""
+    values [-] and a bool mask (False: the caller's numpy reference runs that angle).
+    ``n_nodes`` Gauss–Legendre nodes per radial segment, ``n_azimuth`` per azimuth segment
+    (default ``n_nodes``)."""
     theta = np.ascontiguousarray(theta, dtype=np.float64)
     n = theta.size
     out, flag = np.zeros(n), np.zeros(n, dtype=np.int64)
     s, ds = unit_rule(int(n_nodes))
+    sa, dsa = unit_rule(int(n_nodes if n_azimuth is None else n_azimuth))
     args = (complex(eps), float(k), float(sigma), float(length), float(length_y),
-            math.cos(phi_i), math.sin(phi_i), int(spectrum), s, ds, s, ds)  # fmt: skip
+            math.cos(phi_i), math.sin(phi_i), int(spectrum), s, ds, sa, dsa)  # fmt: skip
 
     def part(a: int, b: int) -> None:
         _kernel(theta, *args, a, b, out, flag)
