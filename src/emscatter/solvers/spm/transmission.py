@@ -53,7 +53,10 @@ import numpy as np
 
 from emscatter.conventions import check_positive
 from emscatter.scattering import Scattering
-from emscatter.solvers.kirchhoff.transmission.go import check_transmission_eps, transmission_angles
+from emscatter.solvers.kirchhoff.transmission.go import (
+    check_lossy_transmission_eps,
+    transmission_angles,
+)
 from emscatter.solvers.spm.second_order import _second_order_R
 from emscatter.solvers.spm.validity import check_validity
 from emscatter.spectra import Roughness
@@ -62,6 +65,8 @@ __all__ = [
     "bistatic_transmission",
     "coherent_transmissivity",
     "transmission_amplitudes",
+    "flux_factors",
+    "diffuse_transmissivity",
     "OUT_OF_RANGE",
     "SPMWarning",
 ]
@@ -78,6 +83,24 @@ def _kz(k2, kperp2):
     """√(k² − k⊥²) with Im ≥ 0 (decaying branch)."""
     r = np.sqrt(np.asarray(k2 - kperp2, dtype=complex))
     return np.where(r.imag < 0, -r, r)
+
+
+def flux_factors(eps, k: float, kperp) -> np.ndarray:
+    """Downward power flux through the plane ``z = 0⁻`` of a unit-amplitude h and v wave of
+    real transverse wavenumber ``kperp`` [rad/m] in the lower medium, in units of the flux
+    ``k₁z`` of a unit wave in vacuum per unit ``k₁z``: ``(2, ...)`` = ``(Re k₂z,
+    |ε| Re(k₂z/ε))`` [rad/m], ``k₂z = √(εk² − k⊥²)`` (Im ≥ 0).
+
+    The time-averaged Poynting vector ``½ Re(E × H*)·(−ẑ)`` of an inhomogeneous plane wave
+    with ``E = b ĥ`` (TE) is ``|b|² Re k₂z / (2ωμ₀)``; with ``H̃ = ωμ₀H = k₂ b ĥ`` (TM, the
+    amplitude convention of :func:`transmission_amplitudes`) it is ``|b|² |ε| Re(k₂z/ε) /
+    (2ωμ₀)`` (Born & Wolf §1.5.3 and §14.2 for absorbing media; Chew, *Waves and Fields in
+    Inhomogeneous Media*, 1990, §2.1). TE and TM fields of one ``k⊥`` carry no cross flux
+    (``(k × ĥ) × (k* × ĥ) ∥ ĥ`` is horizontal). Lossless: both ``k₂z`` (0 for evanescent
+    waves)."""
+    e = np.asarray(eps, dtype=complex)
+    kz2 = _kz(e * k * k, np.asarray(kperp, dtype=float) ** 2)
+    return np.stack(np.broadcast_arrays(kz2.real, (np.abs(e) * (kz2 / e)).real))
 
 
 def _plane_wave(km, cx, cy, K, amp_h, amp_v, qz):
@@ -169,7 +192,7 @@ def _incidence_source(eps, k, ti) -> np.ndarray:
 def _rotated(rough: Roughness, eps, k, ti, tt, pt, pi_):
     """Transverse wavenumbers of the transmitted directions in the ``φi = 0`` frame and the
     spectrum ``w`` at ``κ`` in the surface's axes."""
-    eta = np.sqrt(eps)
+    eta = np.sqrt(eps).real  # the transmitted direction: sinθt = k⊥ / (Re k₂)
     d = pt - pi_
     kt = eta * k * np.sin(tt)
     kx, ky = kt * np.cos(d), kt * np.sin(d)
@@ -186,21 +209,7 @@ def _check(roughness, eps, k, theta_i, theta_t, phi_t, phi_i):
     if roughness.dimension != 2:
         raise ValueError("SPM transmission needs a 2-D surface (dimension=2), got a 1-D profile")
     k = check_positive("k", k, unit="rad/m")
-    try:
-        e = check_transmission_eps(eps)
-    except ValueError as err:
-        if "pec" in str(err):
-            raise ValueError(
-                "eps='pec': a perfect conductor transmits nothing; SPM transmission needs a "
-                "lossless dielectric (real eps > 0, eps != 1)"
-            ) from None
-        if "must be real" in str(err):
-            raise ValueError(
-                f"eps must be real for SPM transmission (a lossless dielectric: σ⁰_t is the "
-                f"power of the propagating waves below the interface, which an absorbing "
-                f"medium attenuates with depth), got eps = {eps!r}"
-            ) from None
-        raise ValueError(str(err).replace("GO transmission", "SPM transmission")) from None
+    e = check_lossy_transmission_eps(eps, "SPM")
     arrs = transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i)
     return k, arrs
 
@@ -213,7 +222,9 @@ def jones(roughness, eps, k, theta_i, theta_t, phi_t, phi_i=0.0) -> np.ndarray:
     k, (ti, tt, pt, pi_, e) = _check(roughness, eps, k, theta_i, theta_t, phi_t, phi_i)
     kx, ky, w = _rotated(roughness, e, k, ti, tt, pt, pi_)
     b = transmission_amplitudes(e, k, ti, kx, ky)
-    scale = 4 * math.pi * e**1.5 * (k * np.cos(tt) * roughness.sigma) ** 2 * w
+    re_k2 = np.sqrt(e).real * k
+    flux = flux_factors(e, k, np.hypot(kx, ky))[:, None]  # per transmitted polarization
+    scale = 4 * math.pi * roughness.sigma**2 * w * re_k2**2 * np.cos(tt) * flux / k
     # the h/v bases (ẑ × k̂) turn with the frame: the φi = 0 amplitudes hold in any frame
     return b * np.sqrt(np.maximum(scale, 0.0))
 
@@ -227,22 +238,94 @@ def coherent_transmissivity(roughness, eps, k: float, theta_i, phi_i=0.0) -> np.
     if roughness.is_isotropic:
         pi_ = np.zeros_like(pi_)
     out = np.zeros((2, *ti.shape))
-    keys = np.stack([ti.ravel(), pi_.ravel(), e.ravel()])
+    keys = np.stack([ti.ravel(), pi_.ravel(), e.real.ravel(), e.imag.ravel()])
     uniq, inv = np.unique(keys, axis=1, return_inverse=True)
     vals = np.empty((2, uniq.shape[1]))
+    e_u = uniq[2] + 1j * uniq[3]
     s2 = roughness.sigma**2
-    for ev in np.unique(uniq[2]):  # one medium per call (the second-order nodes depend on it)
-        m = uniq[2] == ev
+    for ev in np.unique(e_u):  # one medium per call (the second-order nodes depend on it)
+        m = e_u == ev
         t_u, p_u = uniq[0, m], uniq[1, m]
         _, _, T0, T2 = _second_order_R(
             roughness, np.complex128(ev), k, t_u, 16, 16, transmitted=True, phi_i=p_u
         )
         k1zi = k * np.cos(t_u)
-        k2zi = _kz(ev * k * k, (k * np.sin(t_u)) ** 2).real
-        t = (np.abs(T0) ** 2 + 2 * s2 * (np.conj(T0) * T2).real) * k2zi / k1zi
+        flux = flux_factors(ev, k, k * np.sin(t_u))  # (Re k₂zi, |ε| Re(k₂zi/ε))
+        t = (np.abs(T0) ** 2 + 2 * s2 * (np.conj(T0) * T2).real) * flux / k1zi
         vals[:, m] = np.clip(t, 0.0, 1.0)
     out[:] = vals[:, inv.reshape(-1)].reshape(2, *ti.shape)
     return out
+
+
+def _gl(n, a, b, cluster=False):
+    """Gauss–Legendre nodes and weights on [a, b]; ``cluster``: through ``x = a + (b − a)
+    (1 − cos u)/2`` (dense at both ends: removes the square-root kinks of ``k_z`` there)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    if not cluster:
+        return 0.5 * (b - a) * x + 0.5 * (b + a), 0.5 * (b - a) * w
+    u, wu = 0.5 * math.pi * (x + 1), 0.5 * math.pi * w
+    return a + 0.5 * (b - a) * (1 - np.cos(u)), wu * 0.5 * (b - a) * np.sin(u)
+
+
+def diffuse_transmissivity(
+    roughness, eps, k: float, theta_i, phi_i=0.0, *, n: int = 48, kappa_max=None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Diffuse (first-order) transmitted flux through ``z = 0⁻`` per incident polarization
+    ``(2, ...)`` [-] (summed over the transmitted ones) at ``theta_i`` [rad]:
+    ``(T_diff, T_beyond)``.
+
+    ``T_diff = ∫ σ⁰_t dΩ_t / (4π cosθi)`` over the directions of :func:`bistatic_transmission`
+    (``sinθt = k⊥/Re k₂`` ≤ 1); ``T_beyond`` the flux of the waves with ``k⊥ > Re k₂``, which
+    an absorbing medium carries too (``Re k₂z > 0``; 0 for a lossless one, where they are
+    evanescent): ``∫ d²k⊥ σ² w(κ) Σ_p |b_pq|² f_p / k₁zi`` (:func:`flux_factors`) up to
+    ``|κ| ≤ kappa_max`` (default ``16/ℓ_min``: the Gaussian spectrum is ``e⁻⁶⁴`` there; pass a
+    larger value for slowly decaying spectra). ``R_coh + R_diff + T_coh + T_diff + T_beyond``
+    is the energy budget (module docstring). Gauss–Legendre, ``2n × n`` and ``n × n`` nodes
+    (split at the branch circles ``|k⊥| = k``, ``Re k₂``)."""
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 4:
+        raise ValueError(f"n must be an integer >= 4 (quadrature nodes), got {n!r}")
+    k, (ti, _, _, pi_, e) = _check(roughness, eps, k, theta_i, 0.0, 0.0, phi_i)
+    if kappa_max is None:
+        kappa_max = 16.0 / min(roughness.length, roughness.length_y or roughness.length)
+    kappa_max = check_positive("kappa_max", kappa_max, unit="rad/m")
+    shape = ti.shape
+    ti, pi_, e = (a.reshape(-1, 1, 1) for a in (ti, pi_, e))
+    re_eta = np.sqrt(e).real
+    out = np.zeros((2, 2, ti.shape[0]))
+    p, wp = _gl(n, 0.0, 2 * math.pi)
+    for j in range(ti.shape[0]):  # per medium and incidence (the kinks move); vectorized inside
+        eta, sl = float(re_eta[j, 0, 0]), slice(j, j + 1)
+        if eta > 1:  # the vacuum branch circle |k⊥| = k inside the transmitted cone
+            (a, wa), (b, wb) = (
+                _gl(n, 0.0, math.asin(1 / eta)),
+                _gl(n, math.asin(1 / eta), 0.5 * math.pi),
+            )
+            t, wt = np.r_[a, b], np.r_[wa, wb]
+        else:
+            t, wt = _gl(2 * n, 0.0, 0.5 * math.pi)
+        tt, pt = np.meshgrid(t, p, indexing="ij")
+        jj = jones(roughness, e[sl], k, ti[sl], tt, pt + pi_[sl], pi_[sl])
+        dom = np.outer(wt * np.sin(t), wp)
+        out[0, :, j] = (np.abs(jj[:, :, 0]) ** 2 * dom).sum(axis=(0, -1, -2))
+        out[0, :, j] /= 4 * math.pi * math.cos(float(ti[j, 0, 0]))
+        if abs(e[j, 0, 0].imag) == 0:
+            continue  # lossless: the waves beyond are evanescent
+        top = eta * k + k * math.sin(float(ti[j, 0, 0])) + kappa_max
+        cuts = sorted({eta * k, max(k, eta * k), top})
+        nodes = [_gl(n, a, b, cluster=True) for a, b in zip(cuts[:-1], cuts[1:], strict=False)]
+        kr, wk = np.concatenate([q[0] for q in nodes]), np.concatenate([q[1] for q in nodes])
+        kk, pp = np.meshgrid(kr, p, indexing="ij")
+        kx, ky = kk * np.cos(pp), kk * np.sin(pp)
+        dx, dy = kx - k * math.sin(float(ti[j, 0, 0])), ky
+        if not roughness.is_isotropic:
+            c, s_ = math.cos(float(pi_[j, 0, 0])), math.sin(float(pi_[j, 0, 0]))
+            dx, dy = c * dx - s_ * dy, s_ * dx + c * dy
+        w = roughness.spectrum(dx, dy)
+        b = transmission_amplitudes(e[j, 0, 0], k, float(ti[j, 0, 0]), kx, ky)
+        f = flux_factors(e[j, 0, 0], k, kk)[:, None]
+        dens = roughness.sigma**2 * w * np.abs(b) ** 2 * f / (k * math.cos(float(ti[j, 0, 0])))
+        out[1, :, j] = (dens * np.outer(wk * kr, wp)).sum(axis=(0, -1, -2))
+    return out[0].reshape(2, *shape), out[1].reshape(2, *shape)
 
 
 def bistatic_transmission(
@@ -275,7 +358,9 @@ def bistatic_transmission(
     k, (ti, tt, pt, pi_, e) = _check(roughness, eps, k, theta_i, theta_t, phi_t, phi_i)
     j = jones(roughness, e, k, ti, tt, pt, pi_)
     sigma0 = np.abs(j) ** 2
-    validity = check_validity(roughness, k, eps=float(np.max(e)), theta_i=ti)
+    validity = check_validity(
+        roughness, k, eps=complex(e.ravel()[np.argmax(np.abs(e))]), theta_i=ti
+    )
     failing = _failing(validity, ti.shape)
     bad = _policy(validity, failing, out_of_range)
     if np.any(bad):

@@ -91,6 +91,7 @@ __all__ = [
     "transmission_jones",
     "transmission_intensity",
     "check_transmission_eps",
+    "check_lossy_transmission_eps",
     "check_transmission_shadowing",
 ]
 
@@ -146,6 +147,30 @@ def check_transmission_eps(eps) -> np.ndarray:
             f"transmitted field is the undisturbed incident one), got eps = {bad!r}"
         )
     return np.asarray(re, dtype=float)
+
+
+def check_lossy_transmission_eps(eps, method: str) -> np.ndarray:
+    """``ε`` as a complex array for the solvers that accept an absorbing lower medium (SPM,
+    PO): finite, ``Im ε ≥ 0`` (emscatter's ``exp(−iωt)`` convention; a negative imaginary part
+    is a ConventionError naming the value), not "pec", and for a real ``ε``: ``ε > 0``,
+    ``ε ≠ 1``. ``method`` names the solver in the messages ("SPM", "PO")."""
+    if is_pec(eps):
+        raise ValueError(
+            f"eps='pec': a perfect conductor transmits nothing; {method} transmission needs a "
+            "dielectric (complex eps with Im eps >= 0, or real eps > 0, eps != 1)"
+        )
+    e = check_eps(eps)
+    lossless = np.abs(np.imag(e)) <= LOSSLESS_RTOL * np.abs(e)
+    re = np.real(e)
+    wrong = lossless & ((re <= 0) | (re == 1.0))
+    if np.any(wrong):
+        bad = np.broadcast_to(e, wrong.shape)[wrong].ravel()[0]
+        raise ValueError(
+            f"eps must be > 0 and != 1 for {method} transmission when real (eps = 1 is no "
+            f"interface; a real eps <= 0 has no propagating or absorbing transmitted wave), "
+            f"got eps = {bad!r}; an absorbing medium has Im eps > 0 (exp(-i omega t))"
+        )
+    return np.where(lossless, re + 0j, e).astype(complex)
 
 
 def check_transmission_shadowing(shadowing) -> str | None:
