@@ -230,8 +230,10 @@ def transmission_jones(eps, theta_i, theta_t, phi_t, phi_i=0.0) -> np.ndarray:
     return _jones(e, ti, tt, pt.astype(float), pi_.astype(float))
 
 
-def _jones(e, ti, tt, pt, pi_):
-    eta = np.sqrt(e)
+def _jones(e, ti, tt, pt, pi_, eta=None):
+    """(the facet geometry uses the real index ``eta``, default ``√e``; PO passes ``Re √ε``
+    with a complex ``e`` for an absorbing medium, whose facet Fresnel is then lossy)"""
+    eta = np.sqrt(e) if eta is None else eta
     ki, kt, hi, vi, ht, vt = _dirs(ti, pi_, tt, pt)
     _, ci, co, _ = _half(ki, kt, eta)
     ok = (ci > 0) & (co < 0)

@@ -65,7 +65,7 @@ from emscatter.solvers.kirchhoff.transmission.go import (
     _dirs,
     _half,
     _jones,
-    check_transmission_eps,
+    check_lossy_transmission_eps,
     transmission_angles,
 )
 
@@ -86,16 +86,19 @@ def coherent_transmissivity(roughness, eps, k: float, theta_i) -> np.ndarray:
     0 beyond the critical angle for ``ε < 1``). ``k``: the incident medium's wavenumber."""
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
-    e = check_transmission_eps(eps)
+    e = check_lossy_transmission_eps(eps, "PO")
     ti = check_angle("theta_i", theta_i)
     ti, e = np.broadcast_arrays(ti, e)
     ci = np.cos(ti)
-    s2 = (1.0 - ci * ci) / e
-    ct = np.sqrt(np.clip(1.0 - s2, 0.0, 1.0))
+    # q_z / k = cosθi − k₂z/k, k₂z = √(ε − sin²θi) k (Im ≥ 0; imaginary beyond the critical
+    # angle of a lossless ε < 1, where T_F = 0): |⟨e^{i q_z f}⟩|² = exp(−σ² Re q_z²)
+    kz2 = np.sqrt(e - (1.0 - ci * ci) + 0j)
+    kz2 = np.where(kz2.imag < 0, -kz2, kz2)
     rh2, rv2, _ = fast_fresnel(e, ci, cross=False)
-    att = np.exp(-((k * rough.sigma * (ci - np.sqrt(e) * ct)) ** 2))
+    att = np.exp(-((k * rough.sigma) ** 2) * ((ci - kz2) ** 2).real)
     t = np.stack([1.0 - rh2, 1.0 - rv2]) * att
-    return np.where(s2 < 1.0, np.clip(t, 0.0, 1.0), 0.0)
+    tir = (np.abs(e.imag) == 0) & ((1.0 - ci * ci) >= e.real)
+    return np.where(tir, 0.0, np.clip(t, 0.0, 1.0))
 
 
 def bistatic_transmission(
@@ -147,12 +150,13 @@ def bistatic_transmission(
         raise ValueError(f"rtol must be in (0, 1), got {rtol!r}")
     if isinstance(max_terms, bool) or not isinstance(max_terms, int | np.integer) or max_terms < 1:
         raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
-    e = check_transmission_eps(eps)
+    e = check_lossy_transmission_eps(eps, "PO")
     ti, tt, pt, pi_, e = transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i)
-    validity = po.check_validity(rough, k, eps=float(np.max(e)), theta_i=ti)
+    e_big = complex(e.ravel()[np.argmax(np.abs(e))])
+    validity = po.check_validity(rough, k, eps=e_big if e_big.imag else e_big.real, theta_i=ti)
     bad = _policy(validity, ti.shape, out_of_range)
     shape = ti.shape
-    eta = np.sqrt(e)
+    eta = np.sqrt(e).real  # the direction of a wave of the lower medium: sinθt = k⊥/Re k₂
     ki, kt, _, _, _, _ = _dirs(ti, pi_, tt, pt)
     _, ci, co, w2 = _half(ki, kt, eta)
     w = -ki + eta * kt
@@ -169,9 +173,16 @@ def bistatic_transmission(
         )
         logt[sl] = comp if comp is not None else po.series_sum(log_w, Q[sl], K[sl], **opts)
     pref = 4 * math.pi * ks**2 * (k * rough.length) * (k * rough.length_y)
-    geo = pref * e * np.abs(ci * co) * w2 * np.exp(logt.reshape(shape))
-    j = _jones(e, ti, tt, pt, pi_)
+    geo = pref * eta**2 * np.abs(ci * co) * w2 * np.exp(logt.reshape(shape))
+    j = _jones(e, ti, tt, pt, pi_, eta=eta)
     sigma0 = j * j * geo
+    if np.any(e.imag != 0):  # the mean-plane flux of the transmitted wave (lossless: 1)
+        kperp = eta * np.sin(tt)
+        kz2 = np.sqrt(e - kperp**2 + 0j)
+        kz2 = np.where(kz2.imag < 0, -kz2, kz2)
+        ref = np.maximum(eta * np.cos(tt), 1e-300)
+        flux = np.stack([kz2.real, (np.abs(e) * kz2 / e).real]) / ref
+        sigma0 = sigma0 * flux[:, None]
     coh = coherent_transmissivity(rough, e, k, ti)
     if np.any(bad):
         sigma0 = np.where(bad, np.nan, sigma0)
