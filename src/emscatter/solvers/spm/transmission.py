@@ -4,8 +4,9 @@ The transmitted counterpart of the reflection SPM (:mod:`.first_order`, :mod:`.s
 the small-roughness end of the BTDF (fine polish on glass, plastic coats, calm water), where
 GO and PO (:mod:`emscatter.solvers.kirchhoff.transmission`) do not hold.
 
-Fields. Surface ``z = f(x, y)`` between vacuum (``z > 0``, wavenumber ``k``) and a lossless
-dielectric of relative permittivity ``ε`` (``z < 0``, ``k₂ = ηk``, ``η = √ε``); ``exp(−iωt)``.
+Fields. Surface ``z = f(x, y)`` between vacuum (``z > 0``, wavenumber ``k``) and a dielectric
+of relative permittivity ``ε`` (``z < 0``, ``k₂ = ηk``, ``η = √ε``), lossless or absorbing
+(``Im ε > 0``; ``exp(−iωt)``, a negative ``Im ε`` is a ConventionError).
 Expanding the fields in powers of ``f`` (Rice 1951) and the tangential boundary conditions
 ``n̂ × [E] = n̂ × [H] = 0`` at ``z = f`` about ``z = 0``, the first-order fields are one
 up-going plane wave (amplitudes ``a_h, a_v``) and one down-going plane wave in the dielectric
@@ -20,21 +21,40 @@ energy conservation) and Ulaby, Moore & Fung 1982 vol. II §12-5 (the reflected 
 Amplitudes are E-field amplitudes on emscatter's h/v bases of the transmitted direction
 (``ĥ = ẑ × k̂/|ẑ × k̂|``, ``v̂ = ĥ × k̂``: :mod:`emscatter.conventions`).
 
-Transmission coefficient (per unit area, as PO's and GO's: ``T = ∫ σ⁰_t / (4π cosθi) dΩ_t``).
-The power flux of the down-going wave through ``z = 0`` against the incident one is
-``|b|² k₂z / k₁zi``; with ``d²k⊥ = k₂² cosθt dΩ_t`` and ``⟨|F|²⟩ = σ² w(κ) d²κ``::
+Transmitted quantity and directions (lossless and absorbing alike). The transmitted power is
+the time-averaged flux through the mean plane ``z = 0⁻`` per unit area, per real, conserved
+transverse wavenumber ``k⊥``; each wave has ``k₂z = √(k₂² − k⊥²)``, ``Im k₂z ≥ 0`` (Tsang,
+Kong & Ding vol. III ch. 4 and Johnson 1999 for the lossless balance; the flux of an
+inhomogeneous plane wave as Born & Wolf §14.2, Chew 1990 §2.1). In an absorbing medium a
+wave has no real unit direction (its phase and amplitude planes differ), so the direction is
+*defined* by ``k⊥``: ``sinθt = |k⊥| / Re k₂`` (``k_t⊥ = Re η k sinθt (cosφt, sinφt)``) — the
+refraction law with the real index ``Re η`` that renderers and ray tracers use, continuous in
+``Im ε → 0`` (where it is the usual direction), and ``d²k⊥ = (Re k₂)² cosθt dΩ_t`` exactly.
+Waves with ``|k⊥| > Re k₂`` (evanescent when lossless) then carry flux too (``Re k₂z > 0``):
+:func:`diffuse_transmissivity` returns that part (``T_beyond``) beside the hemisphere's. The
+flux of a unit h wave is ``Re k₂z``, of a unit v wave ``|ε| Re(k₂z/ε)`` (:func:`flux_factors`;
+TM differs from TE), against ``k₁zi`` incident; with ``⟨|F|²⟩ = σ² w(κ) d²κ``::
 
-    σ⁰_t,pq = 4π η³ k² cos²θt σ² |b_pq|² w(k_t⊥ − k_i⊥),   k_t⊥ = ηk sinθt (cosφt, sinφt)
+    σ⁰_t,pq = 4π σ² |b_pq|² w(k_t⊥ − k_i⊥) (Re k₂)² cosθt f_p / k,
+    f_h = Re k₂z,  f_v = |ε| Re(k₂z/ε)        (lossless: 4π η³ k² cos²θt σ² |b_pq|² w)
+
+so that ``T = ∫ σ⁰_t / (4π cosθi) dΩ_t`` as for PO and GO.
 
 (``b`` per unit ``F(κ)``, ``w`` the normalized spectrum of :mod:`emscatter.spectra`). The
 coherent transmissivity to second order (mean field ``T⁽⁰⁾ + T⁽²⁾``, :func:`.second_order.
 _second_order_R` with ``transmitted=True``; the evanescent part of the ``k⊥`` integral
 included)::
 
-    T_coh,p = (|T⁽⁰⁾_p|² + 2 σ² Re(T⁽⁰⁾*_p T⁽²⁾_p/σ²)) Re k₂zi / k₁zi
+    T_coh,p = (|T⁽⁰⁾_p|² + 2 σ² Re(T⁽⁰⁾*_p T⁽²⁾_p/σ²)) f_p(k_i⊥) / k₁zi
 
 so that ``R_coh + R_diff + T_coh + T_diff = 1`` for a lossless dielectric to ``O((kσ)²)``,
-the remainder ``O((kσ)⁴)`` (tested: ``tests/test_btdf_spm.py``).
+the remainder ``O((kσ)⁴)`` (tested: ``tests/test_btdf_spm.py``). Absorbing: the flux through
+the mean plane differs from the flux through the rough interface (``1 − R``) by the power
+absorbed between the two, ``O((kσ)² Im ε)`` and of either sign (:func:`layer_absorption`):
+``R_coh + R_diff + T_coh + T_diff + T_beyond + A = 1`` (tested to ≤ 5e-8 at kσ = 0.1, the
+lossless test's quadrature precision, ``tests/test_spm_transmission_lossy.py``; without
+``A`` it misses by up to 1.2e-2 at ε = 4 + 4i). What is absorbed below ``z = 0`` (all of
+``T`` for a half space, a slab's share otherwise) is the caller's.
 
 Reciprocity: ``σ⁰_t,pq(ε, k; k̂_i → k̂_t) = ε σ⁰_t,qp(1/ε, ηk; −k̂_t → −k̂_i)`` (as PO's; the
 radiance BTDF's η² factor of Walter et al. 2007 eq. 21). ``ε < 1`` is light from the denser
@@ -117,7 +137,8 @@ def transmission_amplitudes(eps, k: float, theta_i, kx, ky) -> np.ndarray:
     """First-order transmitted E amplitudes ``b[pol_t, pol_i]`` ``(2, 2, ...)`` (complex,
     per unit height spectrum ``F(κ)`` [1/m]) of the down-going wave of transverse wavenumber
     ``(kx, ky)`` [rad/m] for unit incident h/v waves at ``theta_i`` [rad] (``φi = 0``),
-    emscatter's h/v bases (module docstring); arguments broadcast, ``eps`` real > 0.
+    emscatter's h/v bases (module docstring; for a complex ``k₂`` the v amplitude is that of
+    ``H̃ = ωμ₀H = k₂ b ĥ``); arguments broadcast, ``eps`` complex, ``Im ε ≥ 0``.
 
     The source ``S = ∂z[J⁽⁰⁾]_t + iκ [J⁽⁰⁾_z]`` is linear in ``κ``: its two coefficients
     depend on the incidence only and are computed once per distinct (θi, ε)."""
@@ -405,11 +426,12 @@ def bistatic_transmission(
     Parameters
     ----------
     roughness : a 2-D :class:`~emscatter.spectra.Roughness` (lengths [m]).
-    eps : real relative permittivity (> 0, ≠ 1) of the lower medium to the upper.
+    eps : relative permittivity of the lower medium to the upper: complex with ``Im ε ≥ 0``
+        (absorbing) or real (> 0, ≠ 1).
     k : wavenumber of the upper (incident) medium [rad/m].
     theta_i, theta_t, phi_t, phi_i : emscatter angles [rad], numpy-broadcast (``θt`` from the
-        downward normal, as :func:`emscatter.solvers.kirchhoff.transmission.go.
-        bistatic_transmission`).
+        downward normal, ``sinθt = |k⊥|/Re k₂`` (module docstring), as
+        :func:`emscatter.solvers.kirchhoff.transmission.go.bistatic_transmission`).
     out_of_range : ``"warn"`` (default), ``"raise"``, ``"nan"`` (σ⁰_t and the coherent part
         NaN at the failing incidence angles, everywhere when the roughness fails) or
         ``"ignore"``; ``info["out_of_range"]`` is the mask of failing angles in every case.

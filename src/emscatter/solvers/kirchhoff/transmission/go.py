@@ -124,7 +124,10 @@ def transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i) -> tuple:
 
 def check_transmission_eps(eps) -> np.ndarray:
     """``ε`` as a real float array, or a ValueError: the BTDF needs a real index ``η = √ε``
-    (a lossless dielectric, ``ε > 0``, ``ε ≠ 1``); PEC and absorbing media are refused."""
+    (a lossless dielectric, ``ε > 0``, ``ε ≠ 1``); PEC and absorbing media are refused
+    (GO's facets refract rays: an absorbing medium's inhomogeneous wave has no real ray, and
+    the microfacet BTDF has no depth to attenuate it over; the PO and SPM solvers take a
+    lossy ε through :func:`check_lossy_transmission_eps`)."""
     if is_pec(eps):
         raise ValueError(
             "eps='pec': a perfect conductor transmits nothing; GO transmission needs a "

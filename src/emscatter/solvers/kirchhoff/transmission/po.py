@@ -39,6 +39,20 @@ geometric prefactor is the one that makes the two limits of the Kirchhoff integr
   (``4π |i·ĥ||o·ĥ| η² |J|² D(ĥ) / |i + η o|²``, ``D = p/h_z⁴``) — tested against
   :func:`.go.bistatic_transmission` (``shadowing=False``).
 
+Absorbing lower medium (``Im ε > 0``; ``exp(−iωt)``). The transmitted quantity and the
+directions are SPM's (:mod:`emscatter.solvers.spm.transmission`): flux through the mean plane
+per real ``k⊥``, ``sinθt = |k⊥|/Re k₂``. The stationary-phase facet is that of the real index
+``Re η`` (``w = i + Re η o``; a complex ``k₂`` has no real facet), its Fresnel transmission
+lossy (``τ_p² = 1 − |R_p(ε, i·ĥ)|²``, the flux into the facet), and each transmitted
+polarization carries the flux factor ``f_p / (Re k₂ cosθt)`` of SPM (``f_h = Re k₂z``,
+``f_v = |ε| Re(k₂z/ε)``; 1 when lossless). The coherent transmissivity uses the complex
+``q_z = k₁ cosθi − k₂z``: ``|⟨e^{i q_z f}⟩|² = exp(−σ² Re q_z²)`` for Gaussian heights, exact
+Fresnel flux ``1 − |R_p|²`` when flat (tested to 1e-12 |ε|). A low-loss model: the diffuse
+lobe ignores the attenuation of the tangent-plane field inside the roughness layer
+(``Im q_z``); measured against the lossy SPM where both hold (kσ = 0.3, kℓ = 12–20,
+ε = 4 + 0.4i) it agrees as well as lossless at ε = 4 (0.52 against 0.57 dB,
+``tests/test_po_transmission_lossy.py``).
+
 Reciprocity: ``σ⁰_t,pq(ε, k; k̂_i → k̂_t) = ε · σ⁰_t,qp(1/ε, ηk; −k̂_t → −k̂_i)`` (the
 radiance BTDF's ``f(1→2)/η₂² = f(2→1)/η₁²``, Walter et al. eq. 21's η² factor); ``k`` is the
 wavenumber of the medium the light comes from (free space for the usual ``ε > 1``).
@@ -83,7 +97,8 @@ class POWarning(UserWarning):
 def coherent_transmissivity(roughness, eps, k: float, theta_i) -> np.ndarray:
     """Coherent transmissivity ``(2, ...)`` [-] (h, v) at incidence ``theta_i`` [rad]:
     ``T_F,p · exp(−(kσ)² (cosθi − η cosθt)²)`` with ``sinθt = sinθi/η`` (module docstring;
-    0 beyond the critical angle for ``ε < 1``). ``k``: the incident medium's wavenumber."""
+    0 beyond the critical angle for a lossless ``ε < 1``; complex ``ε``: ``exp(−(kσ)² Re(cosθi −
+    √(ε − sin²θi))²)``, module docstring). ``k``: the incident medium's wavenumber."""
     rough = check_roughness(roughness)
     k = check_positive("k", k, unit="rad/m")
     e = check_lossy_transmission_eps(eps, "PO")
@@ -121,8 +136,9 @@ def bistatic_transmission(
     ----------
     roughness : Gaussian, exponential or power-law :class:`~emscatter.spectra.Roughness` (or a
         measured map's), ``dimension=2``; lengths [m].
-    eps : real relative permittivity (> 0, ≠ 1) of the lower medium to the upper; ``ε < 1``:
-        light from the denser side.
+    eps : relative permittivity of the lower medium to the upper, complex with ``Im ε ≥ 0``
+        (absorbing: module docstring) or real (> 0, ≠ 1); ``Re ε < 1``: light from the denser
+        side.
     k : wavenumber of the upper (incident) medium [rad/m].
     theta_i, theta_t, phi_t, phi_i : emscatter angles [rad], numpy-broadcast (as
         :func:`.go.bistatic_transmission`: ``θt`` from the downward normal).
