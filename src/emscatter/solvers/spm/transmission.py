@@ -464,6 +464,9 @@ def bistatic_transmission(
 
     info = {
         "direction": "transmission",
+        "directions": "sin(theta_t) = |k_perp| / Re k2 (flux through the mean plane z = 0-)",
+        "absorbing": bool(np.any(e.imag != 0)),  # then T_beyond, A: diffuse_transmissivity,
+        # layer_absorption close R + T + A = 1
         "validity": validity,
         "out_of_range": failing,
         "source": "first-order SPM (Rice 1951; transmitted amplitudes as Johnson, JOSA A 16, "

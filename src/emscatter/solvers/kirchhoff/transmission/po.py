@@ -207,6 +207,8 @@ def bistatic_transmission(
         raise ValueError("PO transmission produced NaN/inf (please report the inputs)")
     info = {
         "direction": "transmission",
+        "directions": "sin(theta_t) = |k_perp| / Re k2 (flux through the mean plane z = 0-)",
+        "absorbing": bool(np.any(e.imag != 0)),
         "rtol": rtol,
         "polarization_factors": "local Fresnel transmission at the stationary-phase facet",
         "validity": validity,
