@@ -91,6 +91,7 @@ __all__ = [
     "transmission_jones",
     "transmission_intensity",
     "check_transmission_eps",
+    "check_lossy_transmission_eps",
     "check_transmission_shadowing",
 ]
 
@@ -123,7 +124,10 @@ def transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i) -> tuple:
 
 def check_transmission_eps(eps) -> np.ndarray:
     """``ε`` as a real float array, or a ValueError: the BTDF needs a real index ``η = √ε``
-    (a lossless dielectric, ``ε > 0``, ``ε ≠ 1``); PEC and absorbing media are refused."""
+    (a lossless dielectric, ``ε > 0``, ``ε ≠ 1``); PEC and absorbing media are refused
+    (GO's facets refract rays: an absorbing medium's inhomogeneous wave has no real ray, and
+    the microfacet BTDF has no depth to attenuate it over; the PO and SPM solvers take a
+    lossy ε through :func:`check_lossy_transmission_eps`)."""
     if is_pec(eps):
         raise ValueError(
             "eps='pec': a perfect conductor transmits nothing; GO transmission needs a "
@@ -146,6 +150,30 @@ def check_transmission_eps(eps) -> np.ndarray:
             f"transmitted field is the undisturbed incident one), got eps = {bad!r}"
         )
     return np.asarray(re, dtype=float)
+
+
+def check_lossy_transmission_eps(eps, method: str) -> np.ndarray:
+    """``ε`` as a complex array for the solvers that accept an absorbing lower medium (SPM,
+    PO): finite, ``Im ε ≥ 0`` (emscatter's ``exp(−iωt)`` convention; a negative imaginary part
+    is a ConventionError naming the value), not "pec", and for a real ``ε``: ``ε > 0``,
+    ``ε ≠ 1``. ``method`` names the solver in the messages ("SPM", "PO")."""
+    if is_pec(eps):
+        raise ValueError(
+            f"eps='pec': a perfect conductor transmits nothing; {method} transmission needs a "
+            "dielectric (complex eps with Im eps >= 0, or real eps > 0, eps != 1)"
+        )
+    e = check_eps(eps)
+    lossless = np.abs(np.imag(e)) <= LOSSLESS_RTOL * np.abs(e)
+    re = np.real(e)
+    wrong = lossless & ((re <= 0) | (re == 1.0))
+    if np.any(wrong):
+        bad = np.broadcast_to(e, wrong.shape)[wrong].ravel()[0]
+        raise ValueError(
+            f"eps must be > 0 and != 1 for {method} transmission when real (eps = 1 is no "
+            f"interface; a real eps <= 0 has no propagating or absorbing transmitted wave), "
+            f"got eps = {bad!r}; an absorbing medium has Im eps > 0 (exp(-i omega t))"
+        )
+    return np.where(lossless, re + 0j, e).astype(complex)
 
 
 def check_transmission_shadowing(shadowing) -> str | None:
@@ -205,8 +233,10 @@ def transmission_jones(eps, theta_i, theta_t, phi_t, phi_i=0.0) -> np.ndarray:
     return _jones(e, ti, tt, pt.astype(float), pi_.astype(float))
 
 
-def _jones(e, ti, tt, pt, pi_):
-    eta = np.sqrt(e)
+def _jones(e, ti, tt, pt, pi_, eta=None):
+    """(the facet geometry uses the real index ``eta``, default ``√e``; PO passes ``Re √ε``
+    with a complex ``e`` for an absorbing medium, whose facet Fresnel is then lossy)"""
+    eta = np.sqrt(e) if eta is None else eta
     ki, kt, hi, vi, ht, vt = _dirs(ti, pi_, tt, pt)
     _, ci, co, _ = _half(ki, kt, eta)
     ok = (ci > 0) & (co < 0)
