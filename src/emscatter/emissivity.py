@@ -116,6 +116,11 @@ TIME_BUDGET_S = 60.0
 #: Target duration [s] of one chunk of σ⁰ evaluations: how long Ctrl-C may wait.
 CHUNK_SECONDS = 1.0
 
+#: σ⁰ evaluations (directions × incidence angles) in the first chunk of an integral, which
+#: measures the rate: each solver call has a fixed cost (~0.3–0.5 ms for the IEM), so the
+#: former one-direction first chunk cost the IEM emissivity two to three extra calls per θi.
+FIRST_CHUNK_EVALUATIONS = 64
+
 #: Fraction of the time budget spent before a call is refused on its estimate: solvers fill
 #: tables on first use (the first seconds can be 20× slower per σ⁰ than the rest).
 EARLIEST_REFUSAL = 0.1
@@ -254,9 +259,13 @@ def _evaluate(sigma0_fn, theta_s, phi_s, lead: int, clock: _Clock):
     rest = (slice(None),) * (len(tail) - 1)
     parts = []
     start = 0
-    # the first chunk measures the rate (1 direction); later estimates start from that rate
+    # the first chunk measures the rate (at most FIRST_CHUNK_EVALUATIONS σ⁰ evaluations: a
+    # few solver calls fewer than one direction, and bounded even for a pathological σ⁰);
+    # later estimates start from that rate
     size = (
-        1 if clock.rate is None else max(1, int(CHUNK_SECONDS / max(clock.rate * per_index, 1e-12)))
+        max(1, FIRST_CHUNK_EVALUATIONS // per_index)
+        if clock.rate is None
+        else max(1, int(CHUNK_SECONDS / max(clock.rate * per_index, 1e-12)))
     )
     _progress.expect(total)  # the bar of the call, if any, counts σ⁰ evaluations
     while start < m:
