@@ -287,6 +287,9 @@ def _evaluate(sigma0_fn, theta_s, phi_s, lead: int, clock: _Clock):
                 predicted = clock.elapsed() + clock.rate * left
                 raise _OverBudget(predicted, (1 + clock.follow) * total, clock.rate)
         size = max(1, min(8 * done, int(CHUNK_SECONDS / max(rate * per_index, 1e-12))))
+        if clock.budget is not None:  # a chunk ends before the budget: a refusal comes in time
+            room = 0.5 * (clock.budget - clock.elapsed())
+            size = max(1, min(size, int(room / max(rate * per_index, 1e-12))))
     axis = lead + 2  # after (pol_s, pol_i)
     sig = np.concatenate(parts, axis=axis) if len(parts) > 1 else parts[0]
     return sig.reshape(*sig.shape[:axis], *tail)
