@@ -26,6 +26,14 @@ whole-series bounds and the final sums — and falls back to the log-space walk 
 (``tests/test_iem_fast.py``), ≈ 15× faster. Large calls split into contiguous chunks on
 threads (``threads``; :func:`emscatter.kernels._runtime.run_split`).
 
+The bistatic series (:func:`series_rows`) likewise walks in linear space
+(``kernels.linseries.series_kernel_lin``: from n = 1, one multiplication per component and
+order, the same geometric tail bounds at ``rtol``, tested at orders 3, 7, 11, …) where it is
+safe — components within e^300 of the largest, Poisson arguments ``(kσ)² x_j² ≤ 600``, at most
+``kernels.series.FAST_MAX_ORDER`` orders, final sums in [1e-250, 1e300] — and takes the
+log-space ``row_series`` for the other rows: same σ⁰ and precision ratio to ≤ ``rtol``
+(``tests/test_iem_linseries.py``), ≈ 3.5× faster on the rows of an emissivity call.
+
 Kernels compile on first use (tens of seconds on a loaded 2-core machine) and are cached on
 disk by the package runtime (:mod:`emscatter.kernels._runtime`: ``EMSCATTER_NUMBA_CACHE_DIR``,
 default ``~/.cache/emscatter/numba``); nothing here is imported by ``import emscatter``.
@@ -66,26 +74,37 @@ def spectrum_code(rough) -> int | None:
 @functools.cache
 def _build():
     from emscatter.kernels._runtime import run_split
-    from emscatter.solvers.iem.kernels import lanes, series
+    from emscatter.solvers.iem.kernels import lanes, linseries, series
 
-    return series.series_kernel, series.poisson_kernel, lanes.back_kernel, run_split
+    return series.series_kernel, series.poisson_kernel, lanes.back_kernel, run_split, \
+        linseries.series_kernel_lin  # fmt: skip
 
 
-def series_rows(la, lx, ph, sx, d, log_ks2, spec, dim, K, pref, *, rtol, max_terms):
+def series_rows(la, lx, ph, sx, d, log_ks2, spec, dim, K, pref, *, rtol, max_terms, fast=True,
+                report=False):  # fmt: skip
     """Compiled :func:`emscatter.solvers.iem.series.iem_series` (same arguments, ``spec``,
-    ``dim`` the spectrum code and dimension): ``(log σ⁰, log precision ratio)``."""
-    series_kernel, _, _, _ = _build()
+    ``dim`` the spectrum code and dimension): ``(log σ⁰, log precision ratio, status)``.
+
+    ``fast``: the linear-space walk (``kernels.linseries.series_kernel_lin``: the same terms and
+    stopping rule by recurrences, ≈ 3.5× faster on an emissivity call's rows) where it is safe,
+    the log-space ``kernels.series.row_series`` per row otherwise (and for every row with
+    ``fast=False``); ``report=True`` appends a boolean array: the linear path was taken."""
+    series_kernel, _, _, _, series_kernel_lin = _build()
     n = la.shape[0]
     out_s, out_e = np.empty(n), np.empty(n)
-    st = series_kernel(
+    args = (
         np.ascontiguousarray(la, float), np.ascontiguousarray(lx, float),
         np.ascontiguousarray(ph, complex), np.ascontiguousarray(sx, float),
         np.ascontiguousarray(d, complex), np.ascontiguousarray(np.broadcast_to(pref, (n,)), float),
         np.ascontiguousarray(np.broadcast_to(K, (n,)), float), float(log_ks2), int(spec),
         int(dim), math.log(rtol), int(max_terms), out_s, out_e,
     )  # fmt: skip
+    out_fast = np.zeros(n, dtype=np.bool_)
+    st = series_kernel_lin(*args, out_fast) if fast else series_kernel(*args)
     with np.errstate(invalid="ignore"):
         lp = np.where(np.isfinite(out_s), out_e - out_s, 0.0)
+    if report:
+        return out_s, lp, st, out_fast
     return out_s, lp, st
 
 
@@ -99,7 +118,7 @@ def poisson_sums(logq, K, spec, dim, *, rtol):
     they are summed in contiguous chunks of about :data:`CHUNK_SECONDS` each (sized from the
     previous chunk's time; at kσ ~ 1e3 one element costs ~1e-3 s), so the call can be
     interrupted."""
-    _, poisson_kernel, _, _ = _build()
+    _, poisson_kernel, _, _, _ = _build()
     logq = np.ascontiguousarray(logq, float).ravel()
     Kf = np.ascontiguousarray(np.broadcast_to(K, logq.shape), float).ravel()
     out = np.empty(logq.size)
@@ -176,7 +195,7 @@ def backscatter(
     ``1 − γ_v``, one minus the vv transition factor (``"aiem-faded"``). ``fung92``: the 1992
     IEM (``complementary="fung92"``: one complementary component of base ``cosθ``, no height
     phase; ``lower_q2`` and ``fade`` are then ignored)."""
-    _, _, back_kernel, run_split = _build()
+    _, _, back_kernel, run_split, _ = _build()
     n = si.size
     pec = isinstance(eps, str)
     si, cs, K, pref = flat_n(si, n), flat_n(cs, n), flat_n(K, n), flat_n(pref, n)
