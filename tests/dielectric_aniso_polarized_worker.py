@@ -6,9 +6,9 @@ JSON`` with ``{"variant", "tables": path of a pickle (the test's :func:`tables`)
 :func:`facet_mueller`)}`` loads the
 ``emscatter_dielectric`` plugin of each table set in the pickle (a dict name → (reflection,
 transmission, inner or None)) and prints on its last line JSON with, per name and for ``"rd"``,
-``bsdf.eval`` in radiance mode (``"rd_mueller"``: :func:`facet_mueller`) (polarized variants: the 4 × 4 matrices of channel 0,
-``[r][c][pair]``; others: channel 0 per pair), ``"error"`` (per name, the plugin's load error
-message, or None) and ``"to_string"``."""
+``bsdf.eval`` in radiance mode (polarized variants: the 4 × 4 matrices of channel 0,
+``[r][c][pair]``; others: channel 0 per pair), ``"rd_mueller"`` (:func:`facet_mueller`),
+``"error"`` (per name, the plugin's load error message, or None) and ``"to_string"``."""
 
 from __future__ import annotations
 
