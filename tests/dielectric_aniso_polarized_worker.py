@@ -3,7 +3,7 @@ interpreter (Dr.Jit variants are per process): ``python tests/dielectric_aniso_p
 JSON`` with ``{"variant", "tables": path of a pickle (the test's :func:`tables`), "v": [[x, y, z],
 ...] (towards the viewer, si.wi), "l": [...] (towards the light, wo), "rd": [alpha_u, alpha_v]
 (optional: also Mitsuba's anisotropic Beckmann ``roughdielectric`` and, polarized,
-:func:`facet_mueller`)}`` loads the
+:func:`facet_mueller`), "sample": bool (optional: :func:`sample_check` of ``"aniso"``)}`` loads the
 ``emscatter_dielectric`` plugin of each table set in the pickle (a dict name → (reflection,
 transmission, inner or None)) and prints on its last line JSON with, per name and for ``"rd"``,
 ``bsdf.eval`` in radiance mode (polarized variants: the 4 × 4 matrices of channel 0,
@@ -44,6 +44,36 @@ def facet_mueller(mi, dr, v, lt):
     t00 = np.broadcast_to(np.array(t[0, 0], dtype=float).reshape(-1), (n,))
     return [[(np.broadcast_to(np.array(t[r, c], dtype=float).reshape(-1), (n,)) / t00).tolist()
              for c in range(4)] for r in range(4)]  # fmt: skip
+
+
+def sample_check(mi, dr, b, v, pol):
+    """``sample`` at each viewer ``v`` (4 draws each): ``{"w_pdf": weight · pdf, "eval":
+    eval at the sampled direction, "pdf", "t": transmitted}`` (polarized: the 16 elements of channel
+    0 as rows; radiance mode)."""
+    n = v.shape[0] * 4
+    vv = np.repeat(v, 4, axis=0)
+    rng = np.random.default_rng(2)
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    si.n = mi.Vector3f(0, 0, 1)
+    si.wi = mi.Vector3f(*(mi.Float(c) for c in vv.T))
+    si.wavelengths = mi.UnpolarizedSpectrum(550.0)
+    ctx = mi.BSDFContext()
+    u1 = mi.Float(rng.uniform(0, 1, n))
+    u2 = mi.Point2f(mi.Float(rng.uniform(0, 1, n)), mi.Float(rng.uniform(0, 1, n)))
+    bs, w = b.sample(ctx, si, u1, u2)
+    ev = b.eval(ctx, si, bs.wo)
+    pdf = np.array(bs.pdf, dtype=float)
+
+    def rows(x):
+        if not pol:
+            return [np.array(x[0], dtype=float).tolist()]
+        return [np.broadcast_to(np.array(x[r, c][0], dtype=float).reshape(-1), (n,)).tolist()
+                for r in range(4) for c in range(4)]  # fmt: skip
+
+    wo_z = np.array(bs.wo.z, dtype=float)
+    return {"w_pdf": (np.array(rows(w)) * pdf).tolist(), "eval": rows(ev), "pdf": pdf.tolist(),
+            "t": (wo_z * vv[:, 2] < 0).tolist()}  # fmt: skip
 
 
 def main(arg: str) -> None:
@@ -87,6 +117,8 @@ def main(arg: str) -> None:
             continue
         res["error"][name] = None
         res[name] = evaluate(b)
+        if name == "aniso" and args.get("sample"):
+            res["sample"] = sample_check(mi, dr, b, v, pol)
         res["to_string"] = str(b)
     if args.get("rd"):
         a_u, a_v = (float(x) for x in args["rd"])

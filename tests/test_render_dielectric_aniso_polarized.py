@@ -110,7 +110,7 @@ def runs(tmp_path_factory):
     with open(path, "wb") as fh:
         pickle.dump(sets, fh, protocol=pickle.HIGHEST_PROTOCOL)
     v, lt = _all_pairs()
-    pol = _worker(POL, path, v, lt, rd=[M_X, M_Y])
+    pol = _worker(POL, path, v, lt, rd=[M_X, M_Y], sample=True)
     unp = _worker(UNPOL, path, v, lt)
     return sets, v, lt, pol, unp
 
@@ -202,3 +202,21 @@ def test_a_table_without_mueller_part_is_refused(runs):
     assert msg is not None and "AnisotropicBtdfTable with Mueller matrices" in msg, msg
     assert "polarized=True" in msg
     assert unp["error"]["plain"] is None  # unpolarized variants render it
+
+
+@needs_mitsuba
+def test_sample_weight_is_the_mueller_eval_over_the_pdf(runs):
+    """``sample`` in the polarized variant: the weight times the pdf is the Mueller ``eval``
+    at the sampled direction (every element, to 1e-4 of M₀₀: float32) for every valid sample
+    (pdf > 0; rejected ones weigh 0), transmitted samples among them, with polarization in the
+    weights (a path tracer gets the Mueller BTDF)."""
+    _, _, _, pol, _ = runs
+    s = pol["sample"]
+    wp, ev, t = np.asarray(s["w_pdf"]), np.asarray(s["eval"]), np.asarray(s["t"])
+    valid = np.asarray(s["pdf"]) > 0
+    assert np.all(wp[:, ~valid] == 0)
+    ok = valid & (ev[0] > 1e-6 * ev[0].max())
+    assert (ok & t).sum() > 200 and (ok & ~t).sum() > 20
+    err = np.abs(wp - ev)[:, ok] / ev[0, ok]
+    assert err.max() < 1e-4, err.max()
+    assert np.max(np.abs(ev[1, ok & t] / ev[0, ok & t])) > 0.05
