@@ -3,7 +3,7 @@
 per process): the plugin equals the table, ℓx = ℓy equals the isotropic plugin, Mitsuba's
 anisotropic ``roughdielectric`` (alpha_u = m_x, alpha_v = m_y: Beckmann α = √2 × the rms slope
 per axis, slope_variance = α²/2 as tests/dielectric_plugin_worker.py), the surface turned by
-90° and the polarized variants refused."""
+90° and plain tables refused in the polarized variants."""
 
 from __future__ import annotations
 
@@ -118,9 +118,10 @@ def test_turning_the_surface_turns_the_lobe():
 
 
 @needs_mitsuba
-def test_polarized_variants_refuse_with_a_clear_error():
-    """Not yet in ``*_polarized`` variants: loading the plugin names the variant and the
-    variants that work (no traceback-only failure, no silent unpolarized result)."""
+def test_polarized_variants_need_mueller_tables():
+    """In ``*_polarized`` variants plain (power-only) tables are refused with a clear error
+    naming what is needed (no silent unpolarized result); with Mueller tables the
+    anisotropic BTDF renders polarized (tests/test_render_dielectric_aniso_polarized.py)."""
     v, lt = _pairs(n=20)
     args = {"variant": "llvm_ad_spectral_polarized", "m_x": M_X, "m_y": M_Y, "grid": "coarse",
             "v": v.tolist(), "l": lt.tolist()}  # fmt: skip
@@ -131,5 +132,5 @@ def test_polarized_variants_refuse_with_a_clear_error():
         timeout=900,
     )
     assert res.returncode != 0
-    assert "AnisotropicBtdfTable renders in scalar, RGB, mono and spectral variants" in res.stderr
-    assert "llvm_ad_spectral_polarized" in res.stderr
+    assert "in a polarized Mitsuba variant needs a MuellerTable" in res.stderr
+    assert "a plain BrdfTable keeps no phase between polarizations" in res.stderr

@@ -34,8 +34,9 @@ anisotropic slopes. :meth:`AnisotropicBtdfTable.evaluate_mueller` folds ``φi`` 
 the surface), each mirror maps it to ``P M P``, ``P = diag(1, 1, −1, −1)`` (a mirror reverses
 the handedness of the h/v bases; the isotropic table's rule for ``Δφ < 0``); then Mitsuba's
 Stokes frames at the true (unfolded) angles (:func:`.btdf.emscatter_to_mitsuba`). Storage ×17.
-Rendered by the ``emscatter_dielectric`` plugin (:mod:`emscatter.render.dielectric.aniso`; not
-yet in ``*_polarized`` variants). Not here (yet): PO.
+Rendered by the ``emscatter_dielectric`` plugin (:mod:`emscatter.render.dielectric.aniso`; the
+Mueller part in ``*_polarized`` variants: :mod:`emscatter.render.dielectric.polarized`). Not
+here (yet): PO.
 """
 
 from __future__ import annotations

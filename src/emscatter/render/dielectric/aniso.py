@@ -9,6 +9,11 @@ The table's folded azimuth is recovered as :func:`~emscatter.brdf.btdf_aniso.fol
 the multilinear interpolant of the table in ``(θi, φi, θt, Δφ)`` (clamped in the first three,
 periodic in ``Δφ``): 16 gathers per channel, the same interpolant as
 :meth:`~emscatter.brdf.btdf_aniso.AnisotropicBtdfTable.evaluate` (to float32).
+
+Polarized variants (:mod:`.polarized`): the same lookup of the 16 Mueller entries per channel
+(:func:`aniso_mueller_channels`, :meth:`AnisoBtdfLookup.lookup` also returns the fold's mirror
+flag, where :mod:`.polarized` applies ``P M P``, ``P = diag(1, 1, −1, −1)``, as
+:meth:`~emscatter.brdf.btdf_aniso.AnisotropicBtdfTable.evaluate_mueller`).
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ import numpy as np
 
 from ..plugin_data import Axis
 
-__all__ = ["AnisoBtdfLookup", "check_axes", "reduce_albedo"]
+__all__ = ["AnisoBtdfLookup", "aniso_mueller_channels", "check_axes", "reduce_albedo"]
 
 
 def check_axes(bt) -> list[Axis]:
@@ -43,20 +48,49 @@ def reduce_albedo(albedo) -> np.ndarray:
     return a.mean(axis=tuple(range(2, a.ndim))) if a.ndim > 2 else a
 
 
+def aniso_mueller_channels(bt, mix) -> np.ndarray:
+    """The Mueller BTDF of an anisotropic table as the plugin gathers it: float32 ``(n_ti,
+    n_pi, n_tt, n_pd, C·16)`` [1/sr] in emscatter's h/v bases, channel-major; ``mix`` maps
+    ``(..., n_wl, 16)`` to the plugin's ``(..., C, 16)`` (:func:`.polarized` passes its
+    channel rule). ``M₀₀`` clipped at 0 as the unpolarized plugin. A table without a Mueller
+    part: ``ValueError`` naming what builds one."""
+    if getattr(bt, "mueller", None) is None:
+        raise ValueError(
+            "the emscatter_dielectric plugin in a polarized Mitsuba variant needs an "
+            "AnisotropicBtdfTable with Mueller matrices (build_anisotropic_btdf_table(..., "
+            "polarized=True)); this one has none"
+        )
+    m = np.asarray(bt.mueller, np.float32)  # (n_wl, 4, 4, ti, pi, tt, pd); float32 as stored
+    m = np.moveaxis(m.reshape(m.shape[0], 16, *m.shape[3:]), (0, 1), (-2, -1))
+    out = np.array(mix(m), dtype=np.float32)  # (ti, pi, tt, pd, C, 16)
+    out[..., 0] = np.clip(out[..., 0], 0.0, None)
+    if not np.all(np.isfinite(out)):
+        raise ValueError("the BTDF table's Mueller part holds NaN/inf; nothing to render")
+    return np.ascontiguousarray(out.reshape(*out.shape[:4], -1), dtype=np.float32)
+
+
 class AnisoBtdfLookup:
     """``f_t`` of an anisotropic BTDF table in Dr.Jit (module docstring). ``mat``: ``(C,
-    n_wl)`` plugin channels; :meth:`__call__` returns the ``C`` channels as Dr.Jit floats."""
+    n_wl)`` plugin channels; :meth:`__call__` returns the ``C`` channels as Dr.Jit floats.
+    ``vals``: instead of ``mat``, the ``(n_ti, n_pi, n_tt, n_pd, C)`` node values to look up
+    (the Mueller entries of :func:`aniso_mueller_channels`)."""
 
-    def __init__(self, mi, bt, mat: np.ndarray):
+    def __init__(self, mi, bt, mat: np.ndarray | None = None, vals: np.ndarray | None = None):
         self._mi = mi
         self._ax = check_axes(bt)
-        vals = np.clip(np.moveaxis(np.asarray(bt.values, float), 0, -1) @ mat.T, 0.0, None)
+        if vals is None:
+            vals = np.clip(np.moveaxis(np.asarray(bt.values, float), 0, -1) @ mat.T, 0.0, None)
         self._c = vals.shape[-1]
         self._shape = vals.shape[:-1]  # (n_ti, n_pi, n_tt, n_pd)
         self._flat = mi.Float(np.ascontiguousarray(vals, dtype=np.float32).ravel())
 
     def __call__(self, a, b, active):
         """``a`` above (towards the light or viewer outside), ``b`` below, local frame."""
+        return self.lookup(a, b, active)[0]
+
+    def lookup(self, a, b, active):
+        """``(channels, mirrored)``: the channels at ``a`` above, ``b`` below, and the mask of
+        the pairs whose ``φi`` was folded by the mirror ``φi → π − φi`` (module docstring)."""
         import drjit as dr
 
         mi = self._mi
@@ -99,4 +133,4 @@ class AnisoBtdfLookup:
             for idx, w in corners:
                 acc += w * dr.gather(mi.Float, self._flat, idx * self._c + c, active)
             out.append(acc)
-        return out
+        return out, flip

@@ -11,7 +11,8 @@ Usage, after ``mi.set_variant(...)`` with an RGB, mono or spectral LLVM variant
 ``reflection``: the :class:`~emscatter.brdf.table.BrdfTable` of the outside (``ε``),
 ``transmission``: the :class:`~emscatter.brdf.btdf_table.BtdfTable` of light from outside
 (or an :class:`~emscatter.brdf.btdf_aniso.AnisotropicBtdfTable`, :mod:`.aniso`: scalar, RGB,
-mono and spectral variants; ``reflection``/``inner`` may then be anisotropic BRDF tables),
+mono, spectral and, with its Mueller part, polarized variants; ``reflection``/``inner`` may
+then be anisotropic BRDF tables),
 ``inner`` (optional): the BRDF of the inside (``1/ε``: internal reflection, total internal
 reflection included; without it nothing is reflected inside). The reflection lobes are the
 ``"emscatter"`` plugin (:mod:`.mitsuba`) of each table; this plugin adds the transmission lobe
@@ -231,12 +232,7 @@ def _bsdf_class(mi):
             self._lam, self._inv = lam, [1.0 / (b - a) for a, b in itertools.pairwise(lam)]
             self._aniso = None
             if isinstance(bt, AnisotropicBtdfTable):  # 4-D: explicit gathers (.aniso)
-                if "polarized" in mi.variant():
-                    raise ValueError(
-                        "emscatter_dielectric plugin: an AnisotropicBtdfTable renders in "
-                        f"scalar, RGB, mono and spectral variants, not yet in {mi.variant()!r}"
-                    )
-                self._aniso = AnisoBtdfLookup(mi, bt, mat)
+                self._aniso = AnisoBtdfLookup(mi, bt, mat)  # polarized: also .polarized
             else:
                 vals = np.clip(np.moveaxis(np.asarray(bt.values, float), 0, -1) @ mat.T, 0, None)
                 self._tex = tex(mi.Texture3f, vals)

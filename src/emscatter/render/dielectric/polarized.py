@@ -18,7 +18,14 @@ transport the other way round); the matrix maps Stokes vectors in
   (emscatter's h/v bases, ``ĥ = ẑ × k̂``), multilinear on its nodes (``Δφ ∈ (π, 2π)`` mirrored:
   ``P M P``, ``P = diag(1, 1, −1, −1)``), made right-handed with Mitsuba's sign of V
   (``D_MITSUBA``) and rotated onto the Stokes bases (:meth:`BtdfTable.evaluate_mueller` with
-  ``frame="mitsuba"`` is the NumPy twin).
+  ``frame="mitsuba"`` is the NumPy twin). An
+  :class:`~emscatter.brdf.btdf_aniso.AnisotropicBtdfTable` (``polarized=True``): its 16
+  entries multilinear in ``(θi, φi, θt, Δφ)`` (:class:`.aniso.AnisoBtdfLookup`; ``Δφ`` is
+  stored on the full turn, the fold of ``φi`` into ``[0, π/2]`` by the mirror ``φi → π − φi``
+  gives ``P M P``), then the same signs and rotations (the h/v bases are those of the
+  directions in the local frame, tangent ``+x`` along ``ℓx``;
+  :meth:`AnisotropicBtdfTable.evaluate_mueller` with ``frame="mitsuba"`` is the NumPy twin).
+  Reflection: isotropic or anisotropic ``MuellerTable`` objects (the ``"emscatter"`` plugin).
 * transmission, light from inside (``L`` below, ``V`` above): reciprocity of the reverse path
   (Saxon 1955; the scattering dyadic transposes, ``S(k_s, k_i) = Sᵀ(−k_i, −k_s)``, with the
   same physical polarization vectors). With ``M_f`` the table matrix of the forward path
@@ -49,9 +56,11 @@ import math
 
 import numpy as np
 
+from ...brdf.btdf_aniso import AnisotropicBtdfTable
 from ...brdf.btdf_table import BtdfTable
 from ...brdf.mueller import D_MITSUBA
 from ..polarized import _channel_mix
+from .aniso import AnisoBtdfLookup, aniso_mueller_channels
 
 __all__ = ["btdf_mueller_channels", "polarized_dielectric_class"]
 
@@ -125,6 +134,12 @@ def polarized_dielectric_class(mi, base, coord, theta, sets):
                     "with method='go'), got plain BrdfTables (no phase between polarizations)"
                 )
             bt = s["transmission"]
+            self._maniso = None
+            if isinstance(bt, AnisotropicBtdfTable):  # 4-D: explicit gathers (.aniso)
+                flat = aniso_mueller_channels(bt, lambda m: _channel_mix(bt, m, channels))
+                self._mch = flat.shape[-1] // 16
+                self._maniso = AnisoBtdfLookup(mi, bt, vals=flat)
+                return
             flat = btdf_mueller_channels(bt, channels)
             self._mch = flat.shape[-1] // 16
             self._mtex = mi.Texture3f(
@@ -141,13 +156,16 @@ def polarized_dielectric_class(mi, base, coord, theta, sets):
         def _mt(self, a, b, active, si):
             """Mueller BTDF (no cosine) of light from above along ``−a`` to ``b`` below, in
             Mitsuba's bases of ``−a`` and ``b``."""
-            ti, tt = theta(a.z), theta(b.z)
-            dphi = dr.abs(dr.atan2(b.y, b.x) - dr.atan2(a.y, a.x))
-            dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
-            ax = self._ax
-            pos = mi.Point3f(coord(dphi, ax[2]), coord(tt, ax[1]), coord(ti, ax[0]))
-            vals = self._mtex.eval(pos, active)
-            mirrored = (a.x * b.y - a.y * b.x) < 0  # Δφ = φb − φa ∈ (π, 2π)
+            if self._maniso is not None:  # φi folded by a mirror: P M P (module docstring)
+                vals, mirrored = self._maniso.lookup(a, b, active)
+            else:
+                ti, tt = theta(a.z), theta(b.z)
+                dphi = dr.abs(dr.atan2(b.y, b.x) - dr.atan2(a.y, a.x))
+                dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
+                ax = self._ax
+                pos = mi.Point3f(coord(dphi, ax[2]), coord(tt, ax[1]), coord(ti, ax[0]))
+                vals = self._mtex.eval(pos, active)
+                mirrored = (a.x * b.y - a.y * b.x) < 0  # Δφ = φb − φa ∈ (π, 2π)
             m = dr.zeros(mi.Spectrum)
             c = self._mch
             for e in range(16):
