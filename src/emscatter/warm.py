@@ -83,7 +83,7 @@ def _calls():
     out["spm"] += [emis(spm_g, 17 + 2j, "spm"), emis(spm_e, "pec", "spm")]
     profile = GaussianCorrelation(0.4 / k, 6.0 / k, dimension=1)
     in_plane = (ti, ts, np.array([0.0, math.pi, 0.0]))  # a 1-D profile scatters in its plane
-    out["po"].append(bi(profile, 17 + 2j, "po", in_plane))
+    out["po"] += [bi(profile, 17 + 2j, "po", in_plane), emis(po_g, 17 + 2j, "po")]
     out["go"] = [
         f(go_g, e, "go", **opt)
         for e in (17 + 2j, "pec")
@@ -93,15 +93,18 @@ def _calls():
     # the compiled per-angle validity pass runs above 4096 angles (method_resolution)
     rng = np.random.default_rng(0)
     many = tuple(rng.uniform(lo, hi, 8192) for lo, hi in ((0, 1.5), (0, 1.5), (-3.1, 3.1)))
-    out["go"].append(bi(go_g, 17 + 2j, "go", many))
+    out["go"] += [emis(go_g, 17 + 2j, "go"), bi(go_g, 17 + 2j, "go", many)]  # many: last
     out["iem"] = [
         f(r, e, "iem")
         for r in (iem_g, iem_e)
         for e in (17 + 2j, "pec")
         for f in (bi, back, lambda r, e, m: bi(r, e, m, grid))
     ]
+    # emissivity: hemispherical chunks of thousands of rows take the kernels' threaded splits
+    out["iem"] += [emis(iem_g, 17 + 2j, "iem"), emis(iem_e, 17 + 2j, "iem", crosspol=False)]
     # the backscatter cross-pol auto adds (solvers.auto_crosspol): the resummed term's kernel
     out["auto"] = [back(r, 17 + 2j, "auto") for r in (spm_e, iem_g)]
+    out["auto"] += [emis(r, 17 + 2j, "auto") for r in (iem_g, po_g, go_g)]
     return out
 
 
