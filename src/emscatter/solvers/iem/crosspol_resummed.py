@@ -143,6 +143,27 @@ def _values(rough, eps: complex, k: float, uniq, d: float, n_nodes: int, n_azimu
     return out
 
 
+def _value_one(rough, eps: complex, k: float, theta: float, d: float, n_nodes: int,
+               n_azimuth: int) -> float:  # fmt: skip
+    """``hv`` at one flat angle ``theta`` [rad] (inputs checked, as :func:`_values`, whose
+    value it is to the bit: the same kernel on the same inputs, tested), without the array
+    path's wrapping: compiled where numba is there and the rule has the point symmetry, else
+    :func:`_values`."""
+    from emscatter.kernels import backend
+
+    if backend() == "numba":
+        from emscatter.solvers.iem.kernels import crosspol_resummed as kern
+
+        code = kern.GAUSSIAN if type(rough) is GaussianCorrelation else kern.EXPONENTIAL
+        v = kern.backscatter_one(theta, eps, k, rough.sigma, rough.length, rough.length_y, d,
+                                 code, n_nodes, n_azimuth)  # fmt: skip
+        if math.isfinite(v) and v >= 0:
+            return v
+        if not math.isnan(v):
+            raise FloatingPointError(f"resummed cross-pol not finite/positive at theta={theta!r}")
+    return float(_values(rough, eps, k, np.array([theta]), d, n_nodes, n_azimuth)[0, 0])
+
+
 def _compiled(rough, eps, k, uniq, d, n_nodes, n_azimuth):
     """``(hv, vh)`` (2, n) from the compiled kernel (:mod:`.kernels.crosspol_resummed`;
     ``vh = hv`` there: reciprocity, tested on the numpy path), NaN where an angle's rule lacks
