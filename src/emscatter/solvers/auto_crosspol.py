@@ -105,9 +105,15 @@ _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 4096
 
 
-def clear_cache() -> None:
-    """Forget the remembered backscatter cross-pol values."""
+def clear_cache(*, nodes: bool = True) -> None:
+    """Forget the remembered backscatter cross-pol values, and with ``nodes`` (default) the
+    resummed term's σ-independent node parts too
+    (:func:`emscatter.solvers.iem.crosspol_resummed.clear_memory`): everything recomputed."""
     _CACHE.clear()
+    if nodes:
+        from .iem.crosspol_resummed import clear_memory
+
+        clear_memory()
 
 
 def _cached(keys, compute):

@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import OrderedDict
 
 import numpy as np
 
@@ -143,24 +144,49 @@ def _values(rough, eps: complex, k: float, uniq, d: float, n_nodes: int, n_azimu
     return out
 
 
+#: The σ-independent part of the compiled rule per (spectrum kind, ℓₓ, ℓᵧ, ε, k, θ, φ, nodes)
+#: — exact floats — (:func:`emscatter.solvers.iem.kernels.crosspol_resummed.prepare_one`:
+#: the node weights times the kernel products, the nodes' ``(Kℓ)²``; ≤ 20 400 nodes, ≤ 0.4 MB
+#: each, ~0.1 MB on issue 20's grid), so a new σ at a known (ε, θ, ℓ) costs only the height
+#: series; least recently used first out beyond :data:`_PREP_SIZE`.
+_PREP: OrderedDict = OrderedDict()
+_PREP_SIZE = 64
+
+
+def clear_memory() -> None:
+    """Forget the remembered σ-independent node parts (:data:`_PREP`)."""
+    _PREP.clear()
+
+
 def _value_one(rough, eps: complex, k: float, theta: float, d: float, n_nodes: int,
                n_azimuth: int) -> float:  # fmt: skip
     """``hv`` at one flat angle ``theta`` [rad] (inputs checked, as :func:`_values`, whose
-    value it is to the bit: the same kernel on the same inputs, tested), without the array
-    path's wrapping: compiled where numba is there and the rule has the point symmetry, else
-    :func:`_values`."""
+    value it is to the bit: the same compiled arithmetic, tested), without the array path's
+    wrapping: compiled where numba is there and the rule has the point symmetry — its
+    σ-independent part from :data:`_PREP` where known —, else :func:`_values`."""
     from emscatter.kernels import backend
 
     if backend() == "numba":
         from emscatter.solvers.iem.kernels import crosspol_resummed as kern
 
         code = kern.GAUSSIAN if type(rough) is GaussianCorrelation else kern.EXPONENTIAL
-        v = kern.backscatter_one(theta, eps, k, rough.sigma, rough.length, rough.length_y, d,
-                                 code, n_nodes, n_azimuth)  # fmt: skip
-        if math.isfinite(v) and v >= 0:
+        lx, ly = rough.length, rough.length_y
+        key = (code, lx, ly, eps, k, theta, d, n_nodes, n_azimuth)
+        prep = _PREP.get(key)
+        if prep is None:
+            prep = kern.prepare_one(theta, eps, k, lx, ly, d, code, n_nodes, n_azimuth)
+            _PREP[key] = prep
+            while len(_PREP) > _PREP_SIZE:
+                _PREP.popitem(last=False)
+        else:
+            _PREP.move_to_end(key)
+        if prep is not None:  # (None: no point symmetry, the numpy reference)
+            v = kern.evaluate_one(prep, theta, k, rough.sigma, lx, ly, code)
+            if not (math.isfinite(v) and v >= 0):
+                raise FloatingPointError(
+                    f"resummed cross-pol not finite/positive at theta={theta!r}"
+                )
             return v
-        if not math.isnan(v):
-            raise FloatingPointError(f"resummed cross-pol not finite/positive at theta={theta!r}")
     return float(_values(rough, eps, k, np.array([theta]), d, n_nodes, n_azimuth)[0, 0])
 
 

@@ -199,10 +199,14 @@ def _t_hat_exp_block(qv, cnt, c, inv, nterms, area, out):
 
 
 @jit
-def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, start, stop, out,
-            flag):  # fmt: skip
-    """Resummed σ⁰_hv into ``out[j]`` for ``theta[start:stop]`` [rad]; ``flag[j]`` 1 where
-    computed, 0 where the azimuth rule lacks the point symmetry (the caller's numpy)."""
+def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx):
+    """The σ-independent part of one backscatter angle ``a`` [rad]: for every node ``c`` of
+    the rule (the upper half plane where the surface allows), ``W[c]`` the quadrature weight
+    times ``Re g₂(p)[g₂*(p) + g₂*(−p)]`` (× 2 on the upper half), ``qv[c] = (|p − k_i⊥|ℓ)²``
+    and ``pidx[c]`` the node where ``T̂(k_s⊥ − p)`` is ``T̂`` (the point partner, or its
+    mirror); the node count returned, −1 where the azimuth rule lacks the point symmetry
+    (the caller's numpy). Depends on ε, k, θ, ℓₓ, ℓᵧ, φ and the spectrum's kind, not on σ:
+    the node rule's breaks are ``k``, ``Re√ε k`` and ``1/ℓ`` distances (module docstring)."""
     nr_, na_ = s_r.size, s_a.size
     log = spec != GAUSSIAN
     inv_len = 1.0 / min(lx, ly)
@@ -219,10 +223,7 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
     mir = np.empty(psi.size, dtype=np.int64)
     cpsi, spsi = np.empty(psi.size), np.empty(psi.size)
     g = np.empty((kr.size, psi.size), dtype=np.complex128)
-    tm = np.empty((kr.size, psi.size))
     zc = np.empty(6, dtype=np.complex128)
-    coef = np.empty(N_COEF)
-    cinv = np.empty(N_COEF)
     gs = np.empty(_FOURIER_SAMPLES, dtype=np.complex128)
     cf = np.empty(2 * _DEGREE + 1, dtype=np.complex128)
     ep = np.empty((2 * _DEGREE + 1, psi.size), dtype=np.complex128)
@@ -231,78 +232,89 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
     for j in range(_FOURIER_SAMPLES):
         cs[j] = math.cos(2.0 * math.pi * j / _FOURIER_SAMPLES)
         sn[j] = math.sin(2.0 * math.pi * j / _FOURIER_SAMPLES)
-    qv = np.empty(kr.size * psi.size)
-    tv = np.empty(kr.size * psi.size)
     inv_k2 = 1.0 / (sq_eps * k)
-    area = lx * ly
+    si, ci = math.sin(a), math.cos(a)
+    kis0, kis1 = k * si, 0.0
+    ksv0, ksv1 = k * si * cphi, k * si * sphi
+    nr, na = _node_rules(k, kis0, kis1, ksv0, ksv1, sq_eps, inv_len, extent, log, s_r, ds_r,
+                         s_a, ds_a, pts, br, kr, wr, psi, wpsi)  # fmt: skip
+    if not _partner(psi, na, math.pi, False, neg):
+        return -1  # (no point symmetry: the numpy reference)
+    half = _partner(psi, na, 0.0, True, mir)
+    for ia in range(na):
+        cpsi[ia], spsi[ia] = math.cos(psi[ia]), math.sin(psi[ia])
+    first = 0
+    if half:  # the surface's quadratic form even under y → −y (to 1e-12)
+        for ir in range(nr):
+            for ia in range(na):
+                px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
+                q_a = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
+                pm = mir[ia]
+                q_b = _q2(kr[ir] * cpsi[pm] - kis0, kr[ir] * spsi[pm] - kis1, cr, sr, lx, ly)
+                if not abs(q_a - q_b) <= 1e-12 * abs(q_b):
+                    half = False
+        if half:
+            while first < na and not psi[first] > 0.0:
+                first += 1
+    _fill_g_fourier(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, zc, kr, nr,
+                    cpsi, spsi, first, na, gs, cf, ep, cs, sn)  # fmt: skip
+    m = na - first
+    fac = 2.0 if half else 1.0
+    for ir in range(nr):
+        base = fac * wr[ir] * kr[ir]
+        for ia in range(first, na):
+            ga = g[ir, ia]
+            if half:  # −p's mirror, on the upper half: g(−p) = −g there, T̂ the same
+                pos = max(mir[neg[ia]] - first, 0) + first
+                d = ga - g[ir, pos]
+            else:
+                pos = neg[ia]
+                d = ga + g[ir, pos]
+            c = ir * m + (ia - first)
+            W[c] = base * wpsi[ia] * (ga.real * d.real + ga.imag * d.imag)
+            px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
+            qv[c] = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
+            pidx[c] = ir * m + (pos - first)
+    return nr * m
+
+
+@jit
+def _evaluate(W, qv, pidx, n, a, k, sigma, spec, area, coef, cinv, tv):
+    """σ⁰_hv = 4π k² cos²θ σ⁴ ``Σ_c W[c] T̂(qv[c]) T̂(qv[pidx[c]])`` over the ``n`` nodes of
+    :func:`_prepare` at the angle ``a`` [rad]: the height series at every node at
+    ``Q = (kσ cosθ)²`` (exponential: every node at once, terms outer, the term count bounding
+    the tail everywhere), then the weighted sum."""
+    ci = math.cos(a)
+    Q = (k * sigma * ci) ** 2
+    nc = _coefficients(Q, spec, coef, cinv)
+    if spec == GAUSSIAN:
+        for c in range(n):
+            tv[c] = _t_hat(qv[c], coef, cinv, nc, spec, area)
+    else:
+        _t_hat_exp_block(qv, n, coef, cinv, _exp_terms(coef, nc, _SERIES_RTOL), area, tv)
+    val = 0.0
+    for c in range(n):
+        val += W[c] * tv[c] * tv[pidx[c]]
+    return 4.0 * math.pi * k * k * ci * ci * sigma**4 * val
+
+
+@jit
+def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, start, stop, out,
+            flag):  # fmt: skip
+    """Resummed σ⁰_hv into ``out[j]`` for ``theta[start:stop]`` [rad] (:func:`_prepare`, then
+    :func:`_evaluate`); ``flag[j]`` 1 where computed, 0 where the azimuth rule lacks the point
+    symmetry (the caller's numpy)."""
+    size = _MAX_RADIAL_SEGMENTS * s_r.size * _MAX_AZIMUTH_SEGMENTS * s_a.size
+    W, qv, tv = np.empty(size), np.empty(size), np.empty(size)
+    pidx = np.empty(size, dtype=np.int64)
+    coef, cinv = np.empty(N_COEF), np.empty(N_COEF)
     for j in range(start, stop):
-        a = theta[j]
-        si, ci = math.sin(a), math.cos(a)
-        kis0, kis1 = k * si, 0.0
-        ksv0, ksv1 = k * si * cphi, k * si * sphi
-        nr, na = _node_rules(k, kis0, kis1, ksv0, ksv1, sq_eps, inv_len, extent, log, s_r, ds_r,
-                             s_a, ds_a, pts, br, kr, wr, psi, wpsi)  # fmt: skip
         flag[j] = 0
         out[j] = 0.0
-        if not _partner(psi, na, math.pi, False, neg):
-            continue  # (no point symmetry: the numpy reference)
-        half = _partner(psi, na, 0.0, True, mir)
-        for ia in range(na):
-            cpsi[ia], spsi[ia] = math.cos(psi[ia]), math.sin(psi[ia])
-        first = 0
-        if half:  # the surface's quadratic form even under y → −y (to 1e-12)
-            for ir in range(nr):
-                for ia in range(na):
-                    px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-                    q_a = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
-                    pm = mir[ia]
-                    q_b = _q2(kr[ir] * cpsi[pm] - kis0, kr[ir] * spsi[pm] - kis1, cr, sr, lx, ly)
-                    if not abs(q_a - q_b) <= 1e-12 * abs(q_b):
-                        half = False
-            if half:
-                while first < na and not psi[first] > 0.0:
-                    first += 1
-        # the height series at T̂(p − k_i⊥) of every node computed (the upper half if half)
-        Q = (k * sigma * ci) ** 2
-        nc = _coefficients(Q, spec, coef, cinv)
-        if spec == GAUSSIAN:
-            for ir in range(nr):
-                for ia in range(first, na):
-                    px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-                    q = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
-                    tm[ir, ia] = _t_hat(q, coef, cinv, nc, spec, area)
-        else:  # every node at once, the term count bounding the tail everywhere
-            cnt = 0
-            for ir in range(nr):
-                for ia in range(first, na):
-                    px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-                    qv[cnt] = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
-                    cnt += 1
-            _t_hat_exp_block(qv, cnt, coef, cinv, _exp_terms(coef, nc, _SERIES_RTOL), area, tv)
-            cnt = 0
-            for ir in range(nr):
-                for ia in range(first, na):
-                    tm[ir, ia] = tv[cnt]
-                    cnt += 1
-        _fill_g_fourier(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, zc, kr, nr,
-                        cpsi, spsi, first, na, gs, cf, ep, cs, sn)  # fmt: skip
-        val = 0.0
-        for ir in range(nr):
-            base = wr[ir] * kr[ir]
-            for ia in range(first, na):
-                ga = g[ir, ia]
-                if half:  # −p's mirror, on the upper half: g(−p) = −g there, T̂ the same
-                    pos = max(mir[neg[ia]] - first, 0) + first
-                    d = ga - g[ir, pos]
-                    tp = tm[ir, pos]
-                else:
-                    d = ga + g[ir, neg[ia]]
-                    tp = tm[ir, neg[ia]]
-                w = base * wpsi[ia] * tm[ir, ia] * tp
-                val += w * (ga.real * d.real + ga.imag * d.imag)
-        if half:
-            val *= 2.0
-        out[j] = 4.0 * math.pi * k * k * ci * ci * sigma**4 * val
+        n = _prepare(theta[j], eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx)
+        if n < 0:
+            continue
+        out[j] = _evaluate(W, qv, pidx, n, theta[j], k, sigma, spec, lx * ly, coef, cinv, tv)
         flag[j] = 1
 
 
@@ -326,6 +338,35 @@ def backscatter_resummed(theta, eps: complex, k: float, sigma: float, length: fl
 
     run_split(part, n, threads, 2)
     return out, flag.astype(bool)
+
+
+def prepare_one(theta: float, eps: complex, k: float, length: float, length_y: float,
+                phi_i: float, spectrum: int, n_nodes: int, n_azimuth: int):  # fmt: skip
+    """The σ-independent part of one flat backscatter angle ``theta`` [rad] (:func:`_prepare`):
+    ``(W, qv, pidx)`` trimmed to the rule's nodes (fresh arrays, read-only), or None where the
+    rule lacks the point symmetry (the caller's numpy reference)."""
+    s, ds = unit_rule(n_nodes)
+    sa, dsa = unit_rule(n_azimuth)
+    size = _MAX_RADIAL_SEGMENTS * s.size * _MAX_AZIMUTH_SEGMENTS * sa.size
+    W, qv, pidx = np.empty(size), np.empty(size), np.empty(size, dtype=np.int64)
+    n = _prepare(theta, eps, k, length, length_y, math.cos(phi_i), math.sin(phi_i), spectrum,
+                 s, ds, sa, dsa, W, qv, pidx)  # fmt: skip
+    if n < 0:
+        return None
+    prep = (W[:n].copy(), qv[:n].copy(), pidx[:n].copy())
+    for a in prep:
+        a.flags.writeable = False
+    return prep
+
+
+def evaluate_one(
+    prep, theta: float, k: float, sigma: float, length: float, length_y: float, spectrum: int
+) -> float:
+    """σ⁰_hv [-] at one flat angle ``theta`` [rad] from its :func:`prepare_one` part and the
+    surface's ``sigma`` [m]: the same arithmetic as :func:`_kernel` (the same value to the bit)."""
+    W, qv, pidx = prep
+    return _evaluate(W, qv, pidx, W.size, theta, k, sigma, spectrum, length * length_y,
+                     np.empty(N_COEF), np.empty(N_COEF), np.empty(W.size))  # fmt: skip
 
 
 def backscatter_one(theta: float, eps: complex, k: float, sigma: float, length: float,
