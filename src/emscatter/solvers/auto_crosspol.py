@@ -13,9 +13,9 @@ every branch adds the same hv: the resummed second-order cross-pol
 (:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed` — second-order SPM's
 exact kernel over the whole spectral plane with the IEM's Gaussian height series; issue 20:
 against NMM3D at 40° its HV RMSE is 3.24 dB, bias −2.10 dB, where the IEM term below has 5.23 /
-−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: 0.18–0.5 ms of CPU
-per angle), on :data:`RESUMMED_NODES` radial × :data:`RESUMMED_AZIMUTH_NODES` azimuth
-nodes per segment. Without numba (or with
+−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: ≈ 0.13 ms of CPU
+per angle, ≈ 0.05 ms for a new σ at a known ε, θ, ℓ), on :data:`RESUMMED_NODES` radial ×
+:data:`RESUMMED_AZIMUTH_NODES` azimuth nodes per segment. Without numba (or with
 ``EMSCATTER_KERNELS=numpy``) its numpy reference runs, the same values at 35–80 ms per angle
 (each angle once: remembered). So:
 
@@ -58,7 +58,11 @@ each branch keeps its own second-order term, as before:
 
 Every term is remembered per (roughness, ε, k, θi, φi) — SPM2's per unit σ⁴, since
 σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k and the angles only — and a whole call per its inputs, so a
-repeated scene or the blend's second method pays once (:func:`clear_cache`).
+repeated scene or the blend's second method pays once (:func:`clear_cache`); the resummed
+term's σ-independent node parts (node rule and kernel products) per (ε, k, θ, φ, ℓ) besides
+(``iem.crosspol_resummed._PREP``, 64 at most), so a σ sweep pays the height series only. A
+one-geometry call (the usual ``backscatter`` call) takes a path without the array
+bookkeeping (:func:`_one_angle`: the same values, tested to the bit).
 
 What stays zero, by physics: a 1-D profile (a 2-D problem has no cross-polarization), a flat
 surface (σ = 0), and bistatic geometries in the plane of incidence for these branches'

@@ -38,6 +38,12 @@ the ``c_m`` (discrete Fourier transform, no aliasing), and each node costs 7 com
 place of the kernel's ~40 (``_fill_g_fourier``; issue 20's speed target: 0.34 → 0.14 ms per
 angle on its 162-case grid, loaded machine).
 
+Per angle in two parts: :func:`_prepare` (node rule, partners, the kernel products times the
+weights, the nodes' ``(Kℓ)²``: independent of σ) and :func:`_evaluate` (the height series at
+``Q`` and the weighted sum); :func:`prepare_one` / :func:`evaluate_one` expose them for one
+angle, so that the caller may remember the first (``iem.crosspol_resummed._PREP``) — the same
+arithmetic as :func:`_kernel`, the same double.
+
 Agreement with the numpy reference (``kirchhoff.po.series_sum`` at ``rtol = 1e-10``, whose
 16-term blocks sum far past that bound; the whole-plane rule without the symmetries):
 ``tests/test_iem_crosspol_resummed_kernel.py``, ≤ 1e-10 relative. Angles whose rule lacks the
