@@ -106,3 +106,14 @@ def test_values_memory_clear_keeps_nodes_on_request():
     assert len(cr._PREP) >= 1 and not auto_crosspol._CACHE
     auto_crosspol.clear_cache()
     assert not cr._PREP
+
+
+def test_numpy_backend_takes_the_reference_and_no_memory(monkeypatch):
+    rough = em.ExponentialCorrelation(0.5 / K, 3.0 / K)
+    fast = cr._value_one(rough, 10 + 1j, K, T40, 0.0, *NODES)
+    cr.clear_memory()
+    monkeypatch.setenv("EMSCATTER_KERNELS", "numpy")
+    slow = cr._value_one(rough, 10 + 1j, K, T40, 0.0, *NODES)
+    assert not cr._PREP  # (the numpy path keeps no node parts)
+    assert slow == cr._numpy(rough, 10 + 1j, K, np.array([T40]), 0.0, *NODES)[0, 0]
+    np.testing.assert_allclose(fast, slow, rtol=1e-10)
