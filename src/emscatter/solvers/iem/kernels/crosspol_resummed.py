@@ -71,7 +71,14 @@ from emscatter.solvers.spm.kernel_crosspol import (
     unit_rule,
 )
 
-__all__ = ["backscatter_resummed", "backscatter_one", "GAUSSIAN", "EXPONENTIAL", "N_COEF"]
+__all__ = [
+    "backscatter_resummed",
+    "prepare_one",
+    "evaluate_one",
+    "GAUSSIAN",
+    "EXPONENTIAL",
+    "N_COEF",
+]
 
 EXPONENTIAL = 1
 #: Series coefficients kept per angle (``Q ≤ 9``: ``cₙ`` < 1e-300 of the first by n ≈ 200).
@@ -373,18 +380,3 @@ def evaluate_one(
     W, qv, pidx = prep
     return _evaluate(W, qv, pidx, W.size, theta, k, sigma, spectrum, length * length_y,
                      np.empty(N_COEF), np.empty(N_COEF), np.empty(W.size))  # fmt: skip
-
-
-def backscatter_one(theta: float, eps: complex, k: float, sigma: float, length: float,
-                    length_y: float, phi_i: float, spectrum: int, n_nodes: int,
-                    n_azimuth: int) -> float:  # fmt: skip
-    """:func:`backscatter_resummed` at one flat angle ``theta`` [rad], on the calling thread
-    (no array wrapping: the kernel itself, for ``auto``'s one-geometry calls): σ⁰_hv [-], or
-    NaN where the rule lacks the point symmetry (the caller's numpy reference)."""
-    th = np.array([theta], dtype=np.float64)
-    out, flag = np.zeros(1), np.zeros(1, dtype=np.int64)
-    s, ds = unit_rule(n_nodes)
-    sa, dsa = unit_rule(n_azimuth)
-    _kernel(th, eps, k, sigma, length, length_y, math.cos(phi_i), math.sin(phi_i), spectrum,
-            s, ds, sa, dsa, 0, 1, out, flag)  # fmt: skip
-    return float(out[0]) if flag[0] else math.nan
