@@ -13,9 +13,9 @@ every branch adds the same hv: the resummed second-order cross-pol
 (:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed` — second-order SPM's
 exact kernel over the whole spectral plane with the IEM's Gaussian height series; issue 20:
 against NMM3D at 40° its HV RMSE is 3.24 dB, bias −2.10 dB, where the IEM term below has 5.23 /
-−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: 0.18–0.5 ms of CPU
-per angle), on :data:`RESUMMED_NODES` radial × :data:`RESUMMED_AZIMUTH_NODES` azimuth
-nodes per segment. Without numba (or with
+−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: ≈ 0.13 ms of CPU
+per angle, ≈ 0.05 ms for a new σ at a known ε, θ, ℓ), on :data:`RESUMMED_NODES` radial ×
+:data:`RESUMMED_AZIMUTH_NODES` azimuth nodes per segment. Without numba (or with
 ``EMSCATTER_KERNELS=numpy``) its numpy reference runs, the same values at 35–80 ms per angle
 (each angle once: remembered). So:
 
@@ -58,7 +58,11 @@ each branch keeps its own second-order term, as before:
 
 Every term is remembered per (roughness, ε, k, θi, φi) — SPM2's per unit σ⁴, since
 σ⁰⁽²²⁾/σ⁴ depends on ℓ, ε, k and the angles only — and a whole call per its inputs, so a
-repeated scene or the blend's second method pays once (:func:`clear_cache`).
+repeated scene or the blend's second method pays once (:func:`clear_cache`); the resummed
+term's σ-independent node parts (node rule and kernel products) per (ε, k, θ, φ, ℓ) besides
+(``iem.crosspol_resummed._PREP``, 64 at most), so a σ sweep pays the height series only. A
+one-geometry call (the usual ``backscatter`` call) takes a path without the array
+bookkeeping (:func:`_one_angle`: the same values, tested to the bit).
 
 What stays zero, by physics: a 1-D profile (a 2-D problem has no cross-polarization), a flat
 surface (σ = 0), and bistatic geometries in the plane of incidence for these branches'
@@ -105,9 +109,15 @@ _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 4096
 
 
-def clear_cache() -> None:
-    """Forget the remembered backscatter cross-pol values."""
+def clear_cache(*, nodes: bool = True) -> None:
+    """Forget the remembered backscatter cross-pol values, and with ``nodes`` (default) the
+    resummed term's σ-independent node parts too
+    (:func:`emscatter.solvers.iem.crosspol_resummed.clear_memory`): everything recomputed."""
     _CACHE.clear()
+    if nodes:
+        from .iem.crosspol_resummed import clear_memory
+
+        clear_memory()
 
 
 def _cached(keys, compute):
@@ -195,6 +205,9 @@ def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_, *, options=None
     A repeated call (same inputs) is answered from the cache (a fresh array)."""
     if name == "iem" and (options is None or _IEM_OPTIONS & options.keys()):
         return None, None
+    fast = _one_angle(name, rough, eps, k, ti, ts, ps, pi_)
+    if fast is not None:
+        return fast
     args = (ti, ts, ps, pi_) if is_pec(eps) else (ti, ts, ps, pi_, eps)
     arrays = [np.asarray(a) for a in args]
     key = None
@@ -212,6 +225,53 @@ def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_, *, options=None
         while len(_CACHE) > _CACHE_SIZE:
             _CACHE.popitem(last=False)
     return hv, how
+
+
+def _scalar_dielectric(rough, eps) -> bool:
+    """:func:`_spm2_ok` for one scalar ε without numpy's per-call cost (``medium_class``'s
+    rule: a dielectric is ``Re ε ≥ 0`` and ``|ε| < 100``)."""
+    from ..spectra import ExponentialCorrelation, GaussianCorrelation
+
+    if type(rough) not in (GaussianCorrelation, ExponentialCorrelation):
+        return False
+    if isinstance(eps, str) or np.ndim(eps) != 0:
+        return False
+    e = complex(eps)
+    return not (e.real < 0 or abs(e) >= 100.0)
+
+
+def _one_angle(name: str, rough, eps, k: float, ti, ts, ps, pi_):
+    """:func:`supplement` for one geometry (every angle of size 1, one scalar ε) on a branch
+    that takes the resummed term unfaded (``kσ cosθ ≤`` :data:`FADE_KSIGMA_COS`): the same
+    value from the same per-angle memory, without the array path's numpy calls (≈ 0.1 ms,
+    as much as the kernel itself: issue 20's speed target). None where the array path runs."""
+    if name not in ("spm", "po", "go", IEM_BACKSCATTER):
+        return None
+    if rough.dimension != 2 or rough.sigma == 0 or not _scalar_dielectric(rough, eps):
+        return None
+    arrs = (ti, ts, ps, pi_)
+    if any(np.size(a) != 1 for a in arrs):
+        return None
+    t, t2, p_s, p_i = (float(np.asarray(a).reshape(-1)[0]) for a in arrs)
+    if not (abs(t - t2) <= 1e-12 and abs((p_s - p_i) % (2 * math.pi) - math.pi) <= _BACK_TOL):
+        return None  # (not backscatter: the array path answers)
+    if not (t < 0.5 * math.pi and k * rough.sigma * math.cos(t) <= FADE_KSIGMA_COS):
+        return None  # (faded or grazing: the array path)
+    shape = np.broadcast_shapes(*(np.shape(a) for a in arrs))
+    f = 0.0 if rough.length == rough.length_y else float(np.mod(p_i, 2 * math.pi))
+    e = complex(eps)
+    key = ("resummed", rough, e, float(k), t, f)
+    hit = _CACHE.get(key)
+    if hit is None:
+        from .iem.crosspol_resummed import _value_one
+
+        hit = _value_one(rough, e, float(k), t, f, RESUMMED_NODES, RESUMMED_AZIMUTH_NODES)
+        _CACHE[key] = hit
+        while len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    else:
+        _CACHE.move_to_end(key)
+    return np.full(shape, hit), RESUMMED
 
 
 def _supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_):

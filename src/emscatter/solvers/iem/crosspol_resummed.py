@@ -49,10 +49,12 @@ the horizon for a conductor), Gaussian or exponential 2-D surfaces.
 
 Cost: one σ⁰⁽²²⁾ node set per incidence angle (16 × 16 nodes per segment), the series summed at
 every node. Compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`, the default where
-numba imports; equal to the numpy reference to ≤ 1e-10 relative, seen ≤ 5e-14): 0.9–2.7 ms of
-CPU per angle at 16 nodes, 0.18–0.50 ms (mean 0.33) at the 10 radial × 8 azimuth that
-``auto`` uses (issue 20's 162-case 40° grid; loaded 2-core machine), against 100–250 ms for
-numpy (``EMSCATTER_KERNELS=numpy``). ``method="auto"`` adds it in backscatter on every branch
+numba imports; equal to the numpy reference to ≤ 1e-10 relative, seen ≤ 5e-14): mean 0.14 ms
+of CPU per angle at the 10 radial × 8 azimuth that ``auto`` uses (issue 20's 162-case 40°
+grid, exponential; loaded 2-core machine; 0.34 ms before the kernel's Fourier form), of which
+≈ 0.05 ms is the height series — all a new σ at a known (ε, θ, ℓ) costs, the rest
+remembered (:data:`_PREP`) —, against 100–250 ms for numpy (``EMSCATTER_KERNELS=numpy``).
+``method="auto"`` adds it in backscatter on every branch
 (:mod:`emscatter.solvers.auto_crosspol`); the IEM solver keeps the published IEM term.
 """
 
@@ -60,6 +62,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import OrderedDict
 
 import numpy as np
 
@@ -141,6 +144,52 @@ def _values(rough, eps: complex, k: float, uniq, d: float, n_nodes: int, n_azimu
     if not np.all(np.isfinite(out)) or np.any(out < 0):
         raise FloatingPointError(f"resummed cross-pol not finite/positive at theta={uniq!r}")
     return out
+
+
+#: The σ-independent part of the compiled rule per (spectrum kind, ℓₓ, ℓᵧ, ε, k, θ, φ, nodes)
+#: — exact floats — (:func:`emscatter.solvers.iem.kernels.crosspol_resummed.prepare_one`:
+#: the node weights times the kernel products, the nodes' ``(Kℓ)²``; ≤ 20 400 nodes, ≤ 0.4 MB
+#: each, ~0.1 MB on issue 20's grid), so a new σ at a known (ε, θ, ℓ) costs only the height
+#: series; least recently used first out beyond :data:`_PREP_SIZE`.
+_PREP: OrderedDict = OrderedDict()
+_PREP_SIZE = 64
+
+
+def clear_memory() -> None:
+    """Forget the remembered σ-independent node parts (:data:`_PREP`)."""
+    _PREP.clear()
+
+
+def _value_one(rough, eps: complex, k: float, theta: float, d: float, n_nodes: int,
+               n_azimuth: int) -> float:  # fmt: skip
+    """``hv`` at one flat angle ``theta`` [rad] (inputs checked, as :func:`_values`, whose
+    value it is to the bit: the same compiled arithmetic, tested), without the array path's
+    wrapping: compiled where numba is there and the rule has the point symmetry — its
+    σ-independent part from :data:`_PREP` where known —, else :func:`_values`."""
+    from emscatter.kernels import backend
+
+    if backend() == "numba":
+        from emscatter.solvers.iem.kernels import crosspol_resummed as kern
+
+        code = kern.GAUSSIAN if type(rough) is GaussianCorrelation else kern.EXPONENTIAL
+        lx, ly = rough.length, rough.length_y
+        key = (code, lx, ly, eps, k, theta, d, n_nodes, n_azimuth)
+        prep = _PREP.get(key)
+        if prep is None:
+            prep = kern.prepare_one(theta, eps, k, lx, ly, d, code, n_nodes, n_azimuth)
+            _PREP[key] = prep
+            while len(_PREP) > _PREP_SIZE:
+                _PREP.popitem(last=False)
+        else:
+            _PREP.move_to_end(key)
+        if prep is not None:  # (None: no point symmetry, the numpy reference)
+            v = kern.evaluate_one(prep, theta, k, rough.sigma, lx, ly, code)
+            if not (math.isfinite(v) and v >= 0):
+                raise FloatingPointError(
+                    f"resummed cross-pol not finite/positive at theta={theta!r}"
+                )
+            return v
+    return float(_values(rough, eps, k, np.array([theta]), d, n_nodes, n_azimuth)[0, 0])
 
 
 def _compiled(rough, eps, k, uniq, d, n_nodes, n_azimuth):
