@@ -68,6 +68,7 @@ from ..fresnel import fresnel_cos
 from ..spectra import check_roughness
 from .medium import check_thickness
 from .slab import gaussian_mean_field, slab_coefficients
+from .slab_faces import check_face, choose_face, rough_face_budget
 from .tables import RadioValidityWarning, check_policy
 
 __all__ = ["DiffuseTransmission", "diffuse_transmission", "face_kernels"]
@@ -98,6 +99,8 @@ class DiffuseTransmission:
     t_modes: np.ndarray | None = None  # (2, n, n_mu, M + 1) azimuthal modes of t_lobe
     r_lobe: np.ndarray | None = None  # (2, n, n_mu) internal diffuse light out of the front face
     r_modes: np.ndarray | None = None  # (2, n, n_mu, M + 1) azimuthal modes of r_lobe
+    face: str = "go"  # the face model used (``face=`` of diffuse_transmission, resolved)
+    source_scale: np.ndarray | None = None  # (2, n) SPM/PO/IEM faces (radio.slab_faces)
 
     def transmitted_lobe(self, phi) -> np.ndarray:
         """Diffusely transmitted power per unit solid angle [1/sr], ``(2, n, n_mu, n_phi)``
@@ -190,6 +193,7 @@ def diffuse_transmission(
     conserve: bool = True,
     out_of_range: str = "raise",
     n_modes: int = 0,
+    face: str = "auto",
 ) -> DiffuseTransmission:
     """Power budget of a rough slab per incidence (module docstring).
 
@@ -206,7 +210,13 @@ def diffuse_transmission(
     out_of_range : ``"raise"`` (default), ``"warn"`` or ``"ignore"`` outside GO's validity.
     n_modes : azimuthal Fourier modes of the transmitted lobe to keep (0: the azimuth-integrated
         budget only; ``< n_phi``), for :meth:`DiffuseTransmission.transmitted_lobe`.
+    face : the faces' model, one of :data:`~emscatter.radio.slab_faces.FACES`: ``"auto"``
+        (default: GO where it holds — the GO path unchanged, bit for bit — else the first valid
+        of SPM, PO, IEM), ``"go"``, ``"spm"``, ``"po"``, ``"iem"``
+        (:mod:`emscatter.radio.slab_faces`); ``out_of_range`` applies the chosen model's
+        validity.
     """
+    face = check_face(face)
     e = _check_eps(eps)
     f = float(frequency)
     if not (np.isfinite(f) and f > 0):
@@ -240,20 +250,40 @@ def diffuse_transmission(
     if flat:
         a = 1.0 - r_coh - t_coh
         return DiffuseTransmission(th, f, e, d, r_coh, zero, t_coh, zero, a, zero, True, True)
-    from ..solvers.kirchhoff import go
-
-    rep = go.check_validity(rough, k)
+    face, rep = choose_face(face, rough, k, e)
     if not rep["valid"]:
-        msg = (
-            f"diffuse slab transmission needs geometric optics ((2kσ)² ≥ 10, kℓ ≥ 6); "
-            f"at {f / 1e9:g} GHz {rough.describe()} has kσ = {rep['k_sigma']:.3g}, kℓ = "
-            f"{rep['k_l']:.3g} ({'; '.join(rep['reasons'])}). No first-order SPM/PO "
-            "transmitted σ⁰ is implemented (out_of_range='warn' computes GO anyway)"
-        )
+        if face == "go":
+            from ..solvers.kirchhoff import go
+
+            gr = go.check_validity(rough, k)
+            msg = (
+                f"diffuse slab transmission needs geometric optics ((2kσ)² ≥ 10, kℓ ≥ 6) for "
+                f"face='go'; at {f / 1e9:g} GHz {rough.describe()} has kσ = "
+                f"{gr['k_sigma']:.3g}, kℓ = {gr['k_l']:.3g} ({'; '.join(rep['reasons'])}). "
+                "face='auto' takes SPM, PO or the IEM where one of them holds "
+                "(out_of_range='warn' computes GO anyway)"
+            )
+        else:
+            msg = (
+                f"diffuse slab transmission with face={face!r} at {f / 1e9:g} GHz: "
+                f"{rough.describe()} is outside that model's validity "
+                f"({'; '.join(rep['reasons'])}); out_of_range='warn' computes anyway"
+            )
         if out_of_range == "raise":
             raise ValueError(msg)
         if out_of_range == "warn":
             warnings.warn(msg, RadioValidityWarning, stacklevel=2)
+    if face != "go":
+        mu, wmu = _gauss01(n_mu)
+        parts = rough_face_budget(face, rough, e, k, d, c, mu, wmu, n_phi, n_modes, conserve,
+                                  r_coh, t_coh)  # fmt: skip
+        out = DiffuseTransmission(
+            th, f, e, d, r_coh, t_coh=t_coh, flat=False, valid=rep["valid"],
+            reasons=list(rep["reasons"]), mu_nodes=mu, mu_weights=wmu, face=face, **parts,
+        )  # fmt: skip
+        if not np.all(np.isfinite(out.total)):
+            raise ValueError("diffuse slab transmission produced NaN/inf (please report the inputs)")
+        return out
     mu, wmu = _gauss01(n_mu)
     er = e.real
     # front face from air: polarization-resolved, at the incidence angles
