@@ -18,17 +18,23 @@ polarization ``p`` (h, v) the incident power splits into::
   face's diffuse rows are scaled to ``R + T = 1`` (the deficit returned to the lobes in
   proportion, recorded as ``face_deficit``), so ``L = 0``.
 
-Face model: geometric optics, Walter, Marschner, Li & Torrance, EGSR 2007 (eqs. 16, 21, 23,
-25, 27) for transmission
+Face models (``face=``, :data:`~emscatter.radio.slab_faces.FACES`). ``"go"``: geometric
+optics, Walter, Marschner, Li & Torrance, EGSR 2007 (eqs. 16, 21, 23, 25, 27) for transmission
 (:func:`~emscatter.solvers.kirchhoff.transmission.go.bistatic_transmission`) and
 emscatter's GO reflection (:func:`emscatter.solvers.kirchhoff.go.bistatic`), both with the real
 part of ``ε`` (a low-loss face; the loss acts in the bulk). From inside, a face is
 the interface to air with ``ε_rel = 1/Re ε`` (total internal reflection included). GO holds
 only for ``(2kσ)² ≥ 10`` and ``kℓ ≥ 6`` (:func:`emscatter.solvers.kirchhoff.go.check_validity`);
-there the Kirchhoff mean field is ``< e⁻⁵`` and the coherent terms are negligible. For smaller
-``kσ`` (SPM, PO: the 28 GHz brick wall, kσ = 0.47) no transmitted σ⁰ is implemented and
+there the Kirchhoff mean field is ``< e⁻⁵`` and the coherent terms are negligible (taken off
+the incident power at the entrance, ``keep`` below). ``"spm"``, ``"po"``, ``"iem"``: the
+small and medium roughness of common walls (the 28 GHz brick wall, kσ = 0.47), where the
+coherent slab keeps most of the power; :mod:`emscatter.radio.slab_faces` builds their kernels
+from the solvers' transmitted and reflected σ⁰ (complex ε from air) and feeds the transport
+below with what the coherent field loses at each face, so nothing is counted twice.
+``"auto"`` (default) takes GO where it holds (this GO path, bit for bit), else the first of SPM,
+PO, IEM whose validity holds. Outside the chosen model's validity
 :func:`diffuse_transmission` refuses (``out_of_range="raise"``, the default) or carries on
-outside validity (``"warn"``/``"ignore"``, the GO result then is only indicative).
+(``"warn"``/``"ignore"``, the result then only indicative).
 
 Transport inside (radiative, incoherent): the diffuse power inside is tracked per internal
 direction cosine ``μ`` (Gauss–Legendre nodes on (0, 1)), azimuth-integrated (exact for the
@@ -282,7 +288,9 @@ def diffuse_transmission(
             reasons=list(rep["reasons"]), mu_nodes=mu, mu_weights=wmu, face=face, **parts,
         )  # fmt: skip
         if not np.all(np.isfinite(out.total)):
-            raise ValueError("diffuse slab transmission produced NaN/inf (please report the inputs)")
+            raise ValueError(
+                "diffuse slab transmission produced NaN/inf (please report the inputs)"
+            )
         return out
     mu, wmu = _gauss01(n_mu)
     er = e.real

@@ -47,7 +47,10 @@ carries them): the front face hit from air (unit flux), the coherent wave inside
 face going down (flux ``F_b``) and the front face going up (``F_f``), with ``D = √(1 − |r|²)
 χ_t / (1 − r_in² e^{2iq})`` the coherent downward amplitude just inside the front face
 (``slab.py``'s geometric series), ``F_b = |D|² a_c``, ``F_f = F_b |r_in|² a_c``, ``a_c =
-|e^{iq}|²``. The coherent field's absorption is ``A_coh = |D|²(1 − a_c)(1 + |r_in|² a_c)``.
+|e^{iq}|²``. The coherent field's absorption is ``A_coh = |D|²(1 − a_c)(1 + |r_in|² a_c)``
+per pass, times the ratio that makes it exact for the flat slab (``1 − |R|² − |T|²`` of ITU's
+slab over the same per-pass sum at σ = 0: the interference of the up- and down-going waves in
+a lossy slab; 1 for a lossless wall, where ``A_coh = 0``).
 Each excitation scatters in proportion to its own flux (the interference of the two coherent
 waves meeting a face from both sides is not in the faces' σ⁰); the three sources are scaled by
 one factor per incidence, ``source_scale = S / (ℓ₀ + (F_b + F_f) ℓ_in)``, so that they carry
@@ -65,7 +68,7 @@ import warnings
 import numpy as np
 
 from ..fresnel import fresnel_cos
-from .slab import gaussian_mean_field
+from .slab import gaussian_mean_field, slab_coefficients
 
 __all__ = ["FACES", "choose_face", "face_validity", "rough_face_budget", "sigma0_kernels"]
 
@@ -135,7 +138,9 @@ def _sigma0(face, kind, rough, eps, k, ti, tj, ph):
 
             if kind == "r":
                 return po.bistatic(rough, eps, k, ti, tj, ph, coherent=False).sigma0
-            return tpo.bistatic_transmission(rough, eps, k, ti, tj, ph, out_of_range="ignore").sigma0
+            return tpo.bistatic_transmission(
+                rough, eps, k, ti, tj, ph, out_of_range="ignore"
+            ).sigma0
         from ..solvers.iem import model, transmission
 
         if kind == "r":
@@ -167,6 +172,23 @@ def sigma0_kernels(face, rough, eps_rel, k: float, cos_in, mu, w_mu, n_phi: int,
         ker = 2.0 * np.einsum("pijf,mf->mpij", sig, cosm)
         out.append(ker / (4.0 * math.pi * ci[None, None, :, None]) * w_mu)
     return out[0], out[1]
+
+
+def _coherent_inside(e: complex, k: float, d: float, c, sigma: float):
+    """The coherent downward flux just inside the front face ``|D|²``, one crossing's ``a_c``,
+    ``|r_in|²`` and the per-pass absorption ``|D|²(1 − a_c)(1 + |r_in|² a_c)`` (module
+    docstring), ``(2, n)`` over (h, v) and the incidence cosines ``c``."""
+    r0 = np.stack(fresnel_cos(e, c))
+    root = np.sqrt(e - (1.0 - c * c) + 0j)
+    root = np.where(root.imag < 0, -root, root)
+    k2z = k * root
+    chi_t = gaussian_mean_field((k * c - k2z) ** 2, sigma)
+    r_in = -r0 * gaussian_mean_field(4.0 * k2z * k2z, sigma)
+    ph = np.exp(1j * k * d * root)
+    dflux = (1.0 - np.abs(r0) ** 2) * np.abs(chi_t) ** 2 / np.abs(1.0 - r_in * r_in * ph * ph) ** 2
+    a_c = np.exp(-2.0 * k * d * root.imag)  # |e^{iq}|², exactly 1 when lossless
+    r_in2 = np.abs(r_in) ** 2
+    return dflux, a_c, r_in2, dflux * (1.0 - a_c) * (1.0 + r_in2 * a_c)
 
 
 def _inside_coherent(er: float, m, k: float, sigma: float):
@@ -213,14 +235,14 @@ def rough_face_budget(face, rough, e: complex, k: float, d: float, c, mu, wmu, n
     t0f = 1.0 - np.abs(r0) ** 2
     ell0 = np.maximum(1.0 - np.abs(r0) ** 2 * chi_r**2 - t0f * np.abs(chi_t) ** 2, 0.0)
     # the coherent waves inside (slab.py's geometric series, flux-normalized)
-    chi_i = gaussian_mean_field(4.0 * k2z * k2z, sigma)
-    r_in = -r0 * chi_i
-    ph = np.exp(1j * k * d * root)
-    dflux = t0f * np.abs(chi_t) ** 2 / np.abs(1.0 - r_in * r_in * ph * ph) ** 2
-    a_c = np.abs(ph) ** 2
+    dflux, a_c, r_in2, a_pass = _coherent_inside(e, k, d, c, sigma)
     f_b = dflux * a_c
-    f_f = f_b * np.abs(r_in) ** 2 * a_c
-    a_coh = dflux * (1.0 - a_c) * (1.0 + np.abs(r_in) ** 2 * a_c)
+    f_f = f_b * r_in2 * a_c
+    # their absorption, per pass, calibrated to Poynting's theorem of the flat slab
+    _, _, _, a_pass0 = _coherent_inside(e, k, d, c, 0.0)
+    fr = np.stack(slab_coefficients(e, c, k, d))
+    a_flat = 1.0 - np.abs(fr[:2]) ** 2 - np.abs(fr[2:]) ** 2
+    a_coh = a_pass * np.where(a_pass0 > 0, a_flat / np.where(a_pass0 > 0, a_pass0, 1.0), 1.0)
     mu_c = np.sqrt(np.clip(1.0 - (1.0 - c * c) / er, 0.0, 1.0))  # its internal cosine
     rcc, tcc, _ = _inside_coherent(er, mu_c, k, sigma)
     ell_c = np.maximum(1.0 - rcc - tcc, 0.0)  # (2, n)
