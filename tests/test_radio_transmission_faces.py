@@ -64,10 +64,12 @@ def test_energy_budget_closes_per_incidence(wall, face, k_sigma, conserve):
     assert np.all(b.r_diff + b.t_diff > 0)
     if conserve:
         assert np.all(b.lost == 0.0)
-    else:  # the faces' σ⁰ against the Kirchhoff mean-field deficit, either sign: measured
-        # |L| ≤ 0.06 of the incident power, except PO's inside faces near grazing (no
-        # shadowing; glass kσ = 0.5 at 60–75°: 0.06–0.16 with 16 nodes, 0.04–0.11 with 32)
-        assert np.all(np.abs(b.lost[:, :3]) < 0.06) and np.all(np.abs(b.lost) < 0.2)
+    else:  # the faces' σ⁰ against the Kirchhoff mean-field deficit, either sign. Measured
+        # |L| ≤ 0.035 at kσ ≤ 0.3 for glass, ≤ 0.02 at kσ = 0.1; the inside faces see kσ√Re ε
+        # (1.1 for concrete at kσ = 0.5), where first order and e^{−x} part: up to 0.25 at 0°
+        assert np.all(np.abs(b.lost) < (0.05 if eps == 2.25 and k_sigma <= 0.3 else 0.3))
+        if k_sigma == 0.1:
+            assert np.all(np.abs(b.lost) < 0.03)
         assert np.any(b.lost != 0.0)
     if eps.imag == 0:
         assert np.all(b.absorbed == 0.0)
@@ -144,7 +146,22 @@ def test_transmission_tables_take_the_faces():
     assert np.all(np.abs(tt.scale[:, to80] - 1) < 0.08) and tt.t_diff[:, 0].mean() > 0.05
 
 
+def test_auto_refuses_where_no_face_model_holds():
+    steep = GaussianCorrelation(sigma=20e-3, length=10e-3)  # kσ = 11.7, rms slope 2.8
+    with pytest.raises(ValueError, match=r"face='auto'.*every face model.*go: .*spm: .*iem: "):
+        diffuse_transmission(steep, 3.91, F, 0.1)
+
+
 @pytest.mark.parametrize("face", ["kirchhoff", "GO", None, 3])
 def test_bad_face_names_the_parameter(face):
     with pytest.raises(ValueError, match=r"face must be one of \('auto', 'go', 'spm', 'po', "):
         diffuse_transmission(BRICK, 3.91, F, 0.1, face=face)
+
+
+def test_quadrature_error_of_the_brick_wall_is_below_1e3():
+    # the μ rule is split at the critical cosine (the inside faces' kink): measured n = 32 against
+    # 96 nodes: ≤ 8e-5 in T_diff, R_diff (75°); one 48-node rule was off by 1.3e-3 at 75°
+    a, b = (diffuse_transmission(BRICK, 3.91 + 0.026j, F, 0.1, theta=THETA, n_mu=n, n_phi=n)
+            for n in (24, 48))  # fmt: skip
+    for x, y in ((a.t_diff, b.t_diff), (a.r_diff, b.r_diff), (a.absorbed, b.absorbed)):
+        np.testing.assert_allclose(x, y, atol=1e-3)

@@ -141,6 +141,17 @@ def _gauss01(n: int):
     return 0.5 * (x + 1.0), 0.5 * w
 
 
+def _gauss01_split(n: int, cut: float):
+    """Gauss–Legendre nodes on (0, cut) and (cut, 1), ``n`` in all in proportion to the lengths
+    (at least 2 each): the inside faces' coherent refraction has a kink at the critical
+    cosine ``cut`` (total internal reflection beyond), which one rule converges on slowly."""
+    n1 = min(max(int(round(n * cut)), 2), n - 2)
+    x1, w1 = _gauss01(n1)
+    x2, w2 = _gauss01(n - n1)
+    mu = np.concatenate([cut * x1, cut + (1 - cut) * x2])
+    return mu, np.concatenate([cut * w1, (1 - cut) * w2])
+
+
 def face_kernels(rough, eps_rel: float, k: float, cos_in, mu, w_mu, n_phi: int, n_modes=0):
     """GO kernels of one face for incidence cosines ``cos_in``, per azimuthal Fourier mode.
 
@@ -256,9 +267,17 @@ def diffuse_transmission(
     if flat:
         a = 1.0 - r_coh - t_coh
         return DiffuseTransmission(th, f, e, d, r_coh, zero, t_coh, zero, a, zero, True, True)
+    asked = face
     face, rep = choose_face(face, rough, k, e)
     if not rep["valid"]:
-        if face == "go":
+        if asked == "auto":
+            msg = (
+                f"diffuse slab transmission (face='auto'): at {f / 1e9:g} GHz "
+                f"{rough.describe()} is outside the validity of every face model "
+                f"({'; '.join(rep['reasons'])}); out_of_range='warn' computes GO anyway, or "
+                "name a model with face="
+            )
+        elif face == "go":
             from ..solvers.kirchhoff import go
 
             gr = go.check_validity(rough, k)
@@ -280,9 +299,10 @@ def diffuse_transmission(
         if out_of_range == "warn":
             warnings.warn(msg, RadioValidityWarning, stacklevel=2)
     if face != "go":
-        mu, wmu = _gauss01(n_mu)
-        parts = rough_face_budget(face, rough, e, k, d, c, mu, wmu, n_phi, n_modes, conserve,
-                                  r_coh, t_coh)  # fmt: skip
+        mu, wmu = _gauss01(n_mu)  # air side; inside: split at the critical cosine
+        inner = _gauss01_split(n_mu, math.sqrt(1.0 - 1.0 / e.real))
+        parts = rough_face_budget(face, rough, e, k, d, c, (mu, wmu), inner, n_phi, n_modes,
+                                  conserve, r_coh, t_coh)  # fmt: skip
         out = DiffuseTransmission(
             th, f, e, d, r_coh, t_coh=t_coh, flat=False, valid=rep["valid"],
             reasons=list(rep["reasons"]), mu_nodes=mu, mu_weights=wmu, face=face, **parts,

@@ -15,8 +15,9 @@ Face models (``face=``): first-order SPM (:func:`emscatter.solvers.spm.model.bis
 (:func:`emscatter.solvers.iem.model.bistatic`,
 :func:`emscatter.solvers.iem.transmission.bistatic_transmission`): their incoherent σ⁰ only.
 ``"auto"`` picks GO where it holds (then the GO path of ``slab_diffuse``, unchanged), else the
-first of SPM, PO, IEM whose validity report passes (PO before the IEM: ~100× faster here and it
-takes a lossy ε; ``face="iem"`` on request).
+first of SPM, PO, IEM whose validity report passes from air and from inside (wavenumber
+``k √Re ε``: the inside faces see a rougher face, kσ√Re ε). PO comes before the IEM: ~100×
+faster here and it takes a lossy ε; ``face="iem"`` on request.
 
 * **From air** (the front face, incident plane wave): the complex ``ε`` (flux through the mean
   plane per real ``k⊥``, the transmission solvers' convention), except the IEM transmission,
@@ -84,8 +85,18 @@ def check_face(face) -> str:
 
 
 def face_validity(face: str, rough, k: float, eps) -> dict:
-    """The validity report of one face model at free-space wavenumber ``k`` [rad/m] (the
-    solvers' ``check_validity``; ``valid``, ``reasons`` as strings)."""
+    """The validity report of one face model at free-space wavenumber ``k`` [rad/m]: the
+    solvers' ``check_validity`` from air (``k``, ``ε``) and from inside (``k √Re ε``,
+    ``1/Re ε``: the inside faces see the roughness ``√Re ε`` times larger); ``valid`` when
+    both pass, ``reasons`` as strings (the inside ones prefixed ``inside:``)."""
+    e = complex(eps)
+    out = _face_validity(face, rough, k, e)
+    inside = _face_validity(face, rough, k * math.sqrt(e.real), 1.0 / e.real)
+    return {"valid": out["valid"] and inside["valid"],
+            "reasons": out["reasons"] + [f"inside: {r}" for r in inside["reasons"]]}  # fmt: skip
+
+
+def _face_validity(face: str, rough, k: float, eps) -> dict:
     if face == "go":
         from ..solvers.kirchhoff import go
 
@@ -151,21 +162,24 @@ def _sigma0(face, kind, rough, eps, k, ti, tj, ph):
         ).sigma0
 
 
-def sigma0_kernels(face, rough, eps_rel, k: float, cos_in, mu, w_mu, n_phi: int, n_modes=0):
-    """Diffuse kernels ``(K_r, K_t)``, ``(n_modes + 1, 2, n_in, n_mu)`` [-], of one SPM/PO/IEM
+def sigma0_kernels(face, rough, eps_rel, k: float, cos_in, nodes_r, nodes_t, n_phi: int,
+                   n_modes=0):  # fmt: skip
+    """Diffuse kernels ``(K_r, K_t)``, ``(n_modes + 1, 2, n_in, n_j)`` [-], of one SPM/PO/IEM
     face, defined as :func:`emscatter.radio.slab_diffuse.face_kernels` (GO): mode ``m`` of
-    ``w_j ∫ Σ_q σ⁰_qp cos(mφ) / (4π cosθi) dφ``. ``k`` is the incident medium's wavenumber
-    [rad/m]; ``eps_rel`` the lower medium's permittivity relative to it."""
+    ``w_j ∫ Σ_q σ⁰_qp cos(mφ) / (4π cosθi) dφ``, on the cosine nodes and weights
+    ``nodes_r = (μ, w)`` of the reflected side and ``nodes_t`` of the transmitted side. ``k`` is
+    the incident medium's wavenumber [rad/m]; ``eps_rel`` the lower medium's permittivity
+    relative to it."""
     xp, wp = np.polynomial.legendre.leggauss(n_phi)
     phi = 0.5 * math.pi * (xp + 1.0)
     wphi = 0.5 * math.pi * wp
     cosm = np.cos(np.arange(n_modes + 1)[:, None] * phi[None, :]) * wphi
     ci = np.clip(np.asarray(cos_in, dtype=float), 1e-9, 1.0)
     ti = np.arccos(ci)[:, None, None]
-    tj = np.arccos(mu)[None, :, None]
     ph = phi[None, None, :]
     out = []
-    for kind in ("r", "t"):
+    for kind, (mu, w_mu) in (("r", nodes_r), ("t", nodes_t)):
+        tj = np.arccos(mu)[None, :, None]
         sig = _sigma0(face, kind, rough, eps_rel, k, ti, tj, ph).sum(axis=0)
         if not np.all(np.isfinite(sig)):
             raise ValueError(f"{face} face σ⁰ produced NaN/inf (please report the inputs)")
@@ -205,25 +219,28 @@ def _inside_coherent(er: float, m, k: float, sigma: float):
 
 
 def _specular_deposit(ca, power, mu):
-    """``(n_mu, n_mu)``: ``power[j]`` refracted to air cosine ``ca[j]``, split linearly
-    between the two nearest air nodes (ends held)."""
+    """``(n_in, n_air)``: ``power[j]`` refracted to air cosine ``ca[j]``, split linearly
+    between the two nearest air nodes ``mu`` (ends held)."""
     n = mu.size
     j = np.clip(np.searchsorted(mu, ca) - 1, 0, n - 2)
     w = np.clip((ca - mu[j]) / (mu[j + 1] - mu[j]), 0.0, 1.0)
-    out = np.zeros((n, n))
-    rows = np.arange(n)
+    out = np.zeros((ca.size, n))
+    rows = np.arange(ca.size)
     np.add.at(out, (rows, j), power * (1.0 - w))
     np.add.at(out, (rows, j + 1), power * w)
     return out
 
 
-def rough_face_budget(face, rough, e: complex, k: float, d: float, c, mu, wmu, n_phi: int,
+def rough_face_budget(face, rough, e: complex, k: float, d: float, c, air, inner, n_phi: int,
                       n_modes: int, conserve: bool, r_coh, t_coh):  # fmt: skip
     """The diffuse budget of a slab with SPM/PO/IEM faces (module docstring). ``c`` the
-    incidence cosines, ``mu, wmu`` the Gauss nodes on (0, 1), ``r_coh, t_coh`` ``(2, n)`` the
-    coherent slab's powers. Returns a dict of ``slab_diffuse.DiffuseTransmission`` fields."""
+    incidence cosines, ``air = (μ, w)`` the air-side cosine nodes on (0, 1), ``inner`` those
+    inside (split at the critical cosine), ``r_coh, t_coh`` ``(2, n)`` the coherent slab's
+    powers. Returns a dict of ``slab_diffuse.DiffuseTransmission`` fields."""
     er = e.real
     sigma = float(rough.sigma)
+    mu_a = air[0]
+    mu = inner[0]
     n_mu = mu.size
     # coherent parts of the front face from air (slab.py's mean fields, complex ε)
     r0 = np.stack(fresnel_cos(e, c))
@@ -251,10 +268,9 @@ def rough_face_budget(face, rough, e: complex, k: float, d: float, c, mu, wmu, n
     ell1 = np.maximum(1.0 - rc1 - tc1, 0.0)
     # diffuse kernels: front from air (pol-resolved), inside at μ_c (pol-resolved), nodes (mean)
     kin = k * math.sqrt(er)
-    kr0m, kt0m = sigma0_kernels(face, rough, e, k, c, mu, wmu, n_phi, n_modes)
-    krcm, ktcm = sigma0_kernels(face, rough, 1.0 / er, kin, mu_c.ravel(), mu, wmu, n_phi, n_modes)
-    krcm, ktcm = krcm.reshape(kr0m.shape), ktcm.reshape(kt0m.shape)
-    kr1m, kt1m = sigma0_kernels(face, rough, 1.0 / er, kin, mu, mu, wmu, n_phi, n_modes)
+    kr0m, kt0m = sigma0_kernels(face, rough, e, k, c, air, inner, n_phi, n_modes)
+    krcm, ktcm = sigma0_kernels(face, rough, 1.0 / er, kin, mu_c, inner, air, n_phi, n_modes)
+    kr1m, kt1m = sigma0_kernels(face, rough, 1.0 / er, kin, mu, inner, air, n_phi, n_modes)
     kr1m, kt1m = kr1m.mean(axis=1), kt1m.mean(axis=1)
     sums = [(m[0].sum(-1) + n[0].sum(-1)) for m, n in ((kr0m, kt0m), (krcm, ktcm), (kr1m, kt1m))]
     ells = (ell0, ell_c, ell1)
@@ -270,7 +286,7 @@ def rough_face_budget(face, rough, e: complex, k: float, d: float, c, mu, wmu, n
         losses = deficits
     # the inside face for diffuse light: diffuse σ⁰ plus its coherent parts (all modes alike)
     kr1m = kr1m + np.diag(rc1)[None]
-    kt1m = kt1m + _specular_deposit(ca1, tc1, mu)[None]
+    kt1m = kt1m + _specular_deposit(ca1, tc1, mu_a)[None]
     s_total = np.clip(1.0 - r_coh - t_coh - a_coh, 0.0, None)
     raw = ell0 + (f_b + f_f) * ell_c
     g = np.where(raw > 0, s_total / np.where(raw > 0, raw, 1.0), 0.0)  # source_scale
