@@ -39,6 +39,9 @@ reflection ``|r χ|²`` (``χ = exp(−2σ²k_z²)``, ``k_z`` of the incident si
 ``(1 − |r|²) χ_t²`` (``χ_t = exp(−σ²(k₁z − k₂z)²/2)``). Their deficit ``ℓ = 1 − |rχ|² −
 (1 − |r|²)χ_t²`` is what the face scatters diffusely; ``conserve=True`` scales the face's
 diffuse rows to it (the ratio recorded as ``face_deficit`` = ``ℓ − Σ diffuse``, before scaling).
+Cosine nodes: Gauss–Legendre on (0, 1) in air; inside, split at the critical cosine
+``√(1 − 1/Re ε)`` (the inside faces' coherent refraction has a kink there; one rule was off
+by 1.3e-3 in T_diff at 75° with 48 nodes, the split one is within 8e-5 of 96 nodes with 32).
 For the diffuse light inside, a face's kernel is its diffuse σ⁰ plus its coherent parts
 (specular reflection back into the same node, refraction into the air node at
 ``μ_a = √(1 − Re ε (1 − μ²))``, split linearly between the two nearest nodes).
