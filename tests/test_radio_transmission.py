@@ -124,13 +124,13 @@ def test_flat_limit_equals_sionna_slab():
     assert r["max_db"]["brick"] < 1e-2
 
 
-def test_refuses_outside_go_with_a_clear_error():
+def test_go_faces_refuse_outside_go_with_a_clear_error():
     brick = GaussianCorrelation(sigma=0.8e-3, length=8e-3)  # the 28 GHz brick wall: kσ = 0.47
     with pytest.raises(ValueError, match=r"geometric optics.*kσ = 0\.469.*SPM"):
-        diffuse_transmission(brick, 3.91 + 0.026j, F, 0.1)
+        diffuse_transmission(brick, 3.91 + 0.026j, F, 0.1, face="go")
     with pytest.warns(UserWarning, match="geometric optics"):
         b = diffuse_transmission(brick, 3.91 + 0.026j, F, 0.1, theta=THETA, n_mu=16,
-                                 n_phi=16, out_of_range="warn")  # fmt: skip
+                                 n_phi=16, out_of_range="warn", face="go")  # fmt: skip
     assert not b.valid and b.reasons
 
 

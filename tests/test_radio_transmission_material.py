@@ -157,7 +157,7 @@ def test_path_solver_cannot_carry_it_and_says_so():
     assert r["diffuse"] > 0 and r["diffuse_back"] == 0
     assert len(r["warnings"]) == 1 and "PathSolver" in r["warnings"][0]  # once per material
     assert min(r["rm_t_diff"]) > 0.1  # RadioMapSolver-style sampling does go through
-    assert "diffuse transmission (GO slab)" in r["text"] and "energy scale" in r["text"]
+    assert "diffuse transmission (GO faces)" in r["text"] and "energy scale" in r["text"]
     i = res["inputs"]["result"]
     assert "transmission must be one of ('coherent', 'diffuse'), got 'lambertian'" in i["bad_value"]
     assert "half-space" in i["half_space"] and "thickness" in i["half_space"]

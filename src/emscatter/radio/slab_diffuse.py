@@ -18,17 +18,23 @@ polarization ``p`` (h, v) the incident power splits into::
   face's diffuse rows are scaled to ``R + T = 1`` (the deficit returned to the lobes in
   proportion, recorded as ``face_deficit``), so ``L = 0``.
 
-Face model: geometric optics, Walter, Marschner, Li & Torrance, EGSR 2007 (eqs. 16, 21, 23,
-25, 27) for transmission
+Face models (``face=``, :data:`~emscatter.radio.slab_faces.FACES`). ``"go"``: geometric
+optics, Walter, Marschner, Li & Torrance, EGSR 2007 (eqs. 16, 21, 23, 25, 27) for transmission
 (:func:`~emscatter.solvers.kirchhoff.transmission.go.bistatic_transmission`) and
 emscatter's GO reflection (:func:`emscatter.solvers.kirchhoff.go.bistatic`), both with the real
 part of ``ε`` (a low-loss face; the loss acts in the bulk). From inside, a face is
 the interface to air with ``ε_rel = 1/Re ε`` (total internal reflection included). GO holds
 only for ``(2kσ)² ≥ 10`` and ``kℓ ≥ 6`` (:func:`emscatter.solvers.kirchhoff.go.check_validity`);
-there the Kirchhoff mean field is ``< e⁻⁵`` and the coherent terms are negligible. For smaller
-``kσ`` (SPM, PO: the 28 GHz brick wall, kσ = 0.47) no transmitted σ⁰ is implemented and
+there the Kirchhoff mean field is ``< e⁻⁵`` and the coherent terms are negligible (taken off
+the incident power at the entrance, ``keep`` below). ``"spm"``, ``"po"``, ``"iem"``: the
+small and medium roughness of common walls (the 28 GHz brick wall, kσ = 0.47), where the
+coherent slab keeps most of the power; :mod:`emscatter.radio.slab_faces` builds their kernels
+from the solvers' transmitted and reflected σ⁰ (complex ε from air) and feeds the transport
+below with what the coherent field loses at each face, so nothing is counted twice.
+``"auto"`` (default) takes GO where it holds (this GO path, bit for bit), else the first of SPM,
+PO, IEM whose validity holds. Outside the chosen model's validity
 :func:`diffuse_transmission` refuses (``out_of_range="raise"``, the default) or carries on
-outside validity (``"warn"``/``"ignore"``, the GO result then is only indicative).
+(``"warn"``/``"ignore"``, the result then only indicative).
 
 Transport inside (radiative, incoherent): the diffuse power inside is tracked per internal
 direction cosine ``μ`` (Gauss–Legendre nodes on (0, 1)), azimuth-integrated (exact for the
@@ -68,6 +74,7 @@ from ..fresnel import fresnel_cos
 from ..spectra import check_roughness
 from .medium import check_thickness
 from .slab import gaussian_mean_field, slab_coefficients
+from .slab_faces import check_face, choose_face, rough_face_budget
 from .tables import RadioValidityWarning, check_policy
 
 __all__ = ["DiffuseTransmission", "diffuse_transmission", "face_kernels"]
@@ -98,6 +105,8 @@ class DiffuseTransmission:
     t_modes: np.ndarray | None = None  # (2, n, n_mu, M + 1) azimuthal modes of t_lobe
     r_lobe: np.ndarray | None = None  # (2, n, n_mu) internal diffuse light out of the front face
     r_modes: np.ndarray | None = None  # (2, n, n_mu, M + 1) azimuthal modes of r_lobe
+    face: str = "go"  # the face model used (``face=`` of diffuse_transmission, resolved)
+    source_scale: np.ndarray | None = None  # (2, n) SPM/PO/IEM faces (radio.slab_faces)
 
     def transmitted_lobe(self, phi) -> np.ndarray:
         """Diffusely transmitted power per unit solid angle [1/sr], ``(2, n, n_mu, n_phi)``
@@ -130,6 +139,17 @@ class DiffuseTransmission:
 def _gauss01(n: int):
     x, w = np.polynomial.legendre.leggauss(n)
     return 0.5 * (x + 1.0), 0.5 * w
+
+
+def _gauss01_split(n: int, cut: float):
+    """Gauss–Legendre nodes on (0, cut) and (cut, 1), ``n`` in all in proportion to the lengths
+    (at least 2 each): the inside faces' coherent refraction has a kink at the critical
+    cosine ``cut`` (total internal reflection beyond), which one rule converges on slowly."""
+    n1 = min(max(int(round(n * cut)), 2), n - 2)
+    x1, w1 = _gauss01(n1)
+    x2, w2 = _gauss01(n - n1)
+    mu = np.concatenate([cut * x1, cut + (1 - cut) * x2])
+    return mu, np.concatenate([cut * w1, (1 - cut) * w2])
 
 
 def face_kernels(rough, eps_rel: float, k: float, cos_in, mu, w_mu, n_phi: int, n_modes=0):
@@ -190,6 +210,7 @@ def diffuse_transmission(
     conserve: bool = True,
     out_of_range: str = "raise",
     n_modes: int = 0,
+    face: str = "auto",
 ) -> DiffuseTransmission:
     """Power budget of a rough slab per incidence (module docstring).
 
@@ -206,7 +227,13 @@ def diffuse_transmission(
     out_of_range : ``"raise"`` (default), ``"warn"`` or ``"ignore"`` outside GO's validity.
     n_modes : azimuthal Fourier modes of the transmitted lobe to keep (0: the azimuth-integrated
         budget only; ``< n_phi``), for :meth:`DiffuseTransmission.transmitted_lobe`.
+    face : the faces' model, one of :data:`~emscatter.radio.slab_faces.FACES`: ``"auto"``
+        (default: GO where it holds — the GO path unchanged, bit for bit — else the first valid
+        of SPM, PO, IEM), ``"go"``, ``"spm"``, ``"po"``, ``"iem"``
+        (:mod:`emscatter.radio.slab_faces`); ``out_of_range`` applies the chosen model's
+        validity.
     """
+    face = check_face(face)
     e = _check_eps(eps)
     f = float(frequency)
     if not (np.isfinite(f) and f > 0):
@@ -240,20 +267,51 @@ def diffuse_transmission(
     if flat:
         a = 1.0 - r_coh - t_coh
         return DiffuseTransmission(th, f, e, d, r_coh, zero, t_coh, zero, a, zero, True, True)
-    from ..solvers.kirchhoff import go
-
-    rep = go.check_validity(rough, k)
+    asked = face
+    face, rep = choose_face(face, rough, k, e)
     if not rep["valid"]:
-        msg = (
-            f"diffuse slab transmission needs geometric optics ((2kσ)² ≥ 10, kℓ ≥ 6); "
-            f"at {f / 1e9:g} GHz {rough.describe()} has kσ = {rep['k_sigma']:.3g}, kℓ = "
-            f"{rep['k_l']:.3g} ({'; '.join(rep['reasons'])}). No first-order SPM/PO "
-            "transmitted σ⁰ is implemented (out_of_range='warn' computes GO anyway)"
-        )
+        if asked == "auto":
+            msg = (
+                f"diffuse slab transmission (face='auto'): at {f / 1e9:g} GHz "
+                f"{rough.describe()} is outside the validity of every face model "
+                f"({'; '.join(rep['reasons'])}); out_of_range='warn' computes GO anyway, or "
+                "name a model with face="
+            )
+        elif face == "go":
+            from ..solvers.kirchhoff import go
+
+            gr = go.check_validity(rough, k)
+            msg = (
+                f"diffuse slab transmission needs geometric optics ((2kσ)² ≥ 10, kℓ ≥ 6) for "
+                f"face='go'; at {f / 1e9:g} GHz {rough.describe()} has kσ = "
+                f"{gr['k_sigma']:.3g}, kℓ = {gr['k_l']:.3g} ({'; '.join(rep['reasons'])}). "
+                "face='auto' takes SPM, PO or the IEM where one of them holds "
+                "(out_of_range='warn' computes GO anyway)"
+            )
+        else:
+            msg = (
+                f"diffuse slab transmission with face={face!r} at {f / 1e9:g} GHz: "
+                f"{rough.describe()} is outside that model's validity "
+                f"({'; '.join(rep['reasons'])}); out_of_range='warn' computes anyway"
+            )
         if out_of_range == "raise":
             raise ValueError(msg)
         if out_of_range == "warn":
             warnings.warn(msg, RadioValidityWarning, stacklevel=2)
+    if face != "go":
+        mu, wmu = _gauss01(n_mu)  # air side; inside: split at the critical cosine
+        inner = _gauss01_split(n_mu, math.sqrt(1.0 - 1.0 / e.real))
+        parts = rough_face_budget(face, rough, e, k, d, c, (mu, wmu), inner, n_phi, n_modes,
+                                  conserve, r_coh, t_coh)  # fmt: skip
+        out = DiffuseTransmission(
+            th, f, e, d, r_coh, t_coh=t_coh, flat=False, valid=rep["valid"],
+            reasons=list(rep["reasons"]), mu_nodes=mu, mu_weights=wmu, face=face, **parts,
+        )  # fmt: skip
+        if not np.all(np.isfinite(out.total)):
+            raise ValueError(
+                "diffuse slab transmission produced NaN/inf (please report the inputs)"
+            )
+        return out
     mu, wmu = _gauss01(n_mu)
     er = e.real
     # front face from air: polarization-resolved, at the incidence angles

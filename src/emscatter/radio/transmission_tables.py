@@ -1,7 +1,8 @@
 """Tables of a rough wall's diffuse transmission for the radio material (NumPy, no Dr.Jit).
 
 Built once per (material, frequency) from :func:`emscatter.radio.slab_diffuse.diffuse_transmission`
-(GO faces, radiative transport inside the slab) on the incidence nodes of the material's
+(its ``face=`` model, default ``"auto"``: GO where it holds, else SPM, PO or the IEM; radiative
+transport inside the slab) on the incidence nodes of the material's
 reflection tables (:mod:`emscatter.radio.tables`), for ``transmission="diffuse"``:
 
 * ``lobe[θi, φ, μ, c]`` [1/sr] on a uniform grid in ``μ = |cosθo| ∈ [0, 1]`` and in the
@@ -21,8 +22,8 @@ reflection tables (:mod:`emscatter.radio.tables`), for ``transmission="diffuse"`
   ``scale = E_mat / E_slab`` per incidence and polarization: ``E_slab`` is the power that
   ``slab_diffuse`` lets into the slab (``T_diff + R_int + A``), ``E_mat = 1 − R_coh − T_coh −
   R_front`` the power the material's own coherent slab and front-face lobe leave for it (they
-  come from the solver of the reflection tables, ``slab_diffuse``'s front face is GO with
-  ``Re ε``). Then the material's ``R_coh + R_diff + T_coh + T_diff + A = 1`` per incidence
+  come from the solver of the reflection tables, ``slab_diffuse``'s front face is its ``face``
+  model). Then the material's ``R_coh + R_diff + T_coh + T_diff + A = 1`` per incidence
   (``A = scale · A_slab``), and ``scale`` (recorded) states how far the two front faces differ.
 
 The depolarization: ``slab_diffuse`` carries the light inside unpolarized, so the material
@@ -73,6 +74,7 @@ class TransmissionTables:
     valid: bool
     reasons: list
     seconds: float
+    face: str = "go"  # slab_diffuse's face model (resolved from face="auto")
 
     @property
     def total(self) -> np.ndarray:
@@ -83,7 +85,8 @@ class TransmissionTables:
     def describe(self) -> str:
         i = int(np.argmin(np.abs(self.theta_nodes - math.radians(45.0))))
         return (
-            f"diffuse transmission (GO slab{'' if self.valid else ', OUTSIDE validity'}): "
+            f"diffuse transmission ({self.face.upper()} faces"
+            f"{'' if self.valid else ', OUTSIDE validity'}): "
             f"T_diff(45°) = {self.t_diff[:, i].mean():.3g}, energy scale "
             f"{self.scale.min():.3f}…{self.scale.max():.3f}"
         )
@@ -115,6 +118,7 @@ def build_transmission_tables(
     n_modes: int = 16,
     n_mu: int | None = None,
     n_phi: int | None = None,
+    face: str = "auto",
 ) -> TransmissionTables:
     """Diffuse-transmission tables of one rough wall at one frequency (module docstring).
 
@@ -124,7 +128,8 @@ def build_transmission_tables(
     :func:`~emscatter.radio.slab_diffuse.diffuse_transmission` (GO's validity); ``n_quad`` its
     Gauss nodes (μ and φ), ``n_modes`` its azimuthal modes; ``n_mu``, ``n_phi`` the grid the
     material interpolates (default: the reflection lobe's ``n_s`` and ``n_alpha``, which the
-    material needs: it stacks both lobes in one texture).
+    material needs: it stacks both lobes in one texture); ``face`` the slab faces' model
+    (``"auto"``, ``"go"``, ``"spm"``, ``"po"``, ``"iem"``; ``slab_diffuse``'s ``face=``).
     """
     import time
 
@@ -132,7 +137,7 @@ def build_transmission_tables(
     theta = np.asarray(tables.theta_nodes, dtype=float)
     b = diffuse_transmission(
         surface, eps, frequency, thickness, theta=theta, n_mu=n_quad, n_phi=n_quad,
-        out_of_range=out_of_range, n_modes=n_modes,
+        out_of_range=out_of_range, n_modes=n_modes, face=face,
     )  # fmt: skip
     mu = np.linspace(0.0, 1.0, tables.s_nodes.size if n_mu is None else n_mu)
     phi = np.linspace(0.0, math.pi, tables.alpha_nodes.size if n_phi is None else n_phi)
@@ -166,7 +171,7 @@ def build_transmission_tables(
         theta_nodes=theta, mu_nodes=mu, phi_nodes=phi, lobe=lobe.astype(float),
         t_diff=b.t_diff * scale, r_internal=r_int * scale, absorbed=b.absorbed * scale,
         r_coh=r_coh, t_coh=t_coh, r_front=r_front, scale=scale, valid=b.valid,
-        reasons=list(b.reasons), seconds=time.perf_counter() - t0,
+        reasons=list(b.reasons), seconds=time.perf_counter() - t0, face=b.face,
     )  # fmt: skip
 
 
