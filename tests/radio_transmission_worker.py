@@ -337,6 +337,7 @@ def check_inputs():
         "bad_value": {"transmission": "lambertian"},
         "half_space": {"transmission": "diffuse", "thickness": None},
         "textured": {"transmission": "diffuse", "texture_direction": (0, 0, 1)},
+        "bad_face": {"transmission": "diffuse", "transmission_face": "lambertian"},
     }.items():
         try:
             EmscatterRadioMaterial(f"bad-{key}", surface=_surface(), medium=MEDIUM, **kw)
@@ -349,7 +350,9 @@ def check_inputs():
     props["rms_height"] = SIGMA
     props["correlation_length"] = LENGTH
     props["transmission"] = "diffuse"
-    out["xml"] = EmscatterRadioMaterial(props=props).transmission
+    props["transmission_face"] = "po"
+    xml = EmscatterRadioMaterial(props=props)
+    out["xml"], out["xml_face"] = xml.transmission, xml._face
     out["default"] = EmscatterRadioMaterial("default-wall", surface=_surface(),
                                             medium=MEDIUM).transmission  # fmt: skip
     return out

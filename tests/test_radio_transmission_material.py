@@ -163,3 +163,5 @@ def test_path_solver_cannot_carry_it_and_says_so():
     assert "half-space" in i["half_space"] and "thickness" in i["half_space"]
     assert "texture_direction" in i["textured"]
     assert i["xml"] == "diffuse" and i["default"] == "coherent"
+    assert "face must be one of" in i["bad_face"] and "'lambertian'" in i["bad_face"]
+    assert i["xml_face"] == "po"  # the XML keyword reaches the slab faces' model

@@ -24,7 +24,8 @@ Per ray, at the scene frequency and the ray's incidence angle:
 
 **Diffuse transmission** (``transmission="diffuse"``, opt-in; isotropic rough slabs): the
 tables of :mod:`emscatter.radio.transmission_tables` (from
-:func:`emscatter.radio.slab_diffuse.diffuse_transmission`: GO faces, radiative transport inside)
+:func:`emscatter.radio.slab_diffuse.diffuse_transmission`: faces from ``transmission_face``,
+by default GO where it holds and otherwise SPM, PO or the IEM; radiative transport inside)
 add a diffuse event into the back hemisphere (a ``DIFFUSE`` event, direction uniform on the back
 hemisphere, Jones matrix ``√(T_p Ω / 2)`` into each scattered polarization: the light that
 crossed the slab is unpolarized) and put the internal light that leaves through the front face
@@ -95,6 +96,7 @@ from .material_transmission import (
     through_on,
 )
 from .medium import check_thickness, resolve_medium
+from .slab_faces import check_face
 from .tables import TableOptions, build_tables, check_policy, check_surface
 from .texture import build_textured_tables, check_direction, check_textured_surface
 from .texture_jit import (
@@ -139,6 +141,10 @@ class EmscatterRadioMaterial(RadioMaterialBase):
     transmission : ``"coherent"`` (default: the coherent slab only, as Sionna's own model) or
         ``"diffuse"`` (also the diffusely transmitted lobe of the rough slab; RadioMapSolver only,
         module docstring). Needs a slab (``thickness`` not ``None``) and no texture direction.
+    transmission_face : the slab faces' model for ``transmission="diffuse"``, one of
+        :data:`emscatter.radio.slab_faces.FACES` (default ``"auto"``: GO where it holds, else the
+        first of SPM, PO, IEM valid from both sides; :func:`~emscatter.radio.slab_diffuse.
+        diffuse_transmission`'s ``face=``).
     color : RGB in [0, 1] for Sionna's previews.
     """
 
@@ -156,6 +162,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         table_options: TableOptions | None = None,
         texture_direction=None,
         transmission: str = "coherent",
+        transmission_face: str = "auto",
         color=None,
         props: mi.Properties | None = None,
     ):
@@ -176,6 +183,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             method = kw.get("method", "auto")
             texture_direction = kw.get("texture_direction")
             transmission = kw.get("transmission", "coherent")
+            transmission_face = kw.get("transmission_face", "auto")
         super().__init__(props)
         self._medium = resolve_medium(medium, eps_real=eps_real, conductivity=conductivity)
         thickness = check_thickness(thickness)
@@ -210,6 +218,7 @@ class EmscatterRadioMaterial(RadioMaterialBase):
             )
         self._method = method
         self._transmission = check_transmission(transmission, thickness, self._texture)
+        self._face = check_face(transmission_face)
         self._path_warned = False
         self._out_of_range = out_of_range
         self._options = table_options or TableOptions()

@@ -76,7 +76,14 @@ def _parse_props(props: mi.Properties) -> dict:
         del props[key]
         return v
 
-    for key in ("medium", "method", "correlation", "texture_direction", "transmission"):
+    for key in (
+        "medium",
+        "method",
+        "correlation",
+        "texture_direction",
+        "transmission",
+        "transmission_face",
+    ):
         if key in props:
             out[key] = str(take(key))
     floats = ("eps_real", "conductivity", "thickness", "rms_height", "correlation_length")

@@ -54,7 +54,7 @@ def diffuse_tables(material, tables):
         return None
     return build_transmission_tables(
         material._surface, material._eps, material._frequency, material._thickness, tables,
-        out_of_range=material._out_of_range,
+        out_of_range=material._out_of_range, face=material._face,
     )  # fmt: skip
 
 
