@@ -136,13 +136,14 @@ def test_bad_inputs_name_the_parameter():
 
 
 def test_auto_takes_smcg_for_large_conducting_patches_only():
-    """``accel="auto"``: dense up to SMCG_MIN_NODES nodes, SMCG above; dielectrics always dense;
+    """``accel="auto"``: dense up to SMCG_MIN_NODES nodes, SMCG above (dielectrics:
+    tests/test_mom3d_dielsmcg.py);
     the default r_d grows with the surface's peak-to-valley height (Taylor convergence)."""
     from emscatter.solvers.mom3d import model
 
     assert model._accel_for("auto", model.SMCG_MIN_NODES, True) == "dense"
     assert model._accel_for("auto", model.SMCG_MIN_NODES + 1, True) == "smcg"
-    assert model._accel_for("auto", 10**6, False) == "dense"
+    assert model._accel_for("auto", 16, False) == "dense"
     flat, tall = np.zeros((4, 4)), np.array([[0.0, 3.0]])
     assert model._near_radius(None, flat, K) == model.NEAR_RADIUS
     assert model._near_radius(None, tall, K) == pytest.approx(3.0 / model.MAX_PTP_OVER_RD)

@@ -62,14 +62,29 @@ _KERNELS = (("aH", 1, 0), ("aH", 0, 1), ("aH", 0, 0), ("aE", 1, 0), ("aE", 0, 1)
 
 def _terms():
     """``(output, kernel, extra power of Z, source, coefficient)`` of the weak part."""
-    kx = {name: q for q, name in enumerate(("aHX", "aHY", "aH1", "aEX", "aEY", "aE1", "al1",
-                                             "beXX", "beXY", "beYY", "beX", "beY", "be1"))}  # fmt: skip
+    names = (
+        "aHX",
+        "aHY",
+        "aH1",
+        "aEX",
+        "aEY",
+        "aE1",
+        "al1",
+        "beXX",
+        "beXY",
+        "beYY",
+        "beX",
+        "beY",
+        "be1",
+    )  # fmt: skip  (same order as _KERNELS)
+    kx = {name: q for q, name in enumerate(names)}
     o = {name: q for q, name in enumerate(_OUT)}
     t = []
     for f, off, (ox, oy, oc) in (("aH", 0, ("hx", "hy", "hc")), ("aE", 3, ("ex", "ey", "ec"))):
-        t += [(o[ox], kx[f + "X"], 0, off + 2, 1.0), (o[ox], kx[f + "1"], 1, off + 0, -1.0),
-              (o[oy], kx[f + "Y"], 0, off + 2, 1.0), (o[oy], kx[f + "1"], 1, off + 1, -1.0),
-              (o[oc], kx[f + "Y"], 0, off + 0, 1.0), (o[oc], kx[f + "X"], 0, off + 1, -1.0)]  # fmt: skip
+        fX, fY, f1 = kx[f + "X"], kx[f + "Y"], kx[f + "1"]
+        t += [(o[ox], fX, 0, off + 2, 1.0), (o[ox], f1, 1, off + 0, -1.0),
+              (o[oy], fY, 0, off + 2, 1.0), (o[oy], f1, 1, off + 1, -1.0),
+              (o[oc], fY, 0, off + 0, 1.0), (o[oc], fX, 0, off + 1, -1.0)]  # fmt: skip
     for pre, off in (("vw", 3), ("vu", 0)):
         vx, vy, vz = o[pre + "x"], o[pre + "y"], o[pre + "z"]
         t += [(vx, kx["al1"], 0, off, 1.0), (vx, kx["beXX"], 0, off, 1.0),
