@@ -74,20 +74,26 @@ def _peak_rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
 
 
-def dielectric(eps_list, sizes, ppw: float, max_gib: float) -> None:
-    """The dense Müller solve (:mod:`emscatter.solvers.mom3d.dielectric`) at the grid density
+def dielectric(eps_list, sizes, ppw: float, max_gib: float, accel: str = "dense",
+               near_radius=None, order: int = 3) -> None:  # fmt: skip
+    """The Müller solve (:mod:`emscatter.solvers.mom3d.dielectric`, dense, or the SMCG
+    product of :mod:`emscatter.solvers.mom3d.dielectric_smcg`) at the grid density
     ``bistatic`` uses: ``ppw`` nodes per wavelength inside the medium, ``λ₀ / Re√ε``; one
-    realization of the same Gaussian surface, both incident polarizations. Rows whose
+    realization of the same Gaussian surface, both incident polarizations. Dense rows whose
     complex128 ``(4N)²`` matrix is over ``max_gib`` are not run: their memory is exact, their
     time extrapolated (marked ``est``) from the largest row run for that ε — assembly and each
-    GMRES matvec scale as ``(4N)²``, iterations taken as that row's."""
-    from emscatter.solvers.mom3d.dielectric_model import solve_dielectric_realization
+    GMRES matvec scale as ``(4N)²``, iterations taken as that row's. ``s/it``: GMRES seconds
+    per iteration (both polarizations' iterations together)."""
+    from emscatter.solvers.mom3d.dielectric_model import (
+        dielectric_accel,
+        solve_dielectric_realization,
+    )
 
     k = 2 * math.pi
     rough = GaussianCorrelation(0.3 / k, 3.0 / k)
     print(
-        "eps        L/λ  pts/λ0  nodes  unknowns  matrix_GiB  peak_RSS_MiB  assemble_s  "
-        "gmres_s  total_s  iterations  R_h     R_v"
+        "eps        L/λ  accel  pts/λ0  nodes  unknowns  matrix_GiB  peak_RSS_MiB  assemble_s  "
+        "gmres_s  s/it  total_s  iterations  R_h     R_v"
     )
     for eps in eps_list:
         lam = 1.0 / max(1.0, np.sqrt(eps).real)
@@ -95,30 +101,36 @@ def dielectric(eps_list, sizes, ppw: float, max_gib: float) -> None:
         ref = None
         for size in sorted(sizes):
             n = int(math.ceil(size / lam * ppw))
+            mode = dielectric_accel(accel, n * n)
             unknowns = 4 * n * n
             gib = unknowns**2 * 16 / 2**30
-            head = f"{eps!s:>9}  {size:3g}  {ppw / lam:8.1f}  {n * n:5d}  {unknowns:8d}  "
-            head += f"{gib:10.2f}"
-            if gib > max_gib:
+            head = f"{eps!s:>9}  {size:3g}  {mode:>5}  {ppw / lam:6.1f}  {n * n:5d}  {unknowns:8d}"
+            if mode == "dense" and gib > max_gib:
+                head += f"  {gib:10.2f}"
                 if ref is None:
                     print(f"{head}  (over --max-gib {max_gib:g}: not run, no row to scale)")
                     continue
                 f = (unknowns / ref["unknowns"]) ** 2
                 a, g = ref["seconds"]["assemble"] * f, ref["seconds"]["solve"] * f
                 its = "/".join(map(str, ref["iterations"]))
-                print(f"{head}  {'—':>12}  {a:8.0f}est  {g:5.0f}est  {a + g:5.0f}est  "
+                print(f"{head}  {'—':>12}  {a:8.0f}est  {g:5.0f}est  {'':>5} {a + g:5.0f}est  "
                       f"{its:>10}  (over --max-gib {max_gib:g}: not run)", flush=True)  # fmt: skip
                 continue
             h = generate_surface(rough, (n, n), dx, rng=1).heights
             t0 = time.perf_counter()
             r = solve_dielectric_realization(h, dx, k, eps, math.radians(30), np.array([0.3]),
-                                             np.array([0.0]))  # fmt: skip
+                                             np.array([0.0]), accel=mode,
+                                             near_radius=near_radius,
+                                             taylor_order=order)  # fmt: skip
             total = time.perf_counter() - t0
             s = r["seconds"]
-            ref = r
+            if mode == "dense":
+                ref = r
+            per_it = s["solve"] / max(1, sum(r["iterations"]))
             print(
-                f"{head}  {_peak_rss_mib():12.0f}  {s['assemble']:10.2f}  {s['solve']:7.2f}  "
-                f"{total:7.2f}  {'/'.join(map(str, r['iterations'])):>10}  "
+                f"{head}  {r['matrix_bytes'] / 2**30:10.2f}  {_peak_rss_mib():12.0f}  "
+                f"{s['assemble']:10.2f}  {s['solve']:7.2f}  {per_it:5.2f}  {total:7.2f}  "
+                f"{'/'.join(map(str, r['iterations'])):>10}  "
                 f"{r['reflectivity'][0]:.4f}  {r['reflectivity'][1]:.4f}",
                 flush=True,
             )
@@ -133,7 +145,7 @@ def main(argv=None) -> None:
     ap.add_argument("--order", type=int, default=3, help="SMCG Taylor order")
     ap.add_argument(
         "--eps", type=complex, nargs="+", default=None,
-        help="dielectric rows (dense Müller solve) for these ε, e.g. 4+0.5j 15+2j",
+        help="dielectric rows (Müller solve, --accel dense|smcg|auto) for these ε, e.g. 4+0.5j",
     )  # fmt: skip
     ap.add_argument(
         "--max-gib", type=float, default=6.0,
@@ -142,7 +154,8 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     print("load average (1, 5, 15 min): {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()))
     if args.eps:
-        dielectric(args.eps, args.sizes, args.ppw, args.max_gib)
+        dielectric(args.eps, args.sizes, args.ppw, args.max_gib, args.accel, args.near_radius,
+                   args.order)  # fmt: skip
         return
     k = 2 * math.pi
     rough = GaussianCorrelation(0.3 / k, 3.0 / k)

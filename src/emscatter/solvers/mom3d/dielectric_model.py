@@ -50,8 +50,9 @@ __all__ = [
 #: has 16 entries per pair on a grid ``Re √ε`` times denser than the PEC one, so it is kept
 #: small; the Taylor series (order 3) is then within 1e-5 of the dense product for kσ ≤ 0.3.
 DIELECTRIC_NEAR_RADIUS = 0.5
-#: ``accel="auto"`` takes the dielectric SMCG above this many nodes (measured crossover).
-DIELECTRIC_SMCG_MIN_NODES = 1024
+#: ``accel="auto"`` takes the dielectric SMCG above this many nodes (16² nodes: at 17², 1λ at
+#: ε = 4 + 0.5i, it is already 2.2× faster than the dense solve, 0.96 s vs 2.11 s).
+DIELECTRIC_SMCG_MIN_NODES = 256
 DIELECTRIC_ACCELS = ("auto", "dense", "smcg")
 
 
@@ -103,7 +104,7 @@ def solve_dielectric_realization(
     max_iter: int = 400,
     dtype=None,
     farfield: str = "auto",
-    accel: str = "dense",
+    accel: str = "auto",
     near_radius: float | None = None,
     taylor_order: int = 3,
 ) -> dict:
