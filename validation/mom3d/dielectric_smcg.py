@@ -42,8 +42,9 @@ def case(eps: complex, k_sigma: float, size: float, seed: int = 5) -> dict:
     th = np.radians(np.linspace(-80, 80, 33))
     ts, ps = np.abs(th), np.where(th < 0, math.pi, 0.0)
     out = {
-        acc: solve_dielectric_realization(h, dx, K, eps, math.radians(30), ts, ps, accel=acc,
-                                          tol=1e-6)  # fmt: skip
+        acc: solve_dielectric_realization(
+            h, dx, K, eps, math.radians(30), ts, ps, accel=acc, tol=1e-6
+        )  # fmt: skip
         for acc in ("dense", "smcg")
     }
     d, s = out["dense"], out["smcg"]

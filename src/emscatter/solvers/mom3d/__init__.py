@@ -2,8 +2,8 @@
 dielectric 2-D rough surface ``z = f(x, y)`` — MFIE (PEC) or Müller's equations (dielectric),
 pulse bases, point matching, a tapered incident wave
 (Tsang, Kong, Ding & Ao 2001 vol. II ch. 10), GMRES on the dense matrix or (large
-patches, PEC and dielectric) the sparse-matrix/canonical-grid product, Monte Carlo over realizations (serially,
-on a process pool or on a dask cluster: ``client=``).
+patches, PEC and dielectric) the sparse-matrix/canonical-grid product, Monte Carlo over
+realizations (serially, on a process pool or on a dask cluster: ``client=``).
 
 =========================  ===============================================================
 module                     what it holds
