@@ -119,8 +119,6 @@ def test_bad_inputs_name_the_parameter():
     rough = GaussianCorrelation(0.01, 0.5)
     with pytest.raises(ValueError, match="accel must be one of"):
         mom3d.bistatic(rough, "pec", K, 0.3, 0.3, accel="fmm")
-    with pytest.raises(ValueError, match="accel='smcg' is for perfect conductors"):
-        mom3d.bistatic(rough, 4.0 + 0.1j, K, 0.3, 0.3, accel="smcg", length=2.0)
     with pytest.raises(ValueError, match="length=40 m .* SMCG sparse matrix"):
         mom3d.bistatic(rough, "pec", K, 0.3, 0.3, length=40.0)
     p = _patch(3.0, 1.0)

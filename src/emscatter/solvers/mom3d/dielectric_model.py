@@ -34,6 +34,7 @@ from emscatter.solvers.mom3d.dielectric import (
 from emscatter.solvers.mom3d.dielectric_smcg import dielectric_smcg_operator
 from emscatter.solvers.mom3d.farfield import METHODS, amplitudes_em, hemisphere
 from emscatter.solvers.mom3d.incident import tapered_beam
+from emscatter.solvers.mom3d.near import WIDTH
 from emscatter.solvers.mom3d.operator import make_patch
 from emscatter.solvers.mom3d.smcg import resolve_near_radius
 
@@ -122,10 +123,10 @@ def solve_dielectric_realization(
     ``accel``: ``"dense"`` (the full ``(4N, 4N)`` matrix), ``"smcg"`` (the sparse-matrix/
     canonical-grid product of :mod:`.dielectric_smcg`: pairs closer than ``near_radius``
     [free-space wavelengths, default :data:`DIELECTRIC_NEAR_RADIUS`, enlarged to 1.25 × the
-    peak-to-valley height] exact and sparse, both media's far kernels by a Taylor series of
-    order ``taylor_order`` in ``Z²`` and FFTs; strong entries in ``dtype``, by default
-    complex128 up to 2048 nodes and complex64 above) or ``"auto"``
-    (SMCG above :data:`DIELECTRIC_SMCG_MIN_NODES` nodes). The result then also has
+    peak-to-valley height and to the near-cell stencil, ``3√2`` cells] exact and sparse, both
+    media's far kernels by a Taylor series of order ``taylor_order`` in ``Z²`` and FFTs;
+    strong entries in ``dtype``, by default complex128 up to 2048 nodes and complex64 above)
+    or ``"auto"`` (SMCG above :data:`DIELECTRIC_SMCG_MIN_NODES` nodes). The result then also has
     ``accel``, ``matrix_bytes`` (matrix, or sparse part plus kernel spectra), ``nonzeros``,
     ``near_radius`` [λ] and ``taylor_order``.
     """
@@ -144,6 +145,8 @@ def solve_dielectric_realization(
     extra = {"accel": mode}
     if mode == "smcg":
         rd = resolve_near_radius(near_radius, h, k, DIELECTRIC_NEAR_RADIUS)
+        if near_radius is None:  # at least the near-cell stencil on a coarse grid
+            rd = max(rd, math.sqrt(2.0) * (WIDTH + 1) * spacing * (1 + 1e-9))
         sdt = dtype if dtype is not None else (np.complex128 if h.size <= 2048 else np.complex64)
         mat = dielectric_smcg_operator(patch, k, eps2, near_radius=rd, taylor_order=taylor_order,
                                        dtype=sdt)  # fmt: skip
