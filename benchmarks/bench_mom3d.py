@@ -33,8 +33,8 @@ inflated by the load, not by the far field). 16λ dense would need an 8 GiB matr
 Commands: ``--sizes 8 16 --accel
 smcg``, ``--sizes 32 --accel smcg`` and ``--sizes 8 --accel dense``.
 
-Dielectric (``--eps 4+0.5j 15+2j --sizes 2 3 4``): the dense Müller solve that
-``mom3d.bistatic`` uses for any ε (no SMCG yet), at its grid density, 8 points per wavelength
+Dielectric (``--eps 4+0.5j 15+2j --sizes 2 3 4 --accel dense``): the dense Müller solve, at
+the grid density ``mom3d.bistatic`` uses, 8 points per wavelength
 *inside* the medium (λ₀/Re√ε: 16 points/λ₀ for ε = 4 + 0.5i, 31 for 15 + 2i), four unknowns
 per node, complex128 ``(4N)²`` matrix, one realization (same surface, θi = 30°), both
 polarizations. Rows over ``--max-gib`` (default 6) are not run: memory exact, time
@@ -51,8 +51,24 @@ average 8–10 (the 4λ rows ran at ≈ 25 % of a core; an idle machine is ~2–
 
 (``e``: extrapolated.) Memory is the wall: 4λ at ε = 15 + 2i needs a 58 GiB matrix (29 GiB
 in complex64); the same 4λ patch as a PEC (8 points/λ₀) is a 64 MiB dense matrix.
-Commands: ``--eps 4+0.5j --sizes 2 3 4`` and ``--eps 15+2j --sizes 2 3 4 --max-gib 5``
-(each < 10 min on the loaded machine).
+Commands: ``--eps 4+0.5j --sizes 2 3 4 --accel dense`` and ``--eps 15+2j --sizes 2 3 4
+--max-gib 5 --accel dense`` (each < 10 min on the loaded machine).
+
+Dielectric SMCG (``--accel smcg``, or ``auto`` above 256 nodes: strong pairs within
+r_d = 0.5λ₀ sparse in complex64, both media's far kernels by FFT, Taylor order 3,
+:mod:`emscatter.solvers.mom3d.dielectric_smcg`), same surface and grid; ``s/it`` GMRES seconds
+per iteration. Shared 2-core machine, load average 10–11 (7 other workers)::
+
+    eps     L/λ pts/λ0 nodes unknowns GiB  RSS_MiB asm_s gmres_s s/it total_s its   R_h    R_v
+    4+0.5i   2  16.0   1089   4356  0.05    187    1.3     6.8  0.16     8.5 21/21 0.1432 0.0899
+    4+0.5i   4  16.0   4225  16900  0.15    317    6.4    56.8  1.00    63.6 29/28 0.1452 0.0828
+    4+0.5i   6  16.0   9409  37636  0.34    624    9.2   146.3  2.32   156.2 32/31 0.1425 0.0814
+    4+0.5i   8  16.0  16641  66564  0.61   1062   11.8   180.0  2.69   193.6 34/33 0.1414 0.0798
+
+(R equal to the dense rows' to the digits shown at 2λ and 4λ; the dense 6λ and 8λ matrices
+would be 21 and 66 GiB.) Under this load the far part (FFTs) is ≈ 3/4 of a product; the 12
+spectral sums are since folded into 6 (half the inverse FFTs), not in these rows. Command:
+``--eps 4+0.5j --sizes 2 4 6 8 --accel smcg`` (6.5 min on the loaded machine).
 """
 
 from __future__ import annotations

@@ -226,6 +226,13 @@ class DielectricSmcgOperator:
         fold.update({6: (1, ik), 7: (0, -ik), 8: (2, -ik), 9: (4, -ce), 10: (3, ce), 11: (5, ce)})
         self.terms = [(fold[o][0], kq, e0, s, c * fold[o][1]) for o, kq, e0, s, c in _TERMS]
 
+    def with_order(self, taylor_order: int) -> DielectricSmcgOperator:
+        """The same strong matrix with another Taylor order for the weak pairs (cheap)."""
+        _check_order(taylor_order)
+        return DielectricSmcgOperator(self.patch, self.k0, self.eps2, self.near_radius,
+                                      int(taylor_order), self.strong.dtype,
+                                      strong=self.strong)  # fmt: skip
+
     @property
     def nbytes(self) -> int:
         s = self.strong
