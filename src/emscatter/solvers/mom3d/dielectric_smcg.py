@@ -36,7 +36,25 @@ Taylor order: the remainder is the PEC one of :mod:`.smcg` with ``ξ_i = |k_i| Z
 medium 2's part needs the order of a wavenumber ``|√ε₂|`` times larger; its loss only helps
 (the kernel falls as ``e^{−Im k₂ ρ}``, 1e-3 at 8.8λ for ``ε = 4 + 0.5i``, which is why it
 cannot simply be dropped beyond ``r_d``). Measured relative error of the whole product
-against the dense matrix (tests/test_mom3d_dielsmcg.py) is in the CHANGELOG of this change.
+against the dense matrix for a random vector (validation/mom3d/dielectric_smcg.md, 1.5λ
+patches, Gaussian kℓ = 3), Taylor order 0…5, with ``ξ₂`` at the peak-to-valley height:
+
+=========  ====  =====  ====  =======  =======  =======  =======  =======  =======
+ε          kσ    r_d    ξ₂    0        1        2        3        4        5
+=========  ====  =====  ====  =======  =======  =======  =======  =======  =======
+4 + 0.5i   0.3   0.5λ   0.50  3.7e-3   2.7e-4   2.0e-5   1.3e-6   7.7e-8   4.3e-9
+4 + 0.5i   0.3   1λ     0.25  1.0e-3   5.3e-5   2.6e-6   1.2e-7   4.8e-9   1.7e-10
+4 + 0.5i   0.5   0.5λ   1.38  1.0e-2   2.1e-3   4.2e-4   7.6e-5   1.3e-5   2.0e-6
+15 + 2i    0.3   0.5λ   1.13  8.7e-3   2.1e-3   4.1e-4   6.9e-5   1.0e-5   1.3e-6
+15 + 2i    0.3   1λ     0.57  8.5e-4   9.1e-5   1.1e-5   1.3e-6   1.3e-7   1.1e-8
+=========  ====  =====  ====  =======  =======  =======  =======  =======  =======
+
+The default (``r_d = 0.5λ``, order 3) is within 1e-4 for kσ ≤ 0.5 up to ε = 15 + 2i; the
+solved amplitudes agree with the dense solve's to the GMRES tolerance (≤ 3e-6 of the largest,
+σ⁰ within 2e-3 dB in the lobes, 2λ patches, ε = 4 + 0.5i and 3, kσ 0.15/0.3).
+
+Cost per product: the sparse part ``16 N π (r_d/Δ)²`` nonzeros (≈ 3e7 for 6λ × 6λ at
+ε = 4 + 0.5i, 16 points/λ₀), the FFT part ``18(2P + 3)`` FFTs of ``≈ 4N`` points.
 """
 
 from __future__ import annotations
