@@ -8,8 +8,8 @@ incidence (θs from −80° to 80°). Columns: ``amp_err`` ``max|A_smcg − A_de
 over all four polarizations; ``lobe_db`` the largest σ⁰ difference [dB] among directions
 within 20 dB of the polarization pair's peak; ``R_h``, ``R_v`` (dense) and their SMCG
 difference ``dR``; ``RT_h``, ``RT_v`` R + T of the dense solve and the SMCG difference
-``dRT`` (lossless only); GMRES iterations (both polarizations summed) and seconds of each (loaded shared machine: the load
-average is in the header).
+``dRT`` (lossless only); GMRES iterations (both polarizations summed) and seconds of each
+(loaded shared machine: the load average is in the header).
 
 Second table, the Taylor order the far part needs (medium 2 has ``k₂ = √ε k₀``): the relative
 error of the SMCG product against the dense matrix for a random vector, orders 0…5, on a
