@@ -33,8 +33,8 @@ inflated by the load, not by the far field). 16λ dense would need an 8 GiB matr
 Commands: ``--sizes 8 16 --accel
 smcg``, ``--sizes 32 --accel smcg`` and ``--sizes 8 --accel dense``.
 
-Dielectric (``--eps 4+0.5j 15+2j --sizes 2 3 4``): the dense Müller solve that
-``mom3d.bistatic`` uses for any ε (no SMCG yet), at its grid density, 8 points per wavelength
+Dielectric (``--eps 4+0.5j 15+2j --sizes 2 3 4 --accel dense``): the dense Müller solve, at
+the grid density ``mom3d.bistatic`` uses, 8 points per wavelength
 *inside* the medium (λ₀/Re√ε: 16 points/λ₀ for ε = 4 + 0.5i, 31 for 15 + 2i), four unknowns
 per node, complex128 ``(4N)²`` matrix, one realization (same surface, θi = 30°), both
 polarizations. Rows over ``--max-gib`` (default 6) are not run: memory exact, time
@@ -51,8 +51,24 @@ average 8–10 (the 4λ rows ran at ≈ 25 % of a core; an idle machine is ~2–
 
 (``e``: extrapolated.) Memory is the wall: 4λ at ε = 15 + 2i needs a 58 GiB matrix (29 GiB
 in complex64); the same 4λ patch as a PEC (8 points/λ₀) is a 64 MiB dense matrix.
-Commands: ``--eps 4+0.5j --sizes 2 3 4`` and ``--eps 15+2j --sizes 2 3 4 --max-gib 5``
-(each < 10 min on the loaded machine).
+Commands: ``--eps 4+0.5j --sizes 2 3 4 --accel dense`` and ``--eps 15+2j --sizes 2 3 4
+--max-gib 5 --accel dense`` (each < 10 min on the loaded machine).
+
+Dielectric SMCG (``--accel smcg``, or ``auto`` above 256 nodes: strong pairs within
+r_d = 0.5λ₀ sparse in complex64, both media's far kernels by FFT, Taylor order 3,
+:mod:`emscatter.solvers.mom3d.dielectric_smcg`), same surface and grid; ``s/it`` GMRES seconds
+per iteration. Shared 2-core machine, load average 10–11 (7 other workers)::
+
+    eps     L/λ pts/λ0 nodes unknowns GiB  RSS_MiB asm_s gmres_s s/it total_s its   R_h    R_v
+    4+0.5i   2  16.0   1089   4356  0.05    187    1.3     6.8  0.16     8.5 21/21 0.1432 0.0899
+    4+0.5i   4  16.0   4225  16900  0.15    317    6.4    56.8  1.00    63.6 29/28 0.1452 0.0828
+    4+0.5i   6  16.0   9409  37636  0.34    624    9.2   146.3  2.32   156.2 32/31 0.1425 0.0814
+    4+0.5i   8  16.0  16641  66564  0.61   1062   11.8   180.0  2.69   193.6 34/33 0.1414 0.0798
+
+(R equal to the dense rows' to the digits shown at 2λ and 4λ; the dense 6λ and 8λ matrices
+would be 21 and 66 GiB.) Under this load the far part (FFTs) is ≈ 3/4 of a product; the 12
+spectral sums are since folded into 6 (half the inverse FFTs), not in these rows. Command:
+``--eps 4+0.5j --sizes 2 4 6 8 --accel smcg`` (6.5 min on the loaded machine).
 """
 
 from __future__ import annotations
@@ -74,20 +90,26 @@ def _peak_rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux
 
 
-def dielectric(eps_list, sizes, ppw: float, max_gib: float) -> None:
-    """The dense Müller solve (:mod:`emscatter.solvers.mom3d.dielectric`) at the grid density
+def dielectric(eps_list, sizes, ppw: float, max_gib: float, accel: str = "dense",
+               near_radius=None, order: int = 3) -> None:  # fmt: skip
+    """The Müller solve (:mod:`emscatter.solvers.mom3d.dielectric`, dense, or the SMCG
+    product of :mod:`emscatter.solvers.mom3d.dielectric_smcg`) at the grid density
     ``bistatic`` uses: ``ppw`` nodes per wavelength inside the medium, ``λ₀ / Re√ε``; one
-    realization of the same Gaussian surface, both incident polarizations. Rows whose
+    realization of the same Gaussian surface, both incident polarizations. Dense rows whose
     complex128 ``(4N)²`` matrix is over ``max_gib`` are not run: their memory is exact, their
     time extrapolated (marked ``est``) from the largest row run for that ε — assembly and each
-    GMRES matvec scale as ``(4N)²``, iterations taken as that row's."""
-    from emscatter.solvers.mom3d.dielectric_model import solve_dielectric_realization
+    GMRES matvec scale as ``(4N)²``, iterations taken as that row's. ``s/it``: GMRES seconds
+    per iteration (both polarizations' iterations together)."""
+    from emscatter.solvers.mom3d.dielectric_model import (
+        dielectric_accel,
+        solve_dielectric_realization,
+    )
 
     k = 2 * math.pi
     rough = GaussianCorrelation(0.3 / k, 3.0 / k)
     print(
-        "eps        L/λ  pts/λ0  nodes  unknowns  matrix_GiB  peak_RSS_MiB  assemble_s  "
-        "gmres_s  total_s  iterations  R_h     R_v"
+        "eps        L/λ  accel  pts/λ0  nodes  unknowns  matrix_GiB  peak_RSS_MiB  assemble_s  "
+        "gmres_s  s/it  total_s  iterations  R_h     R_v"
     )
     for eps in eps_list:
         lam = 1.0 / max(1.0, np.sqrt(eps).real)
@@ -95,30 +117,36 @@ def dielectric(eps_list, sizes, ppw: float, max_gib: float) -> None:
         ref = None
         for size in sorted(sizes):
             n = int(math.ceil(size / lam * ppw))
+            mode = dielectric_accel(accel, n * n)
             unknowns = 4 * n * n
             gib = unknowns**2 * 16 / 2**30
-            head = f"{eps!s:>9}  {size:3g}  {ppw / lam:8.1f}  {n * n:5d}  {unknowns:8d}  "
-            head += f"{gib:10.2f}"
-            if gib > max_gib:
+            head = f"{eps!s:>9}  {size:3g}  {mode:>5}  {ppw / lam:6.1f}  {n * n:5d}  {unknowns:8d}"
+            if mode == "dense" and gib > max_gib:
+                head += f"  {gib:10.2f}"
                 if ref is None:
                     print(f"{head}  (over --max-gib {max_gib:g}: not run, no row to scale)")
                     continue
                 f = (unknowns / ref["unknowns"]) ** 2
                 a, g = ref["seconds"]["assemble"] * f, ref["seconds"]["solve"] * f
                 its = "/".join(map(str, ref["iterations"]))
-                print(f"{head}  {'—':>12}  {a:8.0f}est  {g:5.0f}est  {a + g:5.0f}est  "
+                print(f"{head}  {'—':>12}  {a:8.0f}est  {g:5.0f}est  {'':>5} {a + g:5.0f}est  "
                       f"{its:>10}  (over --max-gib {max_gib:g}: not run)", flush=True)  # fmt: skip
                 continue
             h = generate_surface(rough, (n, n), dx, rng=1).heights
             t0 = time.perf_counter()
             r = solve_dielectric_realization(h, dx, k, eps, math.radians(30), np.array([0.3]),
-                                             np.array([0.0]))  # fmt: skip
+                                             np.array([0.0]), accel=mode,
+                                             near_radius=near_radius,
+                                             taylor_order=order)  # fmt: skip
             total = time.perf_counter() - t0
             s = r["seconds"]
-            ref = r
+            if mode == "dense":
+                ref = r
+            per_it = s["solve"] / max(1, sum(r["iterations"]))
             print(
-                f"{head}  {_peak_rss_mib():12.0f}  {s['assemble']:10.2f}  {s['solve']:7.2f}  "
-                f"{total:7.2f}  {'/'.join(map(str, r['iterations'])):>10}  "
+                f"{head}  {r['matrix_bytes'] / 2**30:10.2f}  {_peak_rss_mib():12.0f}  "
+                f"{s['assemble']:10.2f}  {s['solve']:7.2f}  {per_it:5.2f}  {total:7.2f}  "
+                f"{'/'.join(map(str, r['iterations'])):>10}  "
                 f"{r['reflectivity'][0]:.4f}  {r['reflectivity'][1]:.4f}",
                 flush=True,
             )
@@ -133,7 +161,7 @@ def main(argv=None) -> None:
     ap.add_argument("--order", type=int, default=3, help="SMCG Taylor order")
     ap.add_argument(
         "--eps", type=complex, nargs="+", default=None,
-        help="dielectric rows (dense Müller solve) for these ε, e.g. 4+0.5j 15+2j",
+        help="dielectric rows (Müller solve, --accel dense|smcg|auto) for these ε, e.g. 4+0.5j",
     )  # fmt: skip
     ap.add_argument(
         "--max-gib", type=float, default=6.0,
@@ -142,7 +170,8 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     print("load average (1, 5, 15 min): {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()))
     if args.eps:
-        dielectric(args.eps, args.sizes, args.ppw, args.max_gib)
+        dielectric(args.eps, args.sizes, args.ppw, args.max_gib, args.accel, args.near_radius,
+                   args.order)  # fmt: skip
         return
     k = 2 * math.pi
     rough = GaussianCorrelation(0.3 / k, 3.0 / k)

@@ -39,7 +39,15 @@ import numpy as np
 from emscatter.solvers.mom3d.near import near_correction
 from emscatter.solvers.mom3d.operator import Patch, gmres_solve
 
-__all__ = ["assemble_dielectric", "rhs_dielectric", "self_integrals", "solve_dielectric"]
+__all__ = [
+    "assemble_dielectric",
+    "media",
+    "pair_blocks",
+    "rhs_dielectric",
+    "self_blocks",
+    "self_integrals",
+    "solve_dielectric",
+]
 
 #: Bytes of complex temporaries per row block in :func:`assemble_dielectric`.
 BLOCK_BYTES = 64 * 2**20
@@ -80,77 +88,93 @@ def _lift_blocks(fxm, fym, fxn, fyn):
     return -fym * fxn, -1.0 - fym * fyn, 1.0 + fxm * fxn, fxm * fyn
 
 
+def media(k0: float, eps2: complex):
+    """``(ε₁, ε₂, k₁, k₂, 2/(ε₁ + ε₂))`` with ``Im k₂ ≥ 0`` (the decaying branch)."""
+    e1, e2 = 1.0, complex(eps2)
+    k1, k2 = k0, k0 * np.sqrt(e2)
+    if k2.imag < 0:
+        k2 = -k2
+    return e1, e2, k1, k2, 2.0 / (e1 + e2)
+
+
+def pair_blocks(X, Y, Z, fxm, fym, fxn, fyn, self_mask, k0, eps2, area):
+    """The 16 off-self entries of the Müller matrix for the pairs ``r_m − r_n = (X, Y, Z)``
+    [m] (broadcast arrays; slopes of the observation ``m`` and source ``n`` nodes), as a dict
+    ``(row block, column block) → array`` over the blocks ``[u_x, u_y, w_x, w_y]``; entries
+    where ``self_mask`` is true are zero (the self cell is :func:`_add_self`'s)."""
+    e1, e2, k1, k2, scale_e = media(k0, eps2)
+    R = np.sqrt(X * X + Y * Y + Z * Z)
+    R = np.where(self_mask, 1.0, R)
+    e1r, e2r = np.exp(1j * k1 * R), np.exp(1j * k2 * R)
+    inv = 1.0 / (4.0 * math.pi * R)
+    g1, g2 = e1r * inv, e2r * inv
+    # ∇G = a R with a = (ikR − 1) G / R²  (the ``a`` of :mod:`.operator`, per unit area)
+    a1 = (1j * k1 * R - 1.0) * g1 / (R * R)
+    a2 = (1j * k2 * R - 1.0) * g2 / (R * R)
+    # G'' for each medium; ∇∇g = g'' R̂R̂ + (g'/R)(I − R̂R̂) with g = (G₁ − G₂)/k₀²
+    d1 = (2.0 - 2j * k1 * R - (k1 * R) ** 2) * g1 / (R * R)
+    d2 = (2.0 - 2j * k2 * R - (k2 * R) ** 2) * g2 / (R * R)
+    gp_r = (a1 - a2) / k0**2  # g'/R
+    alpha = np.where(self_mask, 0.0, (e1 * g1 - e2 * g2 + gp_r) * area)
+    beta = np.where(self_mask, 0.0, ((d1 - d2) / k0**2 - gp_r) / (R * R) * area)
+    D = Z - fxm * X - fym * Y
+    dfx = fxn - fxm
+    dfy = fyn - fym
+    out = {}
+    for a, off, sc in (((a1 - a2) * area, 0, 1.0), ((e1 * a1 - e2 * a2) * area, 2, scale_e)):
+        a = np.where(self_mask, 0.0, a)
+        out[off, off] = -sc * a * (X * dfx - D)
+        out[off, off + 1] = -sc * a * X * dfy
+        out[off + 1, off] = -sc * a * Y * dfx
+        out[off + 1, off + 1] = -sc * a * (Y * dfy - D)
+    lxx, lxy, lyx, lyy = _lift_blocks(fxm, fym, fxn, fyn)
+    px, py = -Y - fym * Z, X + fxm * Z
+    qx, qy = X + fxn * Z, Y + fyn * Z
+    kxx = alpha * lxx + beta * px * qx
+    kxy = alpha * lxy + beta * px * qy
+    kyx = alpha * lyx + beta * py * qx
+    kyy = alpha * lyy + beta * py * qy
+    for r_off, c_off, c in ((0, 2, -1j * k0), (2, 0, 1j * k0 * scale_e)):
+        out[r_off, c_off] = c * kxx
+        out[r_off, c_off + 1] = c * kxy
+        out[r_off + 1, c_off] = c * kyx
+        out[r_off + 1, c_off + 1] = c * kyy
+    return out
+
+
 def assemble_dielectric(patch: Patch, k0: float, eps2: complex, dtype=np.complex128):
     """The dense ``(4N, 4N)`` Müller matrix for the interface air/``eps2`` at free-space
     wavenumber ``k0`` [rad/m]; unknowns ``[u_x, u_y, w_x, w_y]``; the electric rows scaled by
     ``2/(ε₁ + ε₂)`` (unit diagonal)."""
     n = patch.n
-    e1, e2 = 1.0, complex(eps2)
-    k1, k2 = k0, k0 * np.sqrt(e2)
-    if k2.imag < 0:
-        k2 = -k2
+    e1, e2, k1, k2, scale_e = media(k0, eps2)
     x, y, z, fx, fy = patch.x, patch.y, patch.z, patch.fx, patch.fy
     area = patch.dx * patch.dy
     mat = np.zeros((4 * n, 4 * n), dtype=dtype)
     rows = max(1, int(BLOCK_BYTES // (16 * 16 * n)))
-    scale_e = 2.0 / (e1 + e2)
     for r0 in range(0, n, rows):
         m = slice(r0, min(n, r0 + rows))
         idx = np.arange(m.start, m.stop)
         X = x[m, None] - x[None, :]
         Y = y[m, None] - y[None, :]
         Z = z[m, None] - z[None, :]
-        R = np.sqrt(X * X + Y * Y + Z * Z)
-        R[idx - r0, idx] = 1.0
-        e1r, e2r = np.exp(1j * k1 * R), np.exp(1j * k2 * R)
-        inv = 1.0 / (4.0 * math.pi * R)
-        g1, g2 = e1r * inv, e2r * inv
-        # ∇G = a R with a = (ikR − 1) G / R²  (the ``a`` of :mod:`.operator`, per unit area)
-        a1 = (1j * k1 * R - 1.0) * g1 / (R * R)
-        a2 = (1j * k2 * R - 1.0) * g2 / (R * R)
-        # G'' for each medium; ∇∇g = g'' R̂R̂ + (g'/R)(I − R̂R̂) with g = (G₁ − G₂)/k₀²
-        d1 = (2.0 - 2j * k1 * R - (k1 * R) ** 2) * g1 / (R * R)
-        d2 = (2.0 - 2j * k2 * R - (k2 * R) ** 2) * g2 / (R * R)
-        gp_r = (a1 - a2) / k0**2  # g'/R
-        alpha = (e1 * g1 - e2 * g2 + gp_r) * area
-        beta = ((d1 - d2) / k0**2 - gp_r) / (R * R) * area
-        D = Z - fx[m, None] * X - fy[m, None] * Y
-        dfx = fx[None, :] - fx[m, None]
-        dfy = fy[None, :] - fy[m, None]
-        for a, r_off, c_off, sc in (
-            ((a1 - a2) * area, 0, 0, 1.0),
-            ((e1 * a1 - e2 * a2) * area, 2 * n, 2 * n, scale_e),
-        ):
-            a[idx - r0, idx] = 0.0
-            mat[r_off + m.start : r_off + m.stop, c_off : c_off + n] = -sc * a * (X * dfx - D)
-            mat[r_off + m.start : r_off + m.stop, c_off + n : c_off + 2 * n] = -sc * a * X * dfy
-            rr = r_off + n
-            mat[rr + m.start : rr + m.stop, c_off : c_off + n] = -sc * a * Y * dfx
-            mat[rr + m.start : rr + m.stop, c_off + n : c_off + 2 * n] = -sc * a * (Y * dfy - D)
-        alpha[idx - r0, idx] = 0.0
-        beta[idx - r0, idx] = 0.0
-        fxm, fym = fx[m, None], fy[m, None]
-        lxx, lxy, lyx, lyy = _lift_blocks(fxm, fym, fx[None, :], fy[None, :])
-        px, py = -Y - fym * Z, X + fxm * Z
-        qx, qy = X + fx[None, :] * Z, Y + fy[None, :] * Z
-        kxx = alpha * lxx + beta * px * qx
-        kxy = alpha * lxy + beta * px * qy
-        kyx = alpha * lyx + beta * py * qx
-        kyy = alpha * lyy + beta * py * qy
-        for r_off, c_off, c in ((0, 2 * n, -1j * k0), (2 * n, 0, 1j * k0 * scale_e)):
-            mat[r_off + m.start : r_off + m.stop, c_off : c_off + n] = c * kxx
-            mat[r_off + m.start : r_off + m.stop, c_off + n : c_off + 2 * n] = c * kxy
-            rr = r_off + n
-            mat[rr + m.start : rr + m.stop, c_off : c_off + n] = c * kyx
-            mat[rr + m.start : rr + m.stop, c_off + n : c_off + 2 * n] = c * kyy
-    _add_self(mat, patch, k0, k1, k2, e1, e2, scale_e)
+        self_mask = np.zeros(X.shape, dtype=bool)
+        self_mask[idx - r0, idx] = True
+        blocks = pair_blocks(X, Y, Z, fx[m, None], fy[m, None], fx[None, :], fy[None, :],
+                             self_mask, k0, eps2, area)  # fmt: skip
+        for (bi, bj), val in blocks.items():
+            mat[bi * n + m.start : bi * n + m.stop, bj * n : (bj + 1) * n] = val
+    _add_self(mat, patch, k0, eps2)
     diag = np.arange(4 * n)
     mat[diag, diag] += 1.0
     _add_near(mat, patch, (e1 - e2) * scale_e)
     return mat
 
 
-def _add_self(mat, patch, k0, k1, k2, e1, e2, scale_e):
+def self_blocks(patch, k0, eps2) -> dict:
+    """The self-cell entries of the ``K`` blocks (module docstring), ``(row block, column
+    block) → (N,)`` over the blocks ``[u_x, u_y, w_x, w_y]`` (the identity not included)."""
+    e1, e2, k1, k2, scale_e = media(k0, eps2)
     n = patch.n
     area = patch.dx * patch.dy
     i1, i2 = self_integrals(patch.fx, patch.fy, patch.dx, patch.dy)
@@ -164,11 +188,19 @@ def _add_self(mat, patch, k0, k1, k2, e1, e2, scale_e):
     b = np.zeros((n, 3, 2))
     b[:, 0, 0], b[:, 1, 1], b[:, 2, 0], b[:, 2, 1] = 1.0, 1.0, fx, fy
     blk = np.einsum("nij,njk,nkl->nil", p, kint, b)  # (N, 2, 2)
-    d = np.arange(n)
-    for r_off, c_off, c in ((0, 2 * n, -1j * k0), (2 * n, 0, 1j * k0 * scale_e)):
+    out = {}
+    for r_off, c_off, c in ((0, 2, -1j * k0), (2, 0, 1j * k0 * scale_e)):
         for i in range(2):
             for j in range(2):
-                mat[r_off + i * n + d, c_off + j * n + d] = c * blk[:, i, j]
+                out[r_off + i, c_off + j] = c * blk[:, i, j]
+    return out
+
+
+def _add_self(mat, patch, k0, eps2):
+    n = patch.n
+    d = np.arange(n)
+    for (bi, bj), val in self_blocks(patch, k0, eps2).items():
+        mat[bi * n + d, bj * n + d] = val
 
 
 def _add_near(mat, patch, factor):

@@ -31,11 +31,40 @@ from emscatter.solvers.mom3d.dielectric import (
     rhs_dielectric,
     solve_dielectric,
 )
+from emscatter.solvers.mom3d.dielectric_smcg import dielectric_smcg_operator
 from emscatter.solvers.mom3d.farfield import METHODS, amplitudes_em, hemisphere
 from emscatter.solvers.mom3d.incident import tapered_beam
+from emscatter.solvers.mom3d.near import WIDTH
 from emscatter.solvers.mom3d.operator import make_patch
+from emscatter.solvers.mom3d.smcg import resolve_near_radius
 
-__all__ = ["amplitudes_em", "beam_fresnel", "solve_dielectric_realization"]
+__all__ = [
+    "DIELECTRIC_NEAR_RADIUS",
+    "DIELECTRIC_SMCG_MIN_NODES",
+    "amplitudes_em",
+    "beam_fresnel",
+    "dielectric_accel",
+    "solve_dielectric_realization",
+]
+
+#: Default strong-pair radius of the dielectric SMCG [free-space wavelengths]: the near part
+#: has 16 entries per pair on a grid ``Re √ε`` times denser than the PEC one, so it is kept
+#: small; the Taylor series (order 3) is then within 1e-5 of the dense product for kσ ≤ 0.3.
+DIELECTRIC_NEAR_RADIUS = 0.5
+#: ``accel="auto"`` takes the dielectric SMCG above this many nodes (16² nodes: at 17², 1λ at
+#: ε = 4 + 0.5i, it is already 2.2× faster than the dense solve, 0.96 s vs 2.11 s).
+DIELECTRIC_SMCG_MIN_NODES = 256
+DIELECTRIC_ACCELS = ("auto", "dense", "smcg")
+
+
+def dielectric_accel(accel, n_nodes: int) -> str:
+    """``"dense"`` or ``"smcg"`` for ``accel`` (``"auto"``: SMCG above
+    :data:`DIELECTRIC_SMCG_MIN_NODES` nodes)."""
+    if accel not in DIELECTRIC_ACCELS:
+        raise ValueError(f"accel must be one of {DIELECTRIC_ACCELS}, got {accel!r}")
+    if accel == "auto":
+        return "smcg" if n_nodes > DIELECTRIC_SMCG_MIN_NODES else "dense"
+    return accel
 
 
 def beam_fresnel(beam, eps2) -> np.ndarray:
@@ -74,8 +103,11 @@ def solve_dielectric_realization(
     n_mu: int | None = None,
     tol: float = 1e-6,
     max_iter: int = 400,
-    dtype=np.complex128,
+    dtype=None,
     farfield: str = "auto",
+    accel: str = "auto",
+    near_radius: float | None = None,
+    taylor_order: int = 3,
 ) -> dict:
     """Solve Müller's equations on one ``(ny, nx)`` height map [m] (square ``spacing`` [m])
     for air over ``eps2`` at wavenumber ``k`` [rad/m], incidence ``theta_i, phi_i`` [rad].
@@ -87,18 +119,42 @@ def solve_dielectric_realization(
     ``power``, ``beam``, ``u``, ``w``, ``points``, ``iterations``, ``residual``, ``seconds``,
     ``unknowns``. ``farfield``: how the far-field sums are taken (``"auto"``, ``"direct"``
     or ``"fast"``, :func:`~emscatter.solvers.mom3d.farfield.amplitudes_em`).
+
+    ``accel``: ``"dense"`` (the full ``(4N, 4N)`` matrix), ``"smcg"`` (the sparse-matrix/
+    canonical-grid product of :mod:`.dielectric_smcg`: pairs closer than ``near_radius``
+    [free-space wavelengths, default :data:`DIELECTRIC_NEAR_RADIUS`, enlarged to 1.25 × the
+    peak-to-valley height and to the near-cell stencil, ``3√2`` cells] exact and sparse, both
+    media's far kernels by a Taylor series of order ``taylor_order`` in ``Z²`` and FFTs;
+    strong entries in ``dtype``, by default complex128 up to 2048 nodes and complex64 above)
+    or ``"auto"`` (SMCG above :data:`DIELECTRIC_SMCG_MIN_NODES` nodes). The result then also has
+    ``accel``, ``matrix_bytes`` (matrix, or sparse part plus kernel spectra), ``nonzeros``,
+    ``near_radius`` [λ] and ``taylor_order``.
     """
     if farfield not in METHODS:
         raise ValueError(f"farfield must be one of {METHODS}, got {farfield!r}")
+    h = np.asarray(heights, dtype=float)
+    mode = dielectric_accel(accel, h.size)
     t0 = time.perf_counter()
     eps2 = complex(eps2)
-    patch = make_patch(np.asarray(heights, dtype=float), spacing, spacing)
+    patch = make_patch(h, spacing, spacing)
     ny, nx = patch.shape
     half = math.hypot((nx - 1) / 2 * spacing, (ny - 1) / 2 * spacing)
     g = taper_g if taper_g is not None else min(nx, ny) * spacing / 4.0
     beam = tapered_beam(k, theta_i, phi_i, g, half)
     points = patch.points
-    mat = assemble_dielectric(patch, k, eps2, dtype=dtype)
+    extra = {"accel": mode}
+    if mode == "smcg":
+        rd = resolve_near_radius(near_radius, h, k, DIELECTRIC_NEAR_RADIUS)
+        if near_radius is None:  # at least the near-cell stencil on a coarse grid
+            rd = max(rd, math.sqrt(2.0) * (WIDTH + 1) * spacing * (1 + 1e-9))
+        sdt = dtype if dtype is not None else (np.complex128 if h.size <= 2048 else np.complex64)
+        mat = dielectric_smcg_operator(patch, k, eps2, near_radius=rd, taylor_order=taylor_order,
+                                       dtype=sdt)  # fmt: skip
+        extra.update(near_radius=rd * k / (2 * math.pi), taylor_order=taylor_order,
+                     nonzeros=mat.strong.nnz, matrix_bytes=mat.nbytes)  # fmt: skip
+    else:
+        mat = assemble_dielectric(patch, k, eps2, dtype=dtype or np.complex128)
+        extra["matrix_bytes"] = mat.nbytes
     t_asm = time.perf_counter() - t0
     rhs = [rhs_dielectric(patch, *beam.fields(points, p), eps2) for p in ("h", "v")]
     xs, its, res = solve_dielectric(mat, rhs, tol=tol, max_iter=max_iter)
@@ -145,4 +201,5 @@ def solve_dielectric_realization(
         "unknowns": 4 * n,
         "taper_g": g,
         "n_mu": n_mu,
+        **extra,
     }

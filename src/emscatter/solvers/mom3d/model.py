@@ -18,9 +18,10 @@ realizations of the far-field amplitude ``A = p̂_s·F`` (:mod:`.farfield`):
 
 A perfect conductor is solved on the dense matrix up to :data:`SMCG_MIN_NODES` nodes (8λ × 8λ
 at 8 points/λ) and by the sparse-matrix/canonical-grid product of :mod:`.smcg` above
-(``accel=`` chooses); dielectrics always densely. Not registered in :mod:`emscatter.solvers`
-yet (a dense dielectric solve takes minutes per realization for patches of a few
-wavelengths); call it as ``emscatter.solvers.mom3d.bistatic``.
+(``accel=`` chooses); dielectrics densely up to
+:data:`~.dielectric_model.DIELECTRIC_SMCG_MIN_NODES` nodes and by the dielectric SMCG
+product of :mod:`.dielectric_smcg` (both media's kernels) above. Not registered in
+:mod:`emscatter.solvers` yet; call it as ``emscatter.solvers.mom3d.bistatic``.
 """
 
 from __future__ import annotations
@@ -35,12 +36,20 @@ from emscatter.fresnel import check_eps, is_pec
 from emscatter.parallel import check_client, check_n_workers, check_threads
 from emscatter.progress import task
 from emscatter.scattering import Scattering
-from emscatter.solvers.mom3d.dielectric_model import solve_dielectric_realization
+from emscatter.solvers.mom3d.dielectric_model import (
+    DIELECTRIC_NEAR_RADIUS,
+    dielectric_accel,
+    solve_dielectric_realization,
+)
 from emscatter.solvers.mom3d.farfield import amplitudes, hemisphere
 from emscatter.solvers.mom3d.incident import tapered_beam
 from emscatter.solvers.mom3d.montecarlo import MEMORY_OVERHEAD, run_realizations, stack_results
 from emscatter.solvers.mom3d.operator import assemble, make_patch, rhs, solve
-from emscatter.solvers.mom3d.smcg import smcg_operator
+from emscatter.solvers.mom3d.smcg import (
+    MAX_PTP_OVER_RD,  # noqa: F401  (kept public here)
+    resolve_near_radius,
+    smcg_operator,
+)
 
 __all__ = ["bistatic", "matrix_bytes", "solve_realization"]
 
@@ -53,9 +62,6 @@ SMCG_MIN_NODES = 4096
 #: Default strong-pair radius of SMCG [wavelengths] (Tsang et al.'s r_d) and Taylor order.
 NEAR_RADIUS = 2.5
 TAYLOR_ORDER = 3
-#: The Taylor series in ``Z²/ρ²`` converges for ``|Z| < ρ``: SMCG needs the patch's
-#: peak-to-valley height below this fraction of ``r_d`` (``(Z/ρ)² < 0.64`` on every weak pair).
-MAX_PTP_OVER_RD = 0.8
 ACCELS = ("auto", "dense", "smcg")
 
 
@@ -73,32 +79,24 @@ def smcg_bytes(n_nodes: int, near_radius_cells: float) -> int:
 def _accel_for(accel, n_nodes: int, pec: bool) -> str:
     if accel not in ACCELS:
         raise ValueError(f"accel must be one of {ACCELS}, got {accel!r}")
-    if accel == "smcg" and not pec:
-        raise ValueError(
-            "accel='smcg' is for perfect conductors (eps='pec') only; a dielectric patch is "
-            "solved densely (accel='dense' or 'auto')"
-        )
+    if not pec:
+        return dielectric_accel(accel, n_nodes)
     if accel == "auto":
-        return "smcg" if pec and n_nodes > SMCG_MIN_NODES else "dense"
+        return "smcg" if n_nodes > SMCG_MIN_NODES else "dense"
     return accel
 
 
-def _near_radius(near_radius, heights: np.ndarray, k: float) -> float:
-    """``r_d`` [m] from ``near_radius`` [λ] (default :data:`NEAR_RADIUS`, enlarged to
-    keep the Taylor series convergent); an explicit radius too small for it is refused."""
-    lam = 2 * math.pi / k
-    ptp = float(np.ptp(heights))
-    if near_radius is None:
-        return max(NEAR_RADIUS * lam, ptp / MAX_PTP_OVER_RD)
-    rd = check_positive("near_radius", near_radius, unit="wavelengths") * lam
-    if ptp >= MAX_PTP_OVER_RD * rd:
-        raise ValueError(
-            f"near_radius={fmt(near_radius)} λ is too small for this surface: its "
-            f"peak-to-valley height {ptp / lam:.3g} λ must be < {MAX_PTP_OVER_RD:g}·r_d for the "
-            f"SMCG Taylor series to converge; use near_radius ≥ "
-            f"{ptp / MAX_PTP_OVER_RD / lam:.3g} or accel='dense'"
-        )
-    return rd
+def dielectric_smcg_bytes(n_nodes: int, near_radius_cells: float) -> int:
+    """Estimated bytes of the dielectric SMCG strong matrix (16 ``π r_d²`` blocks per node,
+    complex64 + int32 per nonzero) for ``n_nodes`` nodes and ``r_d`` in grid cells, plus the
+    kernel spectra and FFT work arrays of the far part (≈ 214 complex arrays of ``4N``)."""
+    return int(16 * n_nodes * math.pi * near_radius_cells**2 * 12 + 214 * 4 * n_nodes * 16)
+
+
+def _near_radius(near_radius, heights: np.ndarray, k: float, default: float = NEAR_RADIUS) -> float:
+    """``r_d`` [m] from ``near_radius`` [λ] (:func:`.smcg.resolve_near_radius`, default
+    :data:`NEAR_RADIUS`)."""
+    return resolve_near_radius(near_radius, heights, k, default)
 
 
 def _dtype_for(n_nodes: int):
@@ -221,9 +219,9 @@ def _realization(job: dict, ss: np.random.SeedSequence) -> dict:
         out = solve_realization(surf.heights, spacing, k, *args, **job["options"], **job["fast"])
         out["reflectivity"] = np.ones(2)
     else:
-        out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args, **job["options"])
+        out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args,
+                                           **job["options"], **job["fast"])  # fmt: skip
         out["energy"] = out["reflectivity"] + out["transmissivity"]
-        out["matrix_bytes"] = out["unknowns"] ** 2 * 16
     res = {key: out[key] for key in RESULT_KEYS}
     res["seconds"] = out["seconds"]["total"]
     return res
@@ -265,7 +263,11 @@ def _check(roughness, eps, k, theta_i, length, ppw, realizations, max_bytes, acc
         rd_cells = (near_radius or NEAR_RADIUS) * ppw
         need, what = smcg_bytes(n_side * n_side, rd_cells), "SMCG sparse matrix"
     if not is_pec(eps):
-        need = (4 * n_side * n_side) ** 2 * 16
+        need, what = (4 * n_side * n_side) ** 2 * 16, "dense matrix"
+        if mode == "smcg":
+            rd_cells = (near_radius or DIELECTRIC_NEAR_RADIUS) * lam0 / lam * ppw
+            need = dielectric_smcg_bytes(n_side * n_side, rd_cells)
+            what = "dielectric SMCG sparse matrix"
     if need > max_bytes:
         raise ValueError(
             f"length={fmt(length)} m at points_per_wavelength={fmt(ppw)} needs "
@@ -320,9 +322,14 @@ def bistatic(
         (default 2 GiB).
     progress : a tqdm bar over the realizations on stderr (seconds and energy of the last one
         beside it): ``None`` (auto) on a terminal past 2 s, ``True`` always, ``False`` never.
-    accel, near_radius, taylor_order : ``"dense"``, ``"smcg"`` (PEC only: strong pairs within
-        ``near_radius`` wavelengths sparse, the rest by FFT, :mod:`.smcg`) or ``"auto"``
-        (SMCG above :data:`SMCG_MIN_NODES` nodes); see :func:`solve_realization`.
+    accel, near_radius, taylor_order : ``"dense"``, ``"smcg"`` (strong pairs within
+        ``near_radius`` free-space wavelengths sparse, the rest by FFT: :mod:`.smcg` for a
+        perfect conductor, :mod:`.dielectric_smcg` for a dielectric, default radius 2.5 λ and
+        :data:`~.dielectric_model.DIELECTRIC_NEAR_RADIUS` respectively) or ``"auto"`` (SMCG
+        above :data:`SMCG_MIN_NODES` nodes for PEC,
+        :data:`~.dielectric_model.DIELECTRIC_SMCG_MIN_NODES` for a dielectric); see
+        :func:`solve_realization` and
+        :func:`~.dielectric_model.solve_dielectric_realization`.
     client : where the realizations run (:mod:`.montecarlo`): None (serially, here),
         ``"local"`` (a dask LocalCluster of ``n_workers`` single-threaded processes, closed at
         the end), a scheduler address ``"tcp://host:port"``, a dask.distributed ``Client`` or

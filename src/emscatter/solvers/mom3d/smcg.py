@@ -54,9 +54,15 @@ import numpy as np
 from scipy import fft as sfft
 from scipy import sparse
 
+from emscatter.conventions import check_positive, fmt
 from emscatter.solvers.mom3d.near import WIDTH, near_correction
 
-__all__ = ["SmcgOperator", "smcg_operator", "taylor_kernels"]
+__all__ = ["MAX_PTP_OVER_RD", "SmcgOperator", "resolve_near_radius", "smcg_operator",
+           "taylor_kernels"]  # fmt: skip
+
+#: The Taylor series in ``Z²/ρ²`` converges for ``|Z| < ρ``: SMCG needs the patch's
+#: peak-to-valley height below this fraction of ``r_d`` (``(Z/ρ)² < 0.64`` on every weak pair).
+MAX_PTP_OVER_RD = 0.8
 
 #: Rows per block in the strong-matrix assembly (bounds the ``(rows, offsets)`` temporaries).
 ROW_BLOCK = 256
@@ -232,6 +238,25 @@ class SmcgOperator:
 
     def __matmul__(self, v):
         return self.matvec(v)
+
+
+def resolve_near_radius(near_radius, heights: np.ndarray, k: float, default: float) -> float:
+    """``r_d`` [m] from ``near_radius`` [free-space wavelengths ``2π/k``; ``None``: ``default``,
+    enlarged to keep the Taylor series convergent, ``ptp/MAX_PTP_OVER_RD``]; an explicit radius
+    too small for the surface's peak-to-valley height is refused."""
+    lam = 2 * math.pi / k
+    ptp = float(np.ptp(heights))
+    if near_radius is None:
+        return max(default * lam, ptp / MAX_PTP_OVER_RD)
+    rd = check_positive("near_radius", near_radius, unit="wavelengths") * lam
+    if ptp >= MAX_PTP_OVER_RD * rd:
+        raise ValueError(
+            f"near_radius={fmt(near_radius)} λ is too small for this surface: its "
+            f"peak-to-valley height {ptp / lam:.3g} λ must be < {MAX_PTP_OVER_RD:g}·r_d for the "
+            f"SMCG Taylor series to converge; use near_radius ≥ "
+            f"{ptp / MAX_PTP_OVER_RD / lam:.3g} or accel='dense'"
+        )
+    return rd
 
 
 def _check_order(taylor_order) -> None:
