@@ -67,7 +67,6 @@ Validity: that of the reflection SPM (:func:`emscatter.solvers.spm.validity.chec
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 
@@ -76,6 +75,7 @@ from emscatter.scattering import Scattering
 from emscatter.solvers.kirchhoff.transmission.go import (
     check_lossy_transmission_eps,
     transmission_angles,
+    transmission_policy,
 )
 from emscatter.solvers.spm.second_order import _second_order_R
 from emscatter.solvers.spm.validity import check_validity
@@ -451,8 +451,10 @@ def bistatic_transmission(
     validity = check_validity(
         roughness, k, eps=complex(e.ravel()[np.argmax(np.abs(e))]), theta_i=ti
     )
-    failing = _failing(validity, ti.shape)
-    bad = _policy(validity, failing, out_of_range)
+    failing, bad = transmission_policy(
+        validity, ti.shape, out_of_range, warning=SPMWarning,
+        label="SPM transmission used outside the small-perturbation method's validity",
+    )  # fmt: skip
     if np.any(bad):
         sigma0 = np.where(bad, np.nan, sigma0)
     elif not np.all(np.isfinite(sigma0)):
@@ -476,24 +478,3 @@ def bistatic_transmission(
         sigma0=sigma0, coherent=coh, method="spm-transmission", theta_i=ti, theta_s=tt,
         phi_s=pt, phi_i=pi_, k=k, dimension=2, info=info,
     )  # fmt: skip
-
-
-def _failing(validity: dict, shape) -> np.ndarray:
-    """Mask of the geometries outside SPM's validity (all of them when the roughness fails)."""
-    if not all(validity["checks"].get(n, True) for n in ("k_sigma", "rms_slope")):
-        return np.ones(shape, dtype=bool)
-    return ~np.broadcast_to(np.asarray(validity.get("angle_valid", True), dtype=bool), shape)
-
-
-def _policy(validity: dict, failing, out_of_range: str) -> np.ndarray:
-    """Apply ``out_of_range``: the mask to blank (``"nan"``), a warning or a ValueError."""
-    if validity.get("valid", True) or out_of_range == "ignore":
-        return np.zeros(failing.shape, dtype=bool)
-    why = "; ".join(validity.get("reasons", [])) or "outside its validity range"
-    msg = f"SPM transmission used outside the small-perturbation method's validity: {why}"
-    if out_of_range == "raise":
-        raise ValueError(msg + " (out_of_range='warn' computes anyway, 'nan' blanks those angles)")
-    if out_of_range == "warn":
-        warnings.warn(msg + " (out_of_range='nan' blanks them, 'raise' stops)", SPMWarning, 3)
-        return np.zeros(failing.shape, dtype=bool)
-    return failing

@@ -66,7 +66,6 @@ dielectric's grazing limit, per incidence angle); ``out_of_range`` applies it.
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 
@@ -81,6 +80,7 @@ from emscatter.solvers.kirchhoff.transmission.go import (
     _jones,
     check_lossy_transmission_eps,
     transmission_angles,
+    transmission_policy,
 )
 
 __all__ = ["bistatic_transmission", "coherent_transmissivity", "OUT_OF_RANGE", "POWarning"]
@@ -170,8 +170,11 @@ def bistatic_transmission(
     ti, tt, pt, pi_, e = transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i)
     e_big = complex(e.ravel()[np.argmax(np.abs(e))])
     validity = po.check_validity(rough, k, eps=e_big if e_big.imag else e_big.real, theta_i=ti)
-    bad = _policy(validity, ti.shape, out_of_range)
     shape = ti.shape
+    failing, bad = transmission_policy(
+        validity, shape, out_of_range, warning=POWarning,
+        label="PO transmission used outside the Kirchhoff approximation's validity",
+    )  # fmt: skip
     eta = np.sqrt(e).real  # the direction of a wave of the lower medium: sinθt = k⊥/Re k₂
     ki, kt, _, _, _, _ = _dirs(ti, pi_, tt, pt)
     _, ci, co, w2 = _half(ki, kt, eta)
@@ -212,7 +215,7 @@ def bistatic_transmission(
         "rtol": rtol,
         "polarization_factors": "local Fresnel transmission at the stationary-phase facet",
         "validity": validity,
-        "out_of_range": _failing(validity, shape),
+        "out_of_range": failing,
         "source": "Kirchhoff approximation (Tsang, Kong & Ding 2000 §9.4; Ulaby, Moore & Fung "
         "1982 §12-4); limits: Fresnel T (flat), Walter et al. 2007 eq. 21 (large k sigma)",
     }
@@ -228,24 +231,3 @@ def bistatic_transmission(
         dimension=2,
         info=info,
     )
-
-
-def _failing(validity: dict, shape) -> np.ndarray:
-    """Mask of the geometries outside PO's validity (all of them when the roughness fails)."""
-    if not all(validity["checks"].get(n, True) for n in validity.get("details", {})):
-        return np.ones(shape, dtype=bool)
-    return ~np.broadcast_to(np.asarray(validity.get("angle_valid", True), dtype=bool), shape)
-
-
-def _policy(validity: dict, shape, out_of_range: str) -> np.ndarray:
-    """Apply ``out_of_range``: the mask to blank (``"nan"``), a warning or a ValueError."""
-    if validity.get("valid", True) or out_of_range == "ignore":
-        return np.zeros(shape, dtype=bool)
-    why = "; ".join(validity.get("reasons", [])) or "outside its validity range"
-    msg = f"PO transmission used outside the Kirchhoff approximation's validity: {why}"
-    if out_of_range == "raise":
-        raise ValueError(msg + " (out_of_range='warn' computes anyway, 'nan' blanks those angles)")
-    if out_of_range == "warn":
-        warnings.warn(msg + " (out_of_range='nan' blanks them, 'raise' stops)", POWarning, 3)
-        return np.zeros(shape, dtype=bool)
-    return _failing(validity, shape)
