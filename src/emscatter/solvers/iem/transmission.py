@@ -82,7 +82,6 @@ nominal rms slope ≤ 0.4, θi ≤ 70°), per incidence angle; ``out_of_range`` 
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -94,8 +93,7 @@ from emscatter.solvers.kirchhoff import po
 from emscatter.solvers.kirchhoff.common import check_roughness
 from emscatter.solvers.kirchhoff.transmission import po as tpo
 from emscatter.solvers.kirchhoff.transmission.go import (
-    _dirs,
-    _half,
+    OUT_OF_RANGE,
     _jones,
     check_transmission_eps,
     transmission_angles,
@@ -105,8 +103,6 @@ from emscatter.solvers.spm import transmission as tspm
 
 __all__ = ["bistatic_transmission", "coherent_transmissivity", "OUT_OF_RANGE", "IEMWarning"]
 
-#: The ``out_of_range`` policies (as the solvers' API): warn, raise, blank with NaN, ignore.
-OUT_OF_RANGE = ("warn", "raise", "nan", "ignore")
 FIRST_ORDER = ("spm", "kirchhoff")
 _SPM_REF_KS = 1e-2  # kσ at which SPM's mean-field correction Δ₂ ∝ σ² is evaluated
 
@@ -254,16 +250,8 @@ def bistatic_transmission(
 def _first_kirchhoff_term(rough, e, k, ti, tt, pt, pi_):
     """The n = 1 term ``T₁`` (2, 2, ...) of the Kirchhoff (PO) series and its attenuation
     ``e^{−Q}`` [-] (the prefactor and spectrum of :mod:`..kirchhoff.transmission.po`)."""
-    eta = np.sqrt(e)
-    ki, kt, _, _, _, _ = _dirs(ti, pi_, tt, pt)
-    _, ci, co, w2 = _half(ki, kt, eta)
-    w = -ki + eta * kt
-    ks = k * rough.sigma
-    Q = (ks * w[2]) ** 2
-    K = np.hypot(w[0] * (k * rough.length), w[1] * (k * rough.length_y))
-    log_w1 = po.log_nfold(rough)(1.0, K)
-    pref = 4 * math.pi * ks**2 * (k * rough.length) * (k * rough.length_y)
+    Q, K, geo = tpo.series_geometry(rough, k, np.sqrt(e), ti, tt, pt, pi_)
     att = np.exp(-Q)
-    geo = pref * e * np.abs(ci * co) * w2 * att * np.exp(log_w1)
+    geo = geo * att * np.exp(po.log_nfold(rough)(1.0, K))
     j = _jones(e, ti, tt, pt, pi_)
     return j * j * geo, att

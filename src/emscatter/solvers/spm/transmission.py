@@ -73,6 +73,7 @@ import numpy as np
 from emscatter.conventions import check_positive
 from emscatter.scattering import Scattering
 from emscatter.solvers.kirchhoff.transmission.go import (
+    OUT_OF_RANGE,
     check_lossy_transmission_eps,
     transmission_angles,
     transmission_policy,
@@ -90,9 +91,6 @@ __all__ = [
     "OUT_OF_RANGE",
     "SPMWarning",
 ]
-
-#: The ``out_of_range`` policies (as the solvers' API): warn, raise, blank with NaN, ignore.
-OUT_OF_RANGE = ("warn", "raise", "nan", "ignore")
 
 
 class SPMWarning(UserWarning):
@@ -288,6 +286,19 @@ def _gl(n, a, b, cluster=False):
     return a + 0.5 * (b - a) * (1 - np.cos(u)), wu * 0.5 * (b - a) * np.sin(u)
 
 
+def _check_quadrature(roughness, eps, k, theta_i, phi_i, n, kappa_max):
+    """The checked ``(k, theta_i, phi_i, eps, kappa_max)`` of the flux quadratures
+    (:func:`diffuse_transmissivity`, :func:`layer_absorption`; ``n`` an integer ≥ 4, the
+    default ``kappa_max = 16/ℓ_min`` [rad/m])."""
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 4:
+        raise ValueError(f"n must be an integer >= 4 (quadrature nodes), got {n!r}")
+    k, (ti, _, _, pi_, e) = _check(roughness, eps, k, theta_i, 0.0, 0.0, phi_i)
+    if kappa_max is None:
+        kappa_max = 16.0 / min(roughness.length, roughness.length_y or roughness.length)
+    kappa_max = check_positive("kappa_max", kappa_max, unit="rad/m")
+    return k, ti, pi_, e, kappa_max
+
+
 def diffuse_transmissivity(
     roughness, eps, k: float, theta_i, phi_i=0.0, *, n: int = 48, kappa_max=None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -303,12 +314,7 @@ def diffuse_transmissivity(
     larger value for slowly decaying spectra). ``R_coh + R_diff + T_coh + T_diff + T_beyond``
     is the energy budget (module docstring). Gauss–Legendre, ``2n × n`` and ``n × n`` nodes
     (split at the branch circles ``|k⊥| = k``, ``Re k₂``)."""
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 4:
-        raise ValueError(f"n must be an integer >= 4 (quadrature nodes), got {n!r}")
-    k, (ti, _, _, pi_, e) = _check(roughness, eps, k, theta_i, 0.0, 0.0, phi_i)
-    if kappa_max is None:
-        kappa_max = 16.0 / min(roughness.length, roughness.length_y or roughness.length)
-    kappa_max = check_positive("kappa_max", kappa_max, unit="rad/m")
+    k, ti, pi_, e, kappa_max = _check_quadrature(roughness, eps, k, theta_i, phi_i, n, kappa_max)
     shape = ti.shape
     ti, pi_, e = (a.reshape(-1, 1, 1) for a in (ti, pi_, e))
     re_eta = np.sqrt(e).real
@@ -383,12 +389,7 @@ def layer_absorption(
     ``kappa_max`` and ``n`` as :func:`diffuse_transmissivity`). Tested: ``R_coh + R_diff +
     T_coh + T_diff + T_beyond + A = 1`` to the quadrature's precision
     (``tests/test_spm_transmission_lossy.py``)."""
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 4:
-        raise ValueError(f"n must be an integer >= 4 (quadrature nodes), got {n!r}")
-    k, (ti, _, _, pi_, e) = _check(roughness, eps, k, theta_i, 0.0, 0.0, phi_i)
-    if kappa_max is None:
-        kappa_max = 16.0 / min(roughness.length, roughness.length_y or roughness.length)
-    kappa_max = check_positive("kappa_max", kappa_max, unit="rad/m")
+    k, ti, pi_, e, kappa_max = _check_quadrature(roughness, eps, k, theta_i, phi_i, n, kappa_max)
     shape = ti.shape
     out = np.zeros((2, ti.size))
     for j, (th, ph, ev) in enumerate(zip(ti.ravel(), pi_.ravel(), e.ravel(), strict=True)):

@@ -101,6 +101,10 @@ LOSSLESS_RTOL = 1e-12
 
 _TAU_EPS = 1e-28
 
+#: The ``out_of_range`` policies of the PO, SPM and IEM transmissions (:func:`transmission_policy`):
+#: warn, raise, blank with NaN, ignore.
+OUT_OF_RANGE = ("warn", "raise", "nan", "ignore")
+
 
 def transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i) -> tuple:
     """The transmission solvers' angles checked (θ in [0, π/2], φ finite and real) and broadcast

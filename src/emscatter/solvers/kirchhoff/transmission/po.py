@@ -75,6 +75,7 @@ from emscatter.solvers.kirchhoff import compiled as kirchhoff_compiled
 from emscatter.solvers.kirchhoff import po
 from emscatter.solvers.kirchhoff.common import check_roughness, fast_fresnel
 from emscatter.solvers.kirchhoff.transmission.go import (
+    OUT_OF_RANGE,
     _dirs,
     _half,
     _jones,
@@ -85,8 +86,6 @@ from emscatter.solvers.kirchhoff.transmission.go import (
 
 __all__ = ["bistatic_transmission", "coherent_transmissivity", "OUT_OF_RANGE", "POWarning"]
 
-#: The ``out_of_range`` policies (as the solvers' API): warn, raise, blank with NaN, ignore.
-OUT_OF_RANGE = ("warn", "raise", "nan", "ignore")
 _BLOCK = 1 << 16
 
 
@@ -114,6 +113,21 @@ def coherent_transmissivity(roughness, eps, k: float, theta_i) -> np.ndarray:
     t = np.stack([1.0 - rh2, 1.0 - rv2]) * att
     tir = (np.abs(e.imag) == 0) & ((1.0 - ci * ci) >= e.real)
     return np.where(tir, 0.0, np.clip(t, 0.0, 1.0))
+
+
+def series_geometry(rough, k: float, eta, ti, tt, pt, pi_) -> tuple:
+    """The Kirchhoff series' geometry at broadcast emscatter angles [rad] (module docstring):
+    ``(Q, K, geo)`` with ``Q = (kσ w_z)²``, ``K = √((w_x kℓx)² + (w_y kℓy)²)`` the scaled
+    spectrum wavenumber and ``geo = 4π η² (kσ)² (kℓx)(kℓy) |i·ĥ||o·ĥ| |w|²`` [-] the prefactor
+    of ``e^{−Q} Σ Q^{n−1}/n! w_n`` (``w = i + η o``, ``η`` the real index; ``k`` [rad/m])."""
+    ki, kt, _, _, _, _ = _dirs(ti, pi_, tt, pt)
+    _, ci, co, w2 = _half(ki, kt, eta)
+    w = -ki + eta * kt
+    ks = k * rough.sigma
+    Q = (ks * w[2]) ** 2
+    K = np.hypot(w[0] * (k * rough.length), w[1] * (k * rough.length_y))
+    pref = 4 * math.pi * ks**2 * (k * rough.length) * (k * rough.length_y)
+    return Q, K, pref * eta**2 * np.abs(ci * co) * w2
 
 
 def bistatic_transmission(
@@ -176,12 +190,8 @@ def bistatic_transmission(
         label="PO transmission used outside the Kirchhoff approximation's validity",
     )  # fmt: skip
     eta = np.sqrt(e).real  # the direction of a wave of the lower medium: sinθt = k⊥/Re k₂
-    ki, kt, _, _, _, _ = _dirs(ti, pi_, tt, pt)
-    _, ci, co, w2 = _half(ki, kt, eta)
-    w = -ki + eta * kt
-    ks = k * rough.sigma
-    Q = ((ks * w[2]) ** 2).reshape(-1)
-    K = np.hypot(w[0] * (k * rough.length), w[1] * (k * rough.length_y)).reshape(-1)
+    Q, K, geo = series_geometry(rough, k, eta, ti, tt, pt, pi_)
+    Q, K = Q.reshape(-1), K.reshape(-1)
     log_w = po.log_nfold(rough)
     logt = np.empty(Q.size)
     opts = {"rtol": rtol, "max_terms": int(max_terms)}
@@ -191,8 +201,7 @@ def bistatic_transmission(
             rough, log_w, Q[sl], K[sl], series_sum=po.series_sum, **opts
         )
         logt[sl] = comp if comp is not None else po.series_sum(log_w, Q[sl], K[sl], **opts)
-    pref = 4 * math.pi * ks**2 * (k * rough.length) * (k * rough.length_y)
-    geo = pref * eta**2 * np.abs(ci * co) * w2 * np.exp(logt.reshape(shape))
+    geo = geo * np.exp(logt.reshape(shape))
     j = _jones(e, ti, tt, pt, pi_, eta=eta)
     sigma0 = j * j * geo
     if np.any(e.imag != 0):  # the mean-plane flux of the transmitted wave (lossless: 1)
