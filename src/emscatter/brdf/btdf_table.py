@@ -209,20 +209,12 @@ class BtdfTable:
             grid.locate_clamped(self.theta_t, tt),
             grid.locate_clamped(self.phi_d, np.abs(d)),
         ]
-        mm = self.mueller[cols]  # (n, 4, 4, grid)
-        flat = mm.reshape(mm.shape[0] * 16, *mm.shape[3:])
-        vals = grid.multilinear(flat, locs).reshape(mm.shape[0], 4, 4, -1)
-        vals = np.einsum("wc,cijn->wijn", mat, vals)
+        vals = mueller_at(self.mueller, cols, mat, locs)
         p = np.array([1.0, 1.0, -1.0, -1.0])
         flip = np.where(d < 0, 1.0, 0.0)
         sign = 1.0 - 2.0 * flip * (1 - np.outer(p, p)[:, :, None]) / 2
         vals = vals * sign[None]
-        ok = (ti >= 0) & (ti < HALF_PI) & (tt >= 0) & (tt < HALF_PI)
-        vals[..., ~ok] = 0.0
-        if frame == "mitsuba":
-            vals = np.stack([emscatter_to_mitsuba(v, ti, pi_ + math.pi, tt, po) for v in vals])
-        vals = vals.reshape(*vals.shape[:3], *shape)
-        return vals[0] if scalar else vals
+        return mueller_result(vals, ti, pi_, tt, po, frame, shape, scalar)
 
     def outgoing_weights(self) -> np.ndarray:
         """``W`` (``(n_tt, n_pd)``) with ``Σ W f[i] = ∫ f_t,interp cosθt dωt`` exactly."""
@@ -246,6 +238,29 @@ class BtdfTable:
         dims = "×".join(str(n) for n in self.values.shape[1:])
         wl = ", ".join(f"{x * 1e9:.4g}" for x in self.wavelengths[:6])
         return f"BtdfTable({dims} at λ = [{wl}] nm, solver={self.metadata.get('solver', '?')})"
+
+
+def mueller_at(mueller, cols, mat, locs) -> np.ndarray:
+    """The wavelength-weighted Mueller BTDF ``(n, 4, 4, m)`` [1/sr] of a table's ``mueller``
+    grid at ``m`` located points (``locs``: :func:`.grid.locate_clamped` per axis; ``cols``,
+    ``mat``: :meth:`.table.BrdfTable._wavelength_weights`)."""
+    mm = mueller[cols]  # (n, 4, 4, grid)
+    flat = mm.reshape(mm.shape[0] * 16, *mm.shape[3:])
+    vals = grid.multilinear(flat, locs).reshape(mm.shape[0], 4, 4, -1)
+    return np.einsum("wc,cijn->wijn", mat, vals)
+
+
+def mueller_result(vals, ti, pi_, tt, po, frame, shape, scalar) -> np.ndarray:
+    """``vals`` (``(n, 4, 4, m)``, emscatter's h/v bases, flat emscatter angles [rad]) as an
+    ``evaluate_mueller`` returns it: 0 outside ``θi, θt ∈ [0, π/2)``, in Mitsuba's Stokes
+    frames for ``frame="mitsuba"``, reshaped to ``shape``, the wavelength axis dropped when
+    ``scalar``."""
+    ok = (ti >= 0) & (ti < HALF_PI) & (tt >= 0) & (tt < HALF_PI)
+    vals[..., ~ok] = 0.0
+    if frame == "mitsuba":
+        vals = np.stack([emscatter_to_mitsuba(v, ti, pi_ + math.pi, tt, po) for v in vals])
+    vals = vals.reshape(*vals.shape[:3], *shape)
+    return vals[0] if scalar else vals
 
 
 def build_btdf_table(
