@@ -18,20 +18,7 @@ from emscatter.solvers.spm import model as spm
 from emscatter.solvers.spm import transmission as tspm
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
 from transmission_checks import K, assert_eps_weighted_reciprocity
-from transmission_checks import gauss_legendre as _gl
-
-
-def _hemisphere(n, kink=None):
-    """(θ, φ, dΩ weights) over a hemisphere; θ split at ``kink`` (the branch angle where the
-    integrand has a square-root kink: |k⊥| = k of the other medium)."""
-    if kink is None:
-        t, wt = _gl(2 * n, 0.0, 0.5 * math.pi)
-    else:
-        (a, wa), (b, wb) = _gl(n, 0.0, kink), _gl(n, kink, 0.5 * math.pi)
-        t, wt = np.r_[a, b], np.r_[wa, wb]
-    p, wp = _gl(n, 0.0, 2 * math.pi)
-    tt, pp = np.meshgrid(t, p, indexing="ij")
-    return tt, pp, np.outer(wt * np.sin(t), wp)
+from transmission_checks import hemisphere as _hemisphere
 
 
 def _budget(rough, eps, th, n=48):

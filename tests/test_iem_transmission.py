@@ -10,37 +10,15 @@ import warnings
 import numpy as np
 import pytest
 
-from emscatter.fresnel import fresnel_cos
 from emscatter.solvers.iem import model as iem
 from emscatter.solvers.iem import transmission as tiem
 from emscatter.solvers.kirchhoff.transmission import go as tgo
 from emscatter.solvers.kirchhoff.transmission import po as tpo
 from emscatter.solvers.spm import transmission as tspm
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
-
-K = 2 * math.pi  # λ = 1 m: lengths in wavelengths
-
-
-def _gl(n, a, b):
-    x, w = np.polynomial.legendre.leggauss(n)
-    return 0.5 * (b - a) * x + 0.5 * (b + a), 0.5 * (b - a) * w
-
-
-def _hemisphere(n, kink=None):
-    """(θ, φ, dΩ weights) over a hemisphere, θ split at ``kink`` (a square-root kink)."""
-    if kink is None:
-        t, wt = _gl(2 * n, 0.0, 0.5 * math.pi)
-    else:
-        (a, wa), (b, wb) = _gl(n, 0.0, kink), _gl(n, kink, 0.5 * math.pi)
-        t, wt = np.r_[a, b], np.r_[wa, wb]
-    p, wp = _gl(n, 0.0, 2 * math.pi)
-    tt, pp = np.meshgrid(t, p, indexing="ij")
-    return tt, pp, np.outer(wt * np.sin(t), wp)
-
-
-def _fresnel_t(eps, theta):
-    rh, rv = fresnel_cos(eps, np.cos(theta))
-    return np.array([1 - abs(rh) ** 2, 1 - abs(rv) ** 2])
+from transmission_checks import K, assert_eps_weighted_reciprocity
+from transmission_checks import fresnel_t as _fresnel_t
+from transmission_checks import hemisphere as _hemisphere
 
 
 def test_flat_limit_is_fresnel_transmission():
@@ -173,17 +151,8 @@ def test_energy_exponential_spectrum():
 def test_reciprocity_eps_weighted(rough):
     """σ⁰_t,pq(ε, k; k̂i → k̂t) = ε σ⁰_t,qp(1/ε, ηk; −k̂t → −k̂i) (the radiance BTDF's η² law,
     Walter et al. 2007 eq. 21; PO, SPM and e^{−Q} obey it term by term)."""
-    rng = np.random.default_rng(3)
-    n = 400
-    ti, tt = rng.uniform(0, 1.1, n), rng.uniform(0, 0.6, n)
-    pt, pi_ = rng.uniform(-math.pi, math.pi, n), rng.uniform(-math.pi, math.pi, n)
-    kw = {"out_of_range": "ignore"}
-    f = tiem.bistatic_transmission(rough, 2.25, K, ti, tt, pt, pi_, **kw).sigma0
-    rev = tiem.bistatic_transmission(
-        rough, 1 / 2.25, 1.5 * K, tt, ti, pi_ + math.pi, pt + math.pi, **kw
-    ).sigma0
-    assert np.count_nonzero(f.sum(axis=(0, 1)) > 1e-6 * f.max()) > n // 2
-    np.testing.assert_allclose(f, 2.25 * np.swapaxes(rev, 0, 1), rtol=1e-7, atol=1e-10 * f.max())
+    assert_eps_weighted_reciprocity(tiem.bistatic_transmission, rough, lit_share=1e-6,
+                                    theta_i_max=1.1)  # fmt: skip
 
 
 def test_policies_and_bad_inputs():

@@ -49,8 +49,8 @@ import numpy as np
 from ..solvers.kirchhoff.common import slope_variances
 from ..solvers.kirchhoff.transmission import go as gt
 from . import grid
-from .btdf import checked_surface, emscatter_to_mitsuba
-from .btdf_table import HALF_PI, _m00, default_resolution
+from .btdf import checked_surface
+from .btdf_table import HALF_PI, _m00, default_resolution, mueller_at, mueller_result
 from .build import _check_count, _check_wavelengths, default_phi, default_theta, material_eps
 from .frames import angles
 from .mueller import jones_to_mueller
@@ -178,18 +178,10 @@ class AnisotropicBtdfTable:
             grid.locate_clamped(self.theta_t, tt),
             grid.locate_periodic(self.phi_d, fpd),
         ]
-        mm = self.mueller[cols]  # (n, 4, 4, grid)
-        flat = mm.reshape(mm.shape[0] * 16, *mm.shape[3:])
-        vals = grid.multilinear(flat, locs).reshape(mm.shape[0], 4, 4, -1)
-        vals = np.einsum("wc,cijn->wijn", mat, vals)
+        vals = mueller_at(self.mueller, cols, mat, locs)
         pp = np.array([1.0, 1.0, -1.0, -1.0])
         vals = np.where(flip, vals * np.outer(pp, pp)[:, :, None], vals)  # P M P (mirrored)
-        ok = (ti >= 0) & (ti < HALF_PI) & (tt >= 0) & (tt < HALF_PI)
-        vals[..., ~ok] = 0.0
-        if frame == "mitsuba":
-            vals = np.stack([emscatter_to_mitsuba(v, ti, pi_ + math.pi, tt, po) for v in vals])
-        vals = vals.reshape(*vals.shape[:3], *shape)
-        return vals[0] if scalar else vals
+        return mueller_result(vals, ti, pi_, tt, po, frame, shape, scalar)
 
     def outgoing_weights(self) -> np.ndarray:
         """``W`` (``(n_tt, n_pd)``) with ``Σ W f[i, a] = ∫ f_t,interp cosθt dωt`` exactly."""

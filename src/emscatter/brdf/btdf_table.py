@@ -27,6 +27,9 @@ missing multiple scattering (``A = 0``), a few percent towards grazing, never ne
 :func:`cap_energy` also scales the transmission where the coherent reflection alone leaves
 less than ``T`` (PO glass, m = 0.1, 88°: R + T = 1.27 → 1, ending at the smooth interface's
 R 0.82 / T 0.18).
+
+The PO, SPM and IEM tables' coherent (delta) part, their options and validity policy per
+wavelength, are in :mod:`.btdf_coherent`.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from ..solvers.kirchhoff.transmission import po as tpo
 from ..solvers.spm import transmission as tspm
 from . import grid
 from .btdf import checked_surface, emscatter_to_mitsuba
+from .btdf_coherent import coherent_metadata, coherent_row, po_surface
 from .build import _check_count, _check_wavelengths, default_phi_d, default_theta, material_eps
 from .energy import apply_energy_remedy
 from .frames import angles, fold_dphi
@@ -205,20 +209,12 @@ class BtdfTable:
             grid.locate_clamped(self.theta_t, tt),
             grid.locate_clamped(self.phi_d, np.abs(d)),
         ]
-        mm = self.mueller[cols]  # (n, 4, 4, grid)
-        flat = mm.reshape(mm.shape[0] * 16, *mm.shape[3:])
-        vals = grid.multilinear(flat, locs).reshape(mm.shape[0], 4, 4, -1)
-        vals = np.einsum("wc,cijn->wijn", mat, vals)
+        vals = mueller_at(self.mueller, cols, mat, locs)
         p = np.array([1.0, 1.0, -1.0, -1.0])
         flip = np.where(d < 0, 1.0, 0.0)
         sign = 1.0 - 2.0 * flip * (1 - np.outer(p, p)[:, :, None]) / 2
         vals = vals * sign[None]
-        ok = (ti >= 0) & (ti < HALF_PI) & (tt >= 0) & (tt < HALF_PI)
-        vals[..., ~ok] = 0.0
-        if frame == "mitsuba":
-            vals = np.stack([emscatter_to_mitsuba(v, ti, pi_ + math.pi, tt, po) for v in vals])
-        vals = vals.reshape(*vals.shape[:3], *shape)
-        return vals[0] if scalar else vals
+        return mueller_result(vals, ti, pi_, tt, po, frame, shape, scalar)
 
     def outgoing_weights(self) -> np.ndarray:
         """``W`` (``(n_tt, n_pd)``) with ``Σ W f[i] = ∫ f_t,interp cosθt dωt`` exactly."""
@@ -242,6 +238,29 @@ class BtdfTable:
         dims = "×".join(str(n) for n in self.values.shape[1:])
         wl = ", ".join(f"{x * 1e9:.4g}" for x in self.wavelengths[:6])
         return f"BtdfTable({dims} at λ = [{wl}] nm, solver={self.metadata.get('solver', '?')})"
+
+
+def mueller_at(mueller, cols, mat, locs) -> np.ndarray:
+    """The wavelength-weighted Mueller BTDF ``(n, 4, 4, m)`` [1/sr] of a table's ``mueller``
+    grid at ``m`` located points (``locs``: :func:`.grid.locate_clamped` per axis; ``cols``,
+    ``mat``: :meth:`.table.BrdfTable._wavelength_weights`)."""
+    mm = mueller[cols]  # (n, 4, 4, grid)
+    flat = mm.reshape(mm.shape[0] * 16, *mm.shape[3:])
+    vals = grid.multilinear(flat, locs).reshape(mm.shape[0], 4, 4, -1)
+    return np.einsum("wc,cijn->wijn", mat, vals)
+
+
+def mueller_result(vals, ti, pi_, tt, po, frame, shape, scalar) -> np.ndarray:
+    """``vals`` (``(n, 4, 4, m)``, emscatter's h/v bases, flat emscatter angles [rad]) as an
+    ``evaluate_mueller`` returns it: 0 outside ``θi, θt ∈ [0, π/2)``, in Mitsuba's Stokes
+    frames for ``frame="mitsuba"``, reshaped to ``shape``, the wavelength axis dropped when
+    ``scalar``."""
+    ok = (ti >= 0) & (ti < HALF_PI) & (tt >= 0) & (tt < HALF_PI)
+    vals[..., ~ok] = 0.0
+    if frame == "mitsuba":
+        vals = np.stack([emscatter_to_mitsuba(v, ti, pi_ + math.pi, tt, po) for v in vals])
+    vals = vals.reshape(*vals.shape[:3], *shape)
+    return vals[0] if scalar else vals
 
 
 def build_btdf_table(
@@ -308,7 +327,7 @@ def build_btdf_table(
             f"out_of_range must be 'warn', 'raise' or 'ignore' for a table, got {out_of_range!r}"
         )
     if method != "go":
-        rough, po_opts = _po_surface(surface, options, method)
+        rough, po_opts = po_surface(surface, options, method)
         options = {}
     else:
         rough = checked_surface(surface, options, "a BTDF table")
@@ -381,16 +400,11 @@ def build_btdf_table(
         except ValueError as err:
             raise ValueError(f"material {material!r} at λ = {lam:.6g} m: {err}") from None
         k = 2 * math.pi / lam
-        if method == "po":
-            per_wl.append(_po_validity(rough, eps[j], k, ti, float(lam), out_of_range))
-            coherent[j] = tpo.coherent_transmissivity(rough, eps[j], k, ti).mean(axis=0)
-        elif method == "spm":
-            per_wl.append(_po_validity(rough, eps[j], k, ti, float(lam), out_of_range, "spm"))
-            coherent[j] = tspm.coherent_transmissivity(rough, eps[j], k, ti).mean(axis=0)
-        elif method == "iem":
-            per_wl.append(_po_validity(rough, eps[j], k, ti, float(lam), out_of_range, "iem"))
-            opts = {"first_order": po_opts.get("first_order", "spm")}
-            coherent[j] = tiem.coherent_transmissivity(rough, eps[j], k, ti, **opts).mean(axis=0)
+        if method != "go":  # the validity record, then the delta lobe per θi node
+            record, coherent[j] = coherent_row(
+                method, rough, eps[j], k, ti, float(lam), out_of_range, po_opts
+            )
+            per_wl.append(record)
         for lo in range(0, ti.size, rows):
             a, b, c = np.meshgrid(ti[lo : lo + rows], tt, pd, indexing="ij")
             # renderer Δφ → emscatter: φi = π (k̂_i = −wi with φ(wi) = 0), φt = Δφ
@@ -434,90 +448,12 @@ def build_btdf_table(
         "units": {"values": "1/sr", "angles": "rad", "wavelengths": "m", "coherent": "-"},
         "slope_variance": slopes,  # per direction (s_x, s_y), last wavelength; Beckmann α² = 2s
     }
-    if method == "po":
-        meta.update(
-            solver="kirchhoff-po-transmission",
-            source="Kirchhoff approximation, local Fresnel transmission at the stationary-phase "
-            "facet (emscatter.solvers.kirchhoff.transmission.po)",
-            shadowing=None,
-            coherent="coherent transmissivity T_F exp(-sigma^2 (k1 cos ti - k2 cos tt)^2) "
-            "(delta lobe at the refracted direction, not in values)",
-            per_wavelength=per_wl,
-        )
-    if method == "spm":
-        meta.update(
-            solver="spm-transmission",
-            source="first-order small-perturbation transmission (Rice 1951; Johnson, JOSA A 16, "
-            "1999), coherent part to second order (emscatter.solvers.spm.transmission)",
-            coherent="coherent transmissivity to second order in k sigma (delta lobe at the "
-            "refracted direction, not in values)",
-        )
-    if method == "iem":
-        meta.update(
-            solver="iem-transmission",
-            source="IEM Kirchhoff series with the first-order SPM term, no complementary field "
-            "(emscatter.solvers.iem.transmission)",
-            shadowing=None,
-            first_order=po_opts.get("first_order", "spm"),
-            coherent="Kirchhoff mean field with the second-order SPM correction (delta lobe at "
-            "the refracted direction, not in values)",
-            per_wavelength=per_wl,
-        )
+    if method != "go":
+        meta.update(coherent_metadata(method, po_opts, per_wl))
     return BtdfTable(
         wavelengths=wl, theta_i=ti, theta_t=tt, phi_d=pd, values=values, eps=eps,
         mueller=mueller, metadata=meta, coherent=coherent,
     )  # fmt: skip
-
-
-_PO_OPTIONS = ("rtol", "max_terms")
-
-
-def _po_surface(surface, options, method="po"):
-    """The roughness and the series options of a PO (SPM: none) BTDF table (clear errors)."""
-    allowed = {"po": _PO_OPTIONS, "iem": (*_PO_OPTIONS, "first_order")}.get(method, ())
-    unknown = set(options) - set(allowed)
-    if unknown:
-        raise ValueError(
-            f"unknown option(s) {sorted(unknown)} for the {method.upper()} BTDF; allowed: "
-            f"{list(allowed)}"
-        )
-    fo = options.get("first_order", "spm")
-    if isinstance(fo, bool) or fo not in tiem.FIRST_ORDER:
-        raise ValueError(f"first_order must be one of {tiem.FIRST_ORDER}, got {fo!r}")
-    return checked_surface(surface, {}, "a BTDF table"), dict(options)
-
-
-def _po_validity(rough, eps, k, theta, lam, out_of_range, method="po") -> dict:
-    """PO's (SPM's) validity at the θi nodes for one wavelength: the ``out_of_range`` policy
-    (one warning naming the failing nodes, or a ValueError) and a record for the metadata."""
-    from ..solvers.iem import validity as iem_validity
-    from ..solvers.kirchhoff import po as rpo
-    from ..solvers.spm import validity as spm_validity
-
-    check = {"po": rpo.check_validity, "iem": iem_validity.check_validity}.get(
-        method, spm_validity.check_validity
-    )
-    rep_ = check(rough, k, eps=eps, theta_i=theta)
-    bad = ~np.broadcast_to(np.asarray(rep_.get("angle_valid", True), dtype=bool), theta.shape)
-    if not rep_["valid"] and out_of_range != "ignore":
-        nodes = np.degrees(theta[bad])
-        where = f"θi {nodes.min():.3g}–{nodes.max():.3g}° ({bad.sum()} nodes)" if bad.any() else ""
-        theory = {"po": "Kirchhoff approximation's", "iem": "IEM's"}.get(
-            method, "small-perturbation method's"
-        )
-        msg = (
-            f"build_btdf_table(method={method!r}) at λ = {lam:.6g} m is outside the {theory} "
-            f"validity {where}: {'; '.join(rep_['reasons'])}"
-        )
-        if out_of_range == "raise":
-            raise ValueError(msg + " (out_of_range='warn' builds it anyway)")
-        warnings.warn(msg + " (out_of_range='raise' stops, 'ignore' only records)", stacklevel=3)
-    return {
-        "wavelength": lam,
-        "valid": bool(rep_["valid"]),
-        "reasons": list(rep_["reasons"]),
-        "theta_i_out_of_range_deg": np.degrees(theta[bad]).tolist(),
-    }
 
 
 def _m00(jones) -> np.ndarray:

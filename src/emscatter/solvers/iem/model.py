@@ -164,12 +164,12 @@ from emscatter.scattering import Scattering
 from emscatter.solvers.iem import backscatter_path as back_path
 from emscatter.solvers.iem.amplitudes import (
     _amplitudes,
-    _Options,
     _series,
     _spectral_args,
 )
 from emscatter.solvers.iem.backscatter_path import _backscatter
-from emscatter.solvers.iem.shadowing import _SHADOW_MODES, _shadowing
+from emscatter.solvers.iem.options import _options, _slope
+from emscatter.solvers.iem.shadowing import _shadowing
 from emscatter.solvers.iem.validity import (  # noqa: F401 (re-exported: the solver's contract)
     OPTIONS,
     VALIDITY,
@@ -182,7 +182,6 @@ from emscatter.solvers.kirchhoff.common import (
     check_roughness,
     coherent_local,
     geometry,
-    workers_for,
 )
 from emscatter.solvers.kirchhoff.po import log_nfold
 
@@ -198,12 +197,6 @@ _MODEL_NAMES = {
 
 
 # ----------------------------------------------------------------------------- solver
-
-
-def _choice(name, value, allowed):
-    if isinstance(value, bool) or value not in allowed:
-        raise ValueError(f"{name} must be one of {list(allowed)}, got {value!r}")
-    return value
 
 
 def _single(rough, eps, k, loc, opt, slope, shadow_mode, reciprocal, log_w):
@@ -449,65 +442,6 @@ def _monostatic(rough, eps, k, ti, ps, pi_, options) -> Scattering | None:
     )
 
 
-def _options(rtol, max_terms, fresnel, complementary, first_order, reciprocal, shadowing,
-             crosspol, crosspol_order, coherent, threads):  # fmt: skip
-    """The checked options ``(opt, shadow_mode)`` of :func:`bistatic` (ValueError naming the
-    option otherwise). Remembered per distinct argument tuple (values and their types, so
-    that e.g. ``shadowing=1`` is still refused after ``shadowing=True``): a call with the
-    options of an earlier call pays a dictionary lookup, not the checks (a fixed cost of
-    each call, which matters at a few angles). ``opt`` is shared: read, never written."""
-    args = (rtol, max_terms, fresnel, complementary, first_order, reciprocal, shadowing,
-            crosspol, crosspol_order, coherent, threads)  # fmt: skip
-    try:
-        key = (*args, *map(type, args))
-        hit = _OPTION_MEMO.get(key)
-    except TypeError:  # an unhashable value (e.g. an array): check it every time
-        key = hit = None
-    if hit is None:
-        hit = _check_options(*args)
-        if key is not None and len(_OPTION_MEMO) < 256:
-            _OPTION_MEMO[key] = hit
-    return hit
-
-
-_OPTION_MEMO: dict = {}
-
-
-def _check_options(rtol, max_terms, fresnel, complementary, first_order, reciprocal, shadowing,
-                   crosspol, crosspol_order, coherent, threads):  # fmt: skip
-    """:func:`_options` without the memory."""
-    rtol = check_positive("rtol", rtol)
-    if not rtol < 1:
-        raise ValueError(f"rtol must be in (0, 1), got {rtol!r}")
-    if isinstance(max_terms, bool) or not isinstance(max_terms, int | np.integer) or max_terms < 1:
-        raise ValueError(f"max_terms must be a positive integer, got {max_terms!r}")
-    opt = _Options()
-    opt.fresnel = _choice("fresnel", fresnel, ("transition", "incident"))
-    opt.complementary = _choice(
-        "complementary", complementary, ("aiem-faded", "aiem", "aiem-upper", "fung92")
-    )
-    opt.first_order = _choice("first_order", first_order, ("spm", "model"))
-    opt.rtol, opt.max_terms = rtol, int(max_terms)
-    opt.threads = workers_for(threads, 8)
-    if shadowing not in _SHADOW_MODES or (isinstance(shadowing, str) is False and
-                                          not isinstance(shadowing, bool | None)):  # fmt: skip
-        raise ValueError(
-            "shadowing must be 'direction-correlated' (or True), 'height-correlated' or False, "
-            f"got {shadowing!r}"
-        )
-    shadow_mode = _SHADOW_MODES[shadowing]
-    for name, flag in (("reciprocal", reciprocal), ("crosspol", crosspol), ("coherent", coherent)):
-        if not isinstance(flag, bool | np.bool_):
-            raise ValueError(f"{name} must be True or False, got {flag!r}")
-    if (
-        isinstance(crosspol_order, bool)
-        or not isinstance(crosspol_order, int | np.integer)
-        or not (2 <= crosspol_order <= 64)
-    ):
-        raise ValueError(f"crosspol_order must be an integer in [2, 64], got {crosspol_order!r}")
-    return opt, shadow_mode
-
-
 bistatic.checked = _api_checked  # the API's entry for inputs it has checked
 _SIGNATURE = inspect.signature(bistatic)
 _DEFAULTS = {
@@ -531,17 +465,6 @@ def _all_backscatter(loc) -> bool:
     return bool(
         np.all(np.abs(loc.si - loc.ss) <= 1e-12) and np.all(np.abs(d - math.pi) <= _BACK_TOL)
     )
-
-
-def _slope(rough, rms_slope) -> tuple[float, float]:
-    if rms_slope is None:
-        return nominal_rms_slope(rough)
-    arr = np.atleast_1d(np.asarray(rms_slope, dtype=float))
-    if arr.ndim != 1 or arr.size not in (1, 2) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise ValueError(
-            f"rms_slope must be a positive float or a pair (s_x, s_y), got {rms_slope!r}"
-        )
-    return float(arr[0]), float(arr[-1])
 
 
 def _add_crosspol(sig, rough, g, k, slope, order):

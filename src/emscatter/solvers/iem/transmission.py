@@ -82,8 +82,6 @@ nominal rms slope ≤ 0.4, θi ≤ 70°), per incidence angle; ``out_of_range`` 
 
 from __future__ import annotations
 
-import math
-import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -95,18 +93,16 @@ from emscatter.solvers.kirchhoff import po
 from emscatter.solvers.kirchhoff.common import check_roughness
 from emscatter.solvers.kirchhoff.transmission import po as tpo
 from emscatter.solvers.kirchhoff.transmission.go import (
-    _dirs,
-    _half,
+    OUT_OF_RANGE,
     _jones,
     check_transmission_eps,
     transmission_angles,
+    transmission_policy,
 )
 from emscatter.solvers.spm import transmission as tspm
 
 __all__ = ["bistatic_transmission", "coherent_transmissivity", "OUT_OF_RANGE", "IEMWarning"]
 
-#: The ``out_of_range`` policies (as the solvers' API): warn, raise, blank with NaN, ignore.
-OUT_OF_RANGE = ("warn", "raise", "nan", "ignore")
 FIRST_ORDER = ("spm", "kirchhoff")
 _SPM_REF_KS = 1e-2  # kσ at which SPM's mean-field correction Δ₂ ∝ σ² is evaluated
 
@@ -212,8 +208,10 @@ def bistatic_transmission(
     e = _eps(eps)
     ti, tt, pt, pi_, e = transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i)
     validity = check_validity(rough, k, eps=float(np.max(e)) if e.size else None, theta_i=ti)
-    failing = _failing(validity, ti.shape)
-    bad = _policy(validity, failing, out_of_range)
+    failing, bad = transmission_policy(
+        validity, ti.shape, out_of_range, warning=IEMWarning,
+        label="IEM transmission used outside the IEM's validity",
+    )  # fmt: skip
     kir = tpo.bistatic_transmission(
         rough, e, k, ti, tt, pt, pi_, out_of_range="ignore", rtol=rtol, max_terms=max_terms
     )
@@ -252,37 +250,8 @@ def bistatic_transmission(
 def _first_kirchhoff_term(rough, e, k, ti, tt, pt, pi_):
     """The n = 1 term ``T₁`` (2, 2, ...) of the Kirchhoff (PO) series and its attenuation
     ``e^{−Q}`` [-] (the prefactor and spectrum of :mod:`..kirchhoff.transmission.po`)."""
-    eta = np.sqrt(e)
-    ki, kt, _, _, _, _ = _dirs(ti, pi_, tt, pt)
-    _, ci, co, w2 = _half(ki, kt, eta)
-    w = -ki + eta * kt
-    ks = k * rough.sigma
-    Q = (ks * w[2]) ** 2
-    K = np.hypot(w[0] * (k * rough.length), w[1] * (k * rough.length_y))
-    log_w1 = po.log_nfold(rough)(1.0, K)
-    pref = 4 * math.pi * ks**2 * (k * rough.length) * (k * rough.length_y)
+    Q, K, geo = tpo.series_geometry(rough, k, np.sqrt(e), ti, tt, pt, pi_)
     att = np.exp(-Q)
-    geo = pref * e * np.abs(ci * co) * w2 * att * np.exp(log_w1)
+    geo = geo * att * np.exp(po.log_nfold(rough)(1.0, K))
     j = _jones(e, ti, tt, pt, pi_)
     return j * j * geo, att
-
-
-def _failing(validity: dict, shape) -> np.ndarray:
-    """Mask of the geometries outside the IEM's validity (all when the roughness fails)."""
-    if not all(validity["checks"].get(n, True) for n in ("k_sigma", "rms_slope")):
-        return np.ones(shape, dtype=bool)
-    return ~np.broadcast_to(np.asarray(validity.get("angle_valid", True), dtype=bool), shape)
-
-
-def _policy(validity: dict, failing, out_of_range: str) -> np.ndarray:
-    """Apply ``out_of_range``: the mask to blank (``"nan"``), a warning or a ValueError."""
-    if validity.get("valid", True) or out_of_range == "ignore":
-        return np.zeros(failing.shape, dtype=bool)
-    why = "; ".join(validity.get("reasons", [])) or "outside its validity range"
-    msg = f"IEM transmission used outside the IEM's validity: {why}"
-    if out_of_range == "raise":
-        raise ValueError(msg + " (out_of_range='warn' computes anyway, 'nan' blanks those angles)")
-    if out_of_range == "warn":
-        warnings.warn(msg + " (out_of_range='nan' blanks them, 'raise' stops)", IEMWarning, 3)
-        return np.zeros(failing.shape, dtype=bool)
-    return failing

@@ -67,15 +67,16 @@ Validity: that of the reflection SPM (:func:`emscatter.solvers.spm.validity.chec
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 
 from emscatter.conventions import check_positive
 from emscatter.scattering import Scattering
 from emscatter.solvers.kirchhoff.transmission.go import (
+    OUT_OF_RANGE,
     check_lossy_transmission_eps,
     transmission_angles,
+    transmission_policy,
 )
 from emscatter.solvers.spm.second_order import _second_order_R
 from emscatter.solvers.spm.validity import check_validity
@@ -90,9 +91,6 @@ __all__ = [
     "OUT_OF_RANGE",
     "SPMWarning",
 ]
-
-#: The ``out_of_range`` policies (as the solvers' API): warn, raise, blank with NaN, ignore.
-OUT_OF_RANGE = ("warn", "raise", "nan", "ignore")
 
 
 class SPMWarning(UserWarning):
@@ -288,6 +286,19 @@ def _gl(n, a, b, cluster=False):
     return a + 0.5 * (b - a) * (1 - np.cos(u)), wu * 0.5 * (b - a) * np.sin(u)
 
 
+def _check_quadrature(roughness, eps, k, theta_i, phi_i, n, kappa_max):
+    """The checked ``(k, theta_i, phi_i, eps, kappa_max)`` of the flux quadratures
+    (:func:`diffuse_transmissivity`, :func:`layer_absorption`; ``n`` an integer ≥ 4, the
+    default ``kappa_max = 16/ℓ_min`` [rad/m])."""
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 4:
+        raise ValueError(f"n must be an integer >= 4 (quadrature nodes), got {n!r}")
+    k, (ti, _, _, pi_, e) = _check(roughness, eps, k, theta_i, 0.0, 0.0, phi_i)
+    if kappa_max is None:
+        kappa_max = 16.0 / min(roughness.length, roughness.length_y or roughness.length)
+    kappa_max = check_positive("kappa_max", kappa_max, unit="rad/m")
+    return k, ti, pi_, e, kappa_max
+
+
 def diffuse_transmissivity(
     roughness, eps, k: float, theta_i, phi_i=0.0, *, n: int = 48, kappa_max=None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -303,12 +314,7 @@ def diffuse_transmissivity(
     larger value for slowly decaying spectra). ``R_coh + R_diff + T_coh + T_diff + T_beyond``
     is the energy budget (module docstring). Gauss–Legendre, ``2n × n`` and ``n × n`` nodes
     (split at the branch circles ``|k⊥| = k``, ``Re k₂``)."""
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 4:
-        raise ValueError(f"n must be an integer >= 4 (quadrature nodes), got {n!r}")
-    k, (ti, _, _, pi_, e) = _check(roughness, eps, k, theta_i, 0.0, 0.0, phi_i)
-    if kappa_max is None:
-        kappa_max = 16.0 / min(roughness.length, roughness.length_y or roughness.length)
-    kappa_max = check_positive("kappa_max", kappa_max, unit="rad/m")
+    k, ti, pi_, e, kappa_max = _check_quadrature(roughness, eps, k, theta_i, phi_i, n, kappa_max)
     shape = ti.shape
     ti, pi_, e = (a.reshape(-1, 1, 1) for a in (ti, pi_, e))
     re_eta = np.sqrt(e).real
@@ -383,12 +389,7 @@ def layer_absorption(
     ``kappa_max`` and ``n`` as :func:`diffuse_transmissivity`). Tested: ``R_coh + R_diff +
     T_coh + T_diff + T_beyond + A = 1`` to the quadrature's precision
     (``tests/test_spm_transmission_lossy.py``)."""
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 4:
-        raise ValueError(f"n must be an integer >= 4 (quadrature nodes), got {n!r}")
-    k, (ti, _, _, pi_, e) = _check(roughness, eps, k, theta_i, 0.0, 0.0, phi_i)
-    if kappa_max is None:
-        kappa_max = 16.0 / min(roughness.length, roughness.length_y or roughness.length)
-    kappa_max = check_positive("kappa_max", kappa_max, unit="rad/m")
+    k, ti, pi_, e, kappa_max = _check_quadrature(roughness, eps, k, theta_i, phi_i, n, kappa_max)
     shape = ti.shape
     out = np.zeros((2, ti.size))
     for j, (th, ph, ev) in enumerate(zip(ti.ravel(), pi_.ravel(), e.ravel(), strict=True)):
@@ -451,8 +452,10 @@ def bistatic_transmission(
     validity = check_validity(
         roughness, k, eps=complex(e.ravel()[np.argmax(np.abs(e))]), theta_i=ti
     )
-    failing = _failing(validity, ti.shape)
-    bad = _policy(validity, failing, out_of_range)
+    failing, bad = transmission_policy(
+        validity, ti.shape, out_of_range, warning=SPMWarning,
+        label="SPM transmission used outside the small-perturbation method's validity",
+    )  # fmt: skip
     if np.any(bad):
         sigma0 = np.where(bad, np.nan, sigma0)
     elif not np.all(np.isfinite(sigma0)):
@@ -476,24 +479,3 @@ def bistatic_transmission(
         sigma0=sigma0, coherent=coh, method="spm-transmission", theta_i=ti, theta_s=tt,
         phi_s=pt, phi_i=pi_, k=k, dimension=2, info=info,
     )  # fmt: skip
-
-
-def _failing(validity: dict, shape) -> np.ndarray:
-    """Mask of the geometries outside SPM's validity (all of them when the roughness fails)."""
-    if not all(validity["checks"].get(n, True) for n in ("k_sigma", "rms_slope")):
-        return np.ones(shape, dtype=bool)
-    return ~np.broadcast_to(np.asarray(validity.get("angle_valid", True), dtype=bool), shape)
-
-
-def _policy(validity: dict, failing, out_of_range: str) -> np.ndarray:
-    """Apply ``out_of_range``: the mask to blank (``"nan"``), a warning or a ValueError."""
-    if validity.get("valid", True) or out_of_range == "ignore":
-        return np.zeros(failing.shape, dtype=bool)
-    why = "; ".join(validity.get("reasons", [])) or "outside its validity range"
-    msg = f"SPM transmission used outside the small-perturbation method's validity: {why}"
-    if out_of_range == "raise":
-        raise ValueError(msg + " (out_of_range='warn' computes anyway, 'nan' blanks those angles)")
-    if out_of_range == "warn":
-        warnings.warn(msg + " (out_of_range='nan' blanks them, 'raise' stops)", SPMWarning, 3)
-        return np.zeros(failing.shape, dtype=bool)
-    return failing

@@ -37,6 +37,7 @@
 outside the map: first-order SPM needs ``|K| = |k_s⊥ − k_i⊥|`` up to ``2k`` (backscatter at
 grazing; at 500 nm that is 2.5e7 rad/m, a spacing ≤ 125 nm); the SPM solver runs it and warns
 (:class:`BandWarning`) when part of the needed band is beyond the map with ``tail="none"``.
+The Welch estimate itself and the smallest patches it takes are :mod:`.welch`.
 """
 
 from __future__ import annotations
@@ -47,7 +48,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-import scipy.fft as sfft
 
 from emscatter.spectra import Roughness
 from emscatter.surfaces.heightmap import HeightMap, HeightMapError
@@ -56,6 +56,7 @@ from emscatter.surfaces.measured.estimators import map_acf
 from emscatter.surfaces.measured.nfold import nfold_table
 from emscatter.surfaces.measured.slope_tail import SLOPE_TAILS, evaluate
 from emscatter.surfaces.measured.slopes import kernel_density, measure_slope_density
+from emscatter.surfaces.measured.welch import MIN_MAP_SAMPLES, MIN_PATCH, MIN_SEGMENTS, welch_psd
 
 __all__ = [
     "MeasuredRoughness",
@@ -71,111 +72,9 @@ __all__ = [
 #: The choices for the spectrum beyond the band the map resolves.
 TAILS = ("none", "power-law")
 
-#: The fewest samples per axis of a Welch patch. The Hann window's main lobe is ±2 bins, so
-#: the band ``[2π/L, π/Δ]`` (bins 1…N/2) keeps bins 2…N/2 free of the leakage from K = 0:
-#: 7 bins for N = 16 (a factor 4 in |K|), 3 for N = 8. The power-law tail is fitted on the
-#: bins in ``[π/(4Δ), 0.9 π/Δ]`` (N/8…0.45 N) and needs at least 4: 6 for N = 16, 3 for
-#: N = 8; and ρ, the inverse transform of the same PSD, reaches lags up to N/2 samples.
-MIN_PATCH = 16
-#: The fewest Welch segments per axis: 2 segments overlapping by half are 3 patches per axis
-#: (9 on a map), the relative standard deviation of each bin ≈ √(1.06/K) (Welch 1967, Hann
-#: at 50 % overlap): 0.34 on a map, 0.6 on a profile; one patch is a bare periodogram (100 %).
-MIN_SEGMENTS = 2
-#: The smallest map (samples along every axis) a measured roughness is estimated from.
-MIN_MAP_SAMPLES = MIN_SEGMENTS * MIN_PATCH
-
 
 class BandWarning(UserWarning):
     """Part of the spectral band a computation needs lies beyond what the map resolves."""
-
-
-def _symmetric_extended(p: np.ndarray) -> np.ndarray:
-    """fftshifted grid → symmetric grid spanning ``[−K_N, K_N]`` on every even axis (the
-    Nyquist line repeated), averaged with its point reflection ``P(−K)``."""
-    for ax in range(p.ndim):
-        if p.shape[ax] % 2 == 0:
-            first = np.take(p, [0], axis=ax)
-            p = np.concatenate([p, first], axis=ax)
-    flip = p[(slice(None, None, -1),) * p.ndim]
-    return 0.5 * (p + flip)
-
-
-def _box(p: np.ndarray, half: int) -> np.ndarray:
-    """Moving average over ``(2·half + 1)^d`` bins (edges: the bins that exist)."""
-    if half == 0:
-        return p
-    out, cnt = p.copy(), np.ones_like(p)
-    for ax in range(p.ndim):
-        acc, c = out.copy(), cnt.copy()
-        for s in range(1, half + 1):
-            for sign in (1, -1):
-                sl_to = [slice(None)] * p.ndim
-                sl_from = [slice(None)] * p.ndim
-                sl_to[ax] = slice(s, None) if sign > 0 else slice(None, -s)
-                sl_from[ax] = slice(None, -s) if sign > 0 else slice(s, None)
-                acc[tuple(sl_to)] += out[tuple(sl_from)]
-                c[tuple(sl_to)] += cnt[tuple(sl_from)]
-        out, cnt = acc, c
-    return out / cnt
-
-
-def _full_from_half(half: np.ndarray, patch: tuple) -> np.ndarray:
-    """The FFT-ordered power grid from its ``rfftn`` half, by ``P(−K) = P(K)`` (real input)."""
-    n = patch[-1]
-    out = np.empty(patch)
-    out[..., : half.shape[-1]] = half
-    rest = np.arange(half.shape[-1], n)  # kx = rest ↔ −kx = n − rest, inside the half
-    mirror = half[..., n - rest]
-    for ax in range(half.ndim - 1):  # −ky on the other axes: index (−i) mod m
-        mirror = np.roll(np.flip(mirror, axis=ax), 1, axis=ax)
-    out[..., rest] = mirror
-    return out
-
-
-def _welch(hm: HeightMap, segments: int, smooth: int = 0):
-    """Welch PSD ``P`` [m^(2+d)] on the symmetric fftshifted grid, with the grid origin and
-    step per axis [rad/m] and the patch shape."""
-    h, m = hm.heights, hm.mask.astype(float)
-    shape = h.shape
-    patch = tuple(max(MIN_PATCH, n // segments) for n in shape)
-    step = tuple(max(1, p // 2) for p in patch)
-    win = np.hanning(patch[0] + 2)[1:-1]
-    if h.ndim == 2:
-        win = np.outer(win, np.hanning(patch[1] + 2)[1:-1])
-    wsum = 0.0
-    cell = float(np.prod(hm.spacing))
-    # strided views (no copy), patch rows batched per rfftn (half spectrum, P(−K) = P(K));
-    # the map is detrended as a whole: no patch mean; a map without holes skips the mask
-    views = [np.lib.stride_tricks.sliding_window_view(a, patch)[:: step[0]] for a in (h, m)]
-    if h.ndim == 2:
-        views = [v[:, :: step[1]] for v in views]
-    hv, mv = views
-    full = bool(hm.mask.all())
-    per_row = int(np.prod(hv.shape[1 : h.ndim]))  # patches per row of patches
-    rows = max(1, (1 << 22) // (per_row * int(np.prod(patch))))
-    axes = tuple(range(1, h.ndim + 1))
-    acc = np.zeros((*patch[:-1], patch[-1] // 2 + 1))
-    for r0 in range(0, hv.shape[0], rows):
-        hb = hv[r0 : r0 + rows].reshape(-1, *patch)
-        if full:
-            wm = win
-            wsum += hb.shape[0] * float((win * win).sum())
-        else:
-            wm = win * mv[r0 : r0 + rows].reshape(-1, *patch)
-            ok = wm.sum(axis=axes) > 0.5 * win.sum()  # mostly holes: no estimate from a patch
-            if not ok.any():
-                continue
-            hb, wm = hb[ok], wm[ok]
-            wsum += float((wm * wm).sum())
-        spec = sfft.rfftn(hb * wm, axes=axes, workers=-1)
-        acc += (spec.real**2 + spec.imag**2).sum(axis=0)
-    acc = _full_from_half(acc, patch)
-    if wsum == 0:
-        raise HeightMapError(f"the map from {hm.source} has no patch with enough valid samples")
-    p = _box(np.fft.fftshift(acc * cell / ((2 * math.pi) ** h.ndim * wsum)), smooth)
-    dk = tuple(2 * math.pi / (n * d) for n, d in zip(patch, hm.spacing, strict=True))
-    k0 = tuple(-(n // 2) * s for n, s in zip(patch, dk, strict=True))
-    return _symmetric_extended(p), k0, dk, patch
 
 
 @dataclass(frozen=True, eq=False)
@@ -551,7 +450,7 @@ def measured_roughness(
         raise ValueError(f"slope_tail must be one of {SLOPE_TAILS}, got {slope_tail!r}")
     if isinstance(smooth, bool) or not isinstance(smooth, int) or not 0 <= smooth <= 8:
         raise ValueError(f"smooth must be an integer 0…8 (bins), got {smooth!r}")
-    psd, k0, dk, patch = _welch(hm, segments, smooth)
+    psd, k0, dk, patch = welch_psd(hm, segments, smooth)
     sigma = hm.rms_height()
     slopes = measure_slope_density(hm, slope_bins=slope_bins, slope_bandwidth=slope_bandwidth,
                                    slope_tail=slope_tail)  # fmt: skip

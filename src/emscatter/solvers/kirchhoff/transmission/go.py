@@ -70,6 +70,7 @@ Validity: that of GO (:func:`emscatter.solvers.kirchhoff.go.check_validity`).
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from scipy import special
@@ -100,6 +101,10 @@ LOSSLESS_RTOL = 1e-12
 
 _TAU_EPS = 1e-28
 
+#: The ``out_of_range`` policies of the PO, SPM and IEM transmissions (:func:`transmission_policy`):
+#: warn, raise, blank with NaN, ignore.
+OUT_OF_RANGE = ("warn", "raise", "nan", "ignore")
+
 
 def transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i) -> tuple:
     """The transmission solvers' angles checked (θ in [0, π/2], φ finite and real) and broadcast
@@ -120,6 +125,37 @@ def transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i) -> tuple:
             f"{np.shape(theta_i)}, theta_t{np.shape(theta_t)}, phi_t{np.shape(phi_t)}, "
             f"phi_i{np.shape(phi_i)}, eps{np.shape(eps)}"
         ) from None
+
+
+def transmission_policy(
+    validity: dict, shape, out_of_range: str, *, label: str, warning: type[Warning]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The transmission solvers' ``out_of_range`` policy from a validity report
+    (:func:`emscatter.solvers.validity.build_report`, checked at ``theta_i`` of ``shape``):
+    ``(failing, blank)``, boolean masks of ``shape``.
+
+    ``failing`` marks the geometries outside the validity (all of them when a roughness check,
+    a name in ``validity["details"]``, fails; else those with ``angle_valid`` false): what
+    ``info["out_of_range"]`` holds whatever the policy. ``blank`` is what to set NaN: ``failing``
+    for ``"nan"``, none otherwise; ``"raise"`` raises a ValueError and ``"warn"`` warns with
+    the class ``warning`` (at the caller of the solver), both with the message
+    ``f"{label}: {reasons}"`` (``label`` e.g. "PO transmission used outside the Kirchhoff
+    approximation's validity"); ``"ignore"`` and a valid report: neither."""
+    if not all(validity["checks"].get(n, True) for n in validity.get("details", {})):
+        failing = np.ones(shape, dtype=bool)
+    else:
+        angle_ok = np.asarray(validity.get("angle_valid", True), dtype=bool)
+        failing = ~np.broadcast_to(angle_ok, shape)
+    if validity.get("valid", True) or out_of_range == "ignore":
+        return failing, np.zeros(shape, dtype=bool)
+    why = "; ".join(validity.get("reasons", [])) or "outside its validity range"
+    msg = f"{label}: {why}"
+    if out_of_range == "raise":
+        raise ValueError(msg + " (out_of_range='warn' computes anyway, 'nan' blanks those angles)")
+    if out_of_range == "warn":
+        warnings.warn(msg + " (out_of_range='nan' blanks them, 'raise' stops)", warning, 3)
+        return failing, np.zeros(shape, dtype=bool)
+    return failing, failing
 
 
 def check_transmission_eps(eps) -> np.ndarray:

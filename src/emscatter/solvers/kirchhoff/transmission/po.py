@@ -66,7 +66,6 @@ dielectric's grazing limit, per incidence angle); ``out_of_range`` applies it.
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 
@@ -76,17 +75,17 @@ from emscatter.solvers.kirchhoff import compiled as kirchhoff_compiled
 from emscatter.solvers.kirchhoff import po
 from emscatter.solvers.kirchhoff.common import check_roughness, fast_fresnel
 from emscatter.solvers.kirchhoff.transmission.go import (
+    OUT_OF_RANGE,
     _dirs,
     _half,
     _jones,
     check_lossy_transmission_eps,
     transmission_angles,
+    transmission_policy,
 )
 
 __all__ = ["bistatic_transmission", "coherent_transmissivity", "OUT_OF_RANGE", "POWarning"]
 
-#: The ``out_of_range`` policies (as the solvers' API): warn, raise, blank with NaN, ignore.
-OUT_OF_RANGE = ("warn", "raise", "nan", "ignore")
 _BLOCK = 1 << 16
 
 
@@ -114,6 +113,21 @@ def coherent_transmissivity(roughness, eps, k: float, theta_i) -> np.ndarray:
     t = np.stack([1.0 - rh2, 1.0 - rv2]) * att
     tir = (np.abs(e.imag) == 0) & ((1.0 - ci * ci) >= e.real)
     return np.where(tir, 0.0, np.clip(t, 0.0, 1.0))
+
+
+def series_geometry(rough, k: float, eta, ti, tt, pt, pi_) -> tuple:
+    """The Kirchhoff series' geometry at broadcast emscatter angles [rad] (module docstring):
+    ``(Q, K, geo)`` with ``Q = (kσ w_z)²``, ``K = √((w_x kℓx)² + (w_y kℓy)²)`` the scaled
+    spectrum wavenumber and ``geo = 4π η² (kσ)² (kℓx)(kℓy) |i·ĥ||o·ĥ| |w|²`` [-] the prefactor
+    of ``e^{−Q} Σ Q^{n−1}/n! w_n`` (``w = i + η o``, ``η`` the real index; ``k`` [rad/m])."""
+    ki, kt, _, _, _, _ = _dirs(ti, pi_, tt, pt)
+    _, ci, co, w2 = _half(ki, kt, eta)
+    w = -ki + eta * kt
+    ks = k * rough.sigma
+    Q = (ks * w[2]) ** 2
+    K = np.hypot(w[0] * (k * rough.length), w[1] * (k * rough.length_y))
+    pref = 4 * math.pi * ks**2 * (k * rough.length) * (k * rough.length_y)
+    return Q, K, pref * eta**2 * np.abs(ci * co) * w2
 
 
 def bistatic_transmission(
@@ -170,15 +184,14 @@ def bistatic_transmission(
     ti, tt, pt, pi_, e = transmission_angles(e, eps, theta_i, theta_t, phi_t, phi_i)
     e_big = complex(e.ravel()[np.argmax(np.abs(e))])
     validity = po.check_validity(rough, k, eps=e_big if e_big.imag else e_big.real, theta_i=ti)
-    bad = _policy(validity, ti.shape, out_of_range)
     shape = ti.shape
+    failing, bad = transmission_policy(
+        validity, shape, out_of_range, warning=POWarning,
+        label="PO transmission used outside the Kirchhoff approximation's validity",
+    )  # fmt: skip
     eta = np.sqrt(e).real  # the direction of a wave of the lower medium: sinθt = k⊥/Re k₂
-    ki, kt, _, _, _, _ = _dirs(ti, pi_, tt, pt)
-    _, ci, co, w2 = _half(ki, kt, eta)
-    w = -ki + eta * kt
-    ks = k * rough.sigma
-    Q = ((ks * w[2]) ** 2).reshape(-1)
-    K = np.hypot(w[0] * (k * rough.length), w[1] * (k * rough.length_y)).reshape(-1)
+    Q, K, geo = series_geometry(rough, k, eta, ti, tt, pt, pi_)
+    Q, K = Q.reshape(-1), K.reshape(-1)
     log_w = po.log_nfold(rough)
     logt = np.empty(Q.size)
     opts = {"rtol": rtol, "max_terms": int(max_terms)}
@@ -188,8 +201,7 @@ def bistatic_transmission(
             rough, log_w, Q[sl], K[sl], series_sum=po.series_sum, **opts
         )
         logt[sl] = comp if comp is not None else po.series_sum(log_w, Q[sl], K[sl], **opts)
-    pref = 4 * math.pi * ks**2 * (k * rough.length) * (k * rough.length_y)
-    geo = pref * eta**2 * np.abs(ci * co) * w2 * np.exp(logt.reshape(shape))
+    geo = geo * np.exp(logt.reshape(shape))
     j = _jones(e, ti, tt, pt, pi_, eta=eta)
     sigma0 = j * j * geo
     if np.any(e.imag != 0):  # the mean-plane flux of the transmitted wave (lossless: 1)
@@ -212,7 +224,7 @@ def bistatic_transmission(
         "rtol": rtol,
         "polarization_factors": "local Fresnel transmission at the stationary-phase facet",
         "validity": validity,
-        "out_of_range": _failing(validity, shape),
+        "out_of_range": failing,
         "source": "Kirchhoff approximation (Tsang, Kong & Ding 2000 §9.4; Ulaby, Moore & Fung "
         "1982 §12-4); limits: Fresnel T (flat), Walter et al. 2007 eq. 21 (large k sigma)",
     }
@@ -228,24 +240,3 @@ def bistatic_transmission(
         dimension=2,
         info=info,
     )
-
-
-def _failing(validity: dict, shape) -> np.ndarray:
-    """Mask of the geometries outside PO's validity (all of them when the roughness fails)."""
-    if not all(validity["checks"].get(n, True) for n in validity.get("details", {})):
-        return np.ones(shape, dtype=bool)
-    return ~np.broadcast_to(np.asarray(validity.get("angle_valid", True), dtype=bool), shape)
-
-
-def _policy(validity: dict, shape, out_of_range: str) -> np.ndarray:
-    """Apply ``out_of_range``: the mask to blank (``"nan"``), a warning or a ValueError."""
-    if validity.get("valid", True) or out_of_range == "ignore":
-        return np.zeros(shape, dtype=bool)
-    why = "; ".join(validity.get("reasons", [])) or "outside its validity range"
-    msg = f"PO transmission used outside the Kirchhoff approximation's validity: {why}"
-    if out_of_range == "raise":
-        raise ValueError(msg + " (out_of_range='warn' computes anyway, 'nan' blanks those angles)")
-    if out_of_range == "warn":
-        warnings.warn(msg + " (out_of_range='nan' blanks them, 'raise' stops)", POWarning, 3)
-        return np.zeros(shape, dtype=bool)
-    return _failing(validity, shape)
