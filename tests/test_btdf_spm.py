@@ -190,6 +190,8 @@ def test_spm_table_equals_the_solver_and_counts_the_coherent_lobe(spm_table):
 
     t = spm_table
     assert t.metadata["solver"] == "spm-transmission"
+    # as PO and IEM tables: one validity record per wavelength, no shadowing (SPM has none)
+    assert len(t.metadata["per_wavelength"]) == 1 and t.metadata["shadowing"] is None
     rng = np.random.default_rng(5)
     n = 4000
     ti = rng.choice(t.theta_i[t.theta_i < 1.2], n)

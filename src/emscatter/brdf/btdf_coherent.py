@@ -101,7 +101,7 @@ def coherent_row(method, rough, eps, k, theta, lam, out_of_range, options) -> tu
 
 def coherent_metadata(method, options, per_wavelength) -> dict:
     """The table metadata naming the ``method``'s solver, source and coherent part, with the
-    validity records ``per_wavelength`` (PO, IEM)."""
+    validity records ``per_wavelength`` (PO, SPM, IEM; SPM has no shadowing)."""
     if method == "po":
         return {
             "solver": "kirchhoff-po-transmission",
@@ -117,8 +117,10 @@ def coherent_metadata(method, options, per_wavelength) -> dict:
             "solver": "spm-transmission",
             "source": "first-order small-perturbation transmission (Rice 1951; Johnson, JOSA A "
             "16, 1999), coherent part to second order (emscatter.solvers.spm.transmission)",
+            "shadowing": None,
             "coherent": "coherent transmissivity to second order in k sigma (delta lobe at the "
             "refracted direction, not in values)",
+            "per_wavelength": per_wavelength,
         }
     return {
         "solver": "iem-transmission",
