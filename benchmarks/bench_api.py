@@ -33,8 +33,10 @@ as ``emissivity_copol``, without), twice: with an empty numba cache folder
 "medium_dry_ground", frequency=5.4e9, ...)`` and ``emissivity(rough, 17 + 2i, ...)``. Each row
 has the import time, the first and second call (result cache off) and ``under_limit``: import +
 first call < 2 s (issue 22's target after setup), and ``compiled``: the kernels the call
-compiled into the cache folder (after setup: none expected — a kernel listed there is missing
-from :mod:`emscatter.warm`). ``--kinds`` / ``--states`` select rows.
+compiled into the cache folder (new ``.nbc`` files: a new kernel or a new signature of one;
+after setup: none expected — a kernel listed there is missing from :mod:`emscatter.warm`, or
+is called with other argument types than its warm-up, e.g. a read-only array). ``--kinds`` /
+``--states`` select rows.
 """
 
 from __future__ import annotations
@@ -264,14 +266,21 @@ def _child(method, kind, cache) -> dict:
     env.pop("EMSCATTER_KERNELS", None)
     env["PYTHONPATH"] = str(ROOT / "src")
     code = _CHILD.format(bench=str(Path(__file__).resolve().parent), method=method, kind=kind)
-    before = {p for p in Path(cache).rglob("*.nbi")} if Path(cache).is_dir() else set()
+    before = compiled_entries(cache)
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True)  # fmt: skip
     row = json.loads(out.stdout.strip().splitlines()[-1])
     # the kernels this first call compiled (after setup: none expected; names, not counts)
-    new = sorted(p.name.split("-")[0] for p in Path(cache).rglob("*.nbi") if p not in before)
-    row["compiled"] = new
+    row["compiled"] = sorted({name.split("-")[0] for name in compiled_entries(cache) - before})
     return row
+
+
+def compiled_entries(cache) -> set:
+    """The compiled signatures in a numba cache folder: one ``.nbc`` file per kernel and
+    signature (its ``.nbi`` index lists them). A new signature of a kernel already cached
+    (e.g. a read-only or non-contiguous array argument) adds an ``.nbc`` file, not an index."""
+    cache = Path(cache)
+    return {str(p.relative_to(cache)) for p in cache.rglob("*.nbc")} if cache.is_dir() else set()
 
 
 COLD_KINDS = ("backscatter", "bistatic", "emissivity")

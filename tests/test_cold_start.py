@@ -152,3 +152,65 @@ def test_warm_up_compiles_the_go_validity_pass(monkeypatch):
         res = big()
     assert res.sigma0.shape[-1] > max(method_resolution._DISTINCT_MAX, go_validity.MIN_ANGLES)
     assert go_validity._angle_pass.signatures
+
+
+_AUTO_EMISSIVITY = r"""
+import math, warnings
+import numpy as np
+import emscatter as em
+from emscatter.spectra import GaussianCorrelation
+warnings.simplefilter("ignore")
+# benchmarks/bench_api.py's cold "auto" emissivity row: kσ ≈ 0.63, kℓ ≈ 6.3 at λ = 0.1 m
+res = em.emissivity(GaussianCorrelation(0.01, 0.1), 17 + 2j, wavelength=0.1,
+                    theta_i=np.radians(np.linspace(0.0, 80.0, 9)), method="auto")
+assert np.all(np.isfinite(res.emissivity)), res.emissivity
+print(res.method)
+"""
+
+
+def _nbc(folder: Path) -> set:
+    """Compiled signatures in a numba cache folder (one ``.nbc`` file per kernel and
+    signature; a new signature of a cached kernel adds a file, not an index)."""
+    return {str(p.relative_to(folder)) for p in folder.rglob("*.nbc")}
+
+
+@pytest.mark.slow
+def test_auto_emissivity_compiles_nothing_after_warm(tmp_path):
+    """Issue 22 (first call under 2 s after ``make setup``): after ``python -m emscatter.warm``
+    (the methods the call uses: IEM, PO and the ``auto`` entry) into an empty numba cache, a
+    fresh process's ``auto`` emissivity — whose energy fallback evaluates the IEM's coherent
+    part at the specular geometry, with full-length read-only views that used to select
+    another signature of ``amplitudes_kernel`` (11 s compile) — adds no compiled signature."""
+    pytest.importorskip("numba")
+    cache = tmp_path / "numba"
+    env = {**os.environ, "PYTHONPATH": str(SRC), "EMSCATTER_NUMBA_CACHE_DIR": str(cache),
+           "EMSCATTER_CACHE": "0"}  # fmt: skip
+    for name in ("NUMBA_CACHE_DIR", "EMSCATTER_KERNELS"):
+        env.pop(name, None)
+    warm = subprocess.run([sys.executable, "-m", "emscatter.warm", "po", "iem", "auto"], env=env,
+                          capture_output=True, text=True, timeout=1200)  # fmt: skip
+    assert warm.returncode == 0, warm.stderr
+    assert "failed" not in warm.stdout, warm.stdout
+    before = _nbc(cache)
+    assert before  # the warm-up did compile into the folder
+    run = subprocess.run([sys.executable, "-c", _AUTO_EMISSIVITY], env=env, capture_output=True,
+                         text=True, timeout=1200)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert sorted(_nbc(cache) - before) == []
+
+
+def test_iem_kernel_arguments_are_writeable_whatever_the_input():
+    """numba compiles once per argument type, and a read-only array is another type: the IEM's
+    argument normalizer gives a C-contiguous writeable array (same values, dtype asked) for a
+    read-only full-length view, a strided view, a number and a writeable array (no copy)."""
+    from emscatter.solvers.iem.compiled import flat_n
+
+    x = np.linspace(0.1, 1.2, 7)
+    ro = np.broadcast_to(x, (7,))  # what np.broadcast_to gives for an (n,) array: read-only
+    assert not ro.flags.writeable and ro.flags.c_contiguous
+    cases = ((ro, float), (x[::-1], float), (0.3, float), (ro, complex), (17 + 2j, complex))
+    for v, dtype in cases:
+        a = flat_n(v, 7, dtype)
+        assert a.flags.writeable and a.flags.c_contiguous and a.shape == (7,) and a.dtype == dtype
+        np.testing.assert_array_equal(a, np.broadcast_to(np.asarray(v, dtype), (7,)))
+    assert flat_n(x, 7) is x

@@ -40,7 +40,7 @@ def _amplitudes(rough, si, cs, ss, css, sf, cf, eps, ks: float, log_w, K, opt: _
         g_h, g_v = flat(g_h), flat(g_v)
     else:
         g_h = g_v = np.zeros(n)
-    e = np.ones(n, complex) if pec else np.ascontiguousarray(np.broadcast_to(eps, (n,)), complex)
+    e = np.ones(n, complex) if pec else iem_jit.flat_n(eps, n, complex)  # writeable (flat_n)
     # components: Kirchhoff (with dn_i, up_s merged unless "fung92"), the other upper-medium
     # terms, the four lower-medium terms (none for a PEC)
     J = 1 + (4 if opt.complementary == "fung92" else 2) + (0 if pec else 4)

@@ -133,13 +133,18 @@ def poisson_sums(logq, K, spec, dim, *, rtol):
     return out
 
 
-def flat_n(v, n: int) -> np.ndarray:
-    """``v`` as a C-contiguous float array of length n (no copy when it already is one; a
-    number is spread with ``np.full``)."""
-    a = np.asarray(v, dtype=float)
-    if a.shape == (n,) and a.flags.c_contiguous:
+def flat_n(v, n: int, dtype=float) -> np.ndarray:
+    """``v`` as a C-contiguous, writeable array of length n and ``dtype`` (no copy when it
+    already is one; a number is spread with ``np.full``). Writeable always: numba compiles a
+    kernel once per argument type, and a read-only array (a ``np.broadcast_to`` view of a
+    full-length array, e.g. the specular geometry of an emissivity's coherent part) is
+    another type — a signature ``python -m emscatter.warm`` had not compiled (issue 22)."""
+    a = np.asarray(v, dtype=dtype)
+    if a.shape == (n,) and a.flags.c_contiguous and a.flags.writeable:
         return a
-    return np.full(n, float(a)) if a.ndim == 0 else np.ascontiguousarray(np.broadcast_to(a, (n,)))
+    if a.ndim == 0:
+        return np.full(n, a[()], dtype=dtype)
+    return np.array(np.broadcast_to(a, (n,)), dtype=dtype, order="C")  # a copy: writeable
 
 
 NO_PSI = np.zeros(1)  # the kernel's ψ argument when the shadowing is not direction-correlated
