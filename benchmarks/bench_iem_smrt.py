@@ -3,7 +3,8 @@ interleaved in one process (issue 22's must-show row).
 
     bash benchmarks/peers/setup.sh      # once: a Python with SMRT 1.7 (and numba)
     PYTHONPATH=src <peers python> benchmarks/bench_iem_smrt.py [--rounds 9 --round-seconds 0.15]
-    → benchmarks/results/iem_smrt.json (and a table on stdout)
+    → benchmarks/results/iem_smrt.json (and a table on stdout; ``--out NAME``: NAME.json, so a
+    trial or loaded-machine run leaves the committed idle-machine file alone)
 
 Case: exponential correlation (SMRT's default), ℓ = 3 cm, 5.3 GHz (kℓ = 3.33), ε = 15 + 2i,
 σ for kσ ∈ {0.1, 0.5, 1.0, 1.5, 2.0, 2.5}, N ∈ {1, 10, 100, 1000} incidence angles in
@@ -114,8 +115,16 @@ def main(argv=None) -> dict:
     ap.add_argument("--round-seconds", type=float, default=0.15)
     ap.add_argument("--ks", type=float, nargs="*", default=list(KS))
     ap.add_argument("--sizes", type=int, nargs="*", default=list(SIZES))
-    ap.add_argument("--label", default="iem_smrt")
+    ap.add_argument(
+        "--out",
+        "--label",
+        dest="label",
+        default="iem_smrt",
+        help="result name: benchmarks/results/NAME.json (default iem_smrt, the committed "
+        "idle-machine run; give another name for a loaded or trial run)",
+    )
     args = ap.parse_args(argv)
+    load_start = list(os.getloadavg())  # the machine's own record ("load_average") is the end's
     from smrt.interface.iem_fung92 import IEM_Fung92
 
     import emscatter as em
@@ -216,10 +225,15 @@ def main(argv=None) -> dict:
     }
     cmd = (f"PYTHONPATH=src <peers python> benchmarks/bench_iem_smrt.py --rounds {args.rounds} "
            f"--round-seconds {args.round_seconds}")  # fmt: skip
+    if args.label != "iem_smrt":
+        cmd += f" --out {args.label}"
+    if list(args.ks) != list(KS) or list(args.sizes) != list(SIZES):
+        cmd += " --ks " + " ".join(map(str, args.ks)) + " --sizes " + " ".join(map(str, args.sizes))
     data = {
         "benchmark": "IEM backscatter through the API vs SMRT iem_fung92, converged, interleaved",
         "command": cmd,
         "machine": machine("smrt"),
+        "load_average_start": load_start,
         "case": {
             "frequency_hz": FREQ,
             "ell_m": ELL,
