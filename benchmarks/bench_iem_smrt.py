@@ -33,8 +33,10 @@ fit in ``--round-seconds`` (at least 3) back to back, the contenders' order rota
 to round; a contender's round time is the median of its calls. The ratio SMRT / emscatter is
 taken per round (the two timings seconds apart, the same machine state: this shared 2-core
 machine's speed drifts ×1.5–2 within minutes) and reported as the median over rounds with its
-range. numba's threads: the default (the backscatter kernel splits over threads from
-2 × ``BACK_MIN_CHUNK`` = 4096 angles on, so every size here runs on one thread) and, at a
+range. ``--clock thread`` times this thread's CPU time instead of wall time (a loaded machine:
+it leaves out waiting for a core, not the slowdown of a shared one). numba's threads: the
+default (the backscatter kernel splits over threads from 2 × ``BACK_MIN_CHUNK`` = 4096
+angles on, so every size here runs on one thread) and, at a
 size that splits, ``threads=1`` beside it (SMRT is single-threaded numpy; BLAS threads are set
 to 1). The API's backscatter goes through the IEM's monostatic fast path
 (``iem.bistatic.checked(..., monostatic=True)``); the "solver only" contender is the general
@@ -71,14 +73,18 @@ RTOL = 1e-8
 FUNG92 = dict(complementary="fung92", fresnel="incident", first_order="model", shadowing=False)
 
 
-def _block(fn, seconds: float) -> float:
-    """Median wall time of as many calls of ``fn`` as fit in ``seconds`` (at least 3)."""
+CLOCKS = {"wall": time.perf_counter, "thread": time.thread_time}
+
+
+def _block(fn, seconds: float, clock=time.perf_counter) -> float:
+    """Median time (``clock``) of as many calls of ``fn`` as fit in ``seconds`` of wall time
+    (at least 3)."""
     t = []
     t_end = time.perf_counter() + seconds
     while len(t) < 3 or time.perf_counter() < t_end:
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        t.append(time.perf_counter() - t0)
+        t.append(clock() - t0)
     return statistics.median(t)
 
 
@@ -123,7 +129,16 @@ def main(argv=None) -> dict:
         help="result name: benchmarks/results/NAME.json (default iem_smrt, the committed "
         "idle-machine run; give another name for a loaded or trial run)",
     )
+    ap.add_argument(
+        "--clock",
+        choices=sorted(CLOCKS),
+        default="wall",
+        help="wall (default: what a user waits) or thread (this thread's CPU time: on a loaded "
+        "machine it leaves out the time spent waiting for a core; every contender runs on "
+        "this thread at these sizes)",
+    )
     args = ap.parse_args(argv)
+    clock = CLOCKS[args.clock]
     load_start = list(os.getloadavg())  # the machine's own record ("load_average") is the end's
     from smrt.interface.iem_fung92 import IEM_Fung92
 
@@ -179,7 +194,7 @@ def main(argv=None) -> dict:
             for r in range(args.rounds):
                 order = names[r % len(names) :] + names[: r % len(names)]
                 for m in order:
-                    per[m].append(_block(fns[m], args.round_seconds))
+                    per[m].append(_block(fns[m], args.round_seconds, clock))
             ours = fns["emscatter_fung92"]()
             theirs = smrt_conv.diffuse_reflection_matrix(FREQ, 1.0, EPS, mu, mu, math.pi, 2)
             a = np.stack([ours.sigma0[1, 1], ours.sigma0[0, 0]])
@@ -225,6 +240,8 @@ def main(argv=None) -> dict:
     }
     cmd = (f"PYTHONPATH=src <peers python> benchmarks/bench_iem_smrt.py --rounds {args.rounds} "
            f"--round-seconds {args.round_seconds}")  # fmt: skip
+    if args.clock != "wall":
+        cmd += f" --clock {args.clock}"
     if args.label != "iem_smrt":
         cmd += f" --out {args.label}"
     if list(args.ks) != list(KS) or list(args.sizes) != list(SIZES):
@@ -244,6 +261,7 @@ def main(argv=None) -> dict:
             "rtol": RTOL,
             "emscatter_1992_options": FUNG92,
         },  # fmt: skip
+        "clock": args.clock,
         "rounds": args.rounds,
         "round_seconds": args.round_seconds,
         "rows": rows,

@@ -264,7 +264,8 @@ def test_fung92_compiled_fast_walk_equals_log_space_walk():
 
 def test_closed_form_lower_medium_amplitudes_equal_the_reduced_coefficients():
     """``lanes.lower_back`` (the fast walk's lower-medium amplitudes in closed form at exact
-    backscatter) equals ``lanes.lower_setup`` (the general reduced coefficients
+    backscatter, used with the upper-medium phase: the default ``"aiem-faded"`` and
+    ``"aiem-upper"``) equals ``lanes.lower_setup`` (the general reduced coefficients
     ``terms._reduced_i``, ``_reduced_s`` combined by ``lower_co``, which the log-space path
     keeps) to rounding: within 4e-15 of the amplitude scale (the Kirchhoff ``4|R|``) over
     0–89°, ε (lossless, lossy, very lossy), both height phases and a fade factor."""
@@ -287,10 +288,11 @@ def test_closed_form_lower_medium_amplitudes_equal_the_reduced_coefficients():
 @pytest.mark.parametrize("spec", [iem_jit.GAUSSIAN, iem_jit.EXPONENTIAL], ids=["gauss", "exp"])
 @pytest.mark.parametrize("ks", [0.1, 0.5, 1.5, 2.5])
 def test_default_configuration_fast_walk_equals_log_space_walk(spec, ks):
-    """The default configuration (``"aiem-faded"``: faded lower-medium terms, the transition
-    sums sharing their Ŵₙ rows with the series walk, shadowing in the kernel) — fast walk =
-    log-space walk to 1e-10 at rtol 1e-12, and to rtol at the default 1e-8, over kℓ, ε
-    (dielectrics, PEC), both shadowing modes, surfaces and profiles."""
+    """The default configuration (``"aiem-faded"``: faded lower-medium terms in closed form,
+    ``lanes.lower_back``; the transition sums with one ``Qⁿ/n!`` per order for every lane;
+    shadowing in the kernel) — fast walk = log-space walk (the general reduced coefficients)
+    to 1e-10 at rtol 1e-12, and to rtol at the default 1e-8, over kℓ, ε (dielectrics, PEC),
+    both shadowing modes, surfaces and profiles."""
     si, cs = np.sin(THETA), np.cos(THETA)
     for dim, kl in ((2, 0.5), (2, 3.3), (2, 20.0), (1, 6.0)):
         K = 2.0 * kl * si

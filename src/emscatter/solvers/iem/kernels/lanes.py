@@ -155,7 +155,7 @@ def _lane_tail(S, l, zrow, xxrow, kmrow, phrow, pvrow, e, rho, w, ks2):
 
 
 @jit
-def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, W, wfill):
+def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
     """Walk lanes ``0 … m−1`` of ``S`` (set up by :func:`lane_start`, ``ACT`` = 1) in lockstep
     from n = 2 until each meets its stopping rule; ``out_ok[l]`` False where the linear-space
     walk was not safe. Sums end in rows ``SH, SV, EH, EV`` (times ``MSQ``: ``S_hh, S_vv`` and
@@ -176,9 +176,9 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, W, wfill):
     every fourth order. Not safe (the caller takes the log-space path): a component that
     starts below 1e-140 of the largest is left out and its whole-series bound must be
     negligible (≤ 1e-3 rtol of the sum) at the end; a walk longer than
-    :data:`FAST_MAX_ORDER` or ``max_terms``; sums outside [1e-250, 1e300]. ``Ŵₙ`` rows come
-    from :func:`w_row` (``W, wfill``: the block's rows, shared with :func:`walk_transition`)."""
+    :data:`FAST_MAX_ORDER` or ``max_terms``; sums outside [1e-250, 1e300]."""
     sks = math.sqrt(ks2)
+    w = np.empty(m)
     live = 0
     for l in range(m):
         out_ok[l] = True
@@ -186,7 +186,8 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, W, wfill):
             live += 1
     n = 2.0
     while live > 0:
-        o = w_row(W, wfill, n, S, K2F, m, spec, dim)  # Ŵₙ per lane
+        for l in range(m):  # Ŵₙ per lane
+            w[l] = w_lin(n, S[K2F + l], spec, dim)
         for l in range(m):  # one order for every lane (frozen lanes add nothing)
             z0, z1, z2 = S[Z0 + l], S[Z1 + l], S[Z2 + l]
             hr = S[H0R + l] * z0 + S[H1R + l] * z1 + S[H2R + l] * z2
@@ -197,7 +198,7 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, W, wfill):
             enh = S[M0H + l] * a0 + S[M1H + l] * a1 + S[M2H + l] * a2
             env = S[M0V + l] * a0 + S[M1V + l] * a1 + S[M2V + l] * a2
             act = S[ACT + l] > 0.0
-            wl = W[o + l]
+            wl = w[l]
             S[SH + l] += (hr * hr + hi * hi) * wl if act else 0.0
             S[SV + l] += (vr * vr + vi * vi) * wl if act else 0.0
             S[EH + l] += enh * enh * wl if act else 0.0
@@ -208,7 +209,7 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, W, wfill):
                 if S[ACT + l] <= 0.0:
                     continue
                 wp = S[WPREV + l]
-                wl = W[o + l]
+                wl = w[l]
                 rho = ks2 / n * wl / wp if wp > 0.0 else np.inf
                 e0, e1 = S[E0 + l], S[E1 + l]
                 t0h, t0v = _lane_tail(S, l, Z0, XX0, KM0, P0H, P0V, e0, rho, wl, ks2)
@@ -227,7 +228,7 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, W, wfill):
         n += 1.0
         f = sks * isqrt(n)
         for l in range(m):
-            S[WPREV + l] = W[o + l]
+            S[WPREV + l] = w[l]
             S[Z0 + l] *= S[X0 + l] * f
             S[Z1 + l] *= S[X1 + l] * f
             S[Z2 + l] *= S[X2 + l] * f
@@ -247,40 +248,19 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, W, wfill):
 # rows of the transition-sum lane state (offsets, as above)
 TK2, TS1, TS2, TS4, TT1, TPREV, TACT = range(0, 7 * LANES, LANES)
 T_ROWS = 7
-#: Orders of Ŵₙ kept per block (:func:`w_row`): the transition sums and the backscatter
-#: series of one block of lanes need the same ``Ŵₙ(K)`` (same K per lane, n from 1), so the
-#: first walk's values are kept for the second; orders past this are computed in place.
-W_ORDERS = 256
-W_SIZE = (W_ORDERS + 1) * LANES  # the last row: scratch for orders > W_ORDERS
-
-
-@inline
-def w_row(W, wfill, n, K2, k2row, m, spec, dim):
-    """Offset into ``W`` of the row ``Ŵₙ`` of lanes ``0 … m−1`` (``K2[k2row + l]`` = K² of lane
-    ``l``): computed unless ``wfill[0] ≥ n`` already (one row per order, the same values the
-    other walk of the block computed: :func:`w_lin` on the same numbers)."""
-    i = int(n)
-    if i <= wfill[0]:
-        return (i - 1) * LANES
-    o = (i - 1) * LANES if i <= W_ORDERS else W_ORDERS * LANES
-    for l in range(m):
-        W[o + l] = w_lin(n, K2[k2row + l], spec, dim)
-    if i <= W_ORDERS:
-        wfill[0] = i
-    return o
 
 
 @jit
-def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok, W, wfill):
+def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
     """Linear-space :func:`transition_sums` for lanes ``0 … m−1`` of ``T`` in lockstep, one
     ``Q`` for all (rows ``TK2`` = K², ``TACT`` = 1 where wanted): ``S(βQ) = Σ_{n≥1}
     (βQ)ⁿ/n! Ŵₙ`` for β = 1, 2, 4 end in rows ``TS1, TS2, TS4`` (:func:`transition_ratios`
-    reads them). ``Qⁿ/n!`` is one number per order for every lane; ``Ŵₙ`` rows come from
-    :func:`w_row` (``W, wfill``: the block's rows, shared with :func:`walk_lanes`). A lane
+    reads them). ``Qⁿ/n!`` is one number per order for every lane. A lane
     stops when the geometric tail of each of the three series (term ratios non-increasing from
     n = 3 on for these spectra, tested at odd orders) is below ``rtol_t`` of its sum;
     ``out_ok[l]`` False when the sums leave the safe range (the caller then takes the
     log-space path). One lane (m = 1) is the one-geometry form the log-space path uses."""
+    w = np.empty(m)
     live = 0
     for l in range(m):
         out_ok[l] = True
@@ -293,9 +273,10 @@ def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok, W, wfill):
         p2 *= 2.0
         p4 *= 4.0
         qn = qn * (Q / n)
-        o = w_row(W, wfill, n, T, TK2, m, spec, dim)
         for l in range(m):
-            t1 = qn * W[o + l]
+            w[l] = w_lin(n, T[TK2 + l], spec, dim)
+        for l in range(m):
+            t1 = qn * w[l]
             T[TT1 + l] = t1
             act = T[TACT + l] > 0.0
             T[TS1 + l] += t1 if act else 0.0
@@ -452,15 +433,15 @@ def fung92_co(s, c, q2, eps, pec):
 
 @inline
 def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_rtol, r0, r08,
-                r08sq, a0, ieps, T, tr_ok, lower_q2, fade, fung92, W, wfill):  # fmt: skip
+                r08sq, a0, ieps, T, tr_ok, lower_q2, fade, fung92):  # fmt: skip
     """Per-geometry coefficients of exact backscatter, one geometry at a time (the
     log-space path): ``(fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J)`` — Fresnel
     coefficients at θ and with the transition, ``a = Re q₂``, the height exponents, the
     lower-medium combinations (zero for a PEC: ``J = 1``; ``fung92``: the 1992 complementary
     amplitude ×4 in ``p1``, base ``cosθ``, ``a = 0``, ``J = 3`` also for a PEC); ``fast``
     False where the linear transition sums left the safe range (the log-space sums were
-    used). ``T, tr_ok, W, wfill``: lane state for a one-lane :func:`walk_transition` (lane 0
-    is overwritten, ``wfill`` reset: the block's ``Ŵₙ`` rows are not reused)."""
+    used). ``T, tr_ok``: lane state for a one-lane :func:`walk_transition` (lane 0 is
+    overwritten)."""
     s2 = s * s
     zero = (0j, 0j, 0j, 0j)
     q2, iq, rh, rv = fresnel_setup(s, c, eps, pec)
@@ -471,8 +452,7 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
         e2, e4 = 2.0, 4.0
         if fast:
             T[TK2], T[TACT] = Kr * Kr, 1.0
-            wfill[0] = 0
-            walk_transition(T, 1, Q, spec, dim, rtol * 1e-2, tr_ok, W, wfill)
+            walk_transition(T, 1, Q, spec, dim, rtol * 1e-2, tr_ok)
             fast = tr_ok[0]
             if fast:
                 e2, e4 = transition_ratios(T, 0, math.exp(-Q))
@@ -521,8 +501,6 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     S = np.empty(N_ROWS * LANES)
     T = np.empty(T_ROWS * LANES)
     lane_ok = np.empty(LANES, dtype=np.bool_)
-    W = np.empty(W_SIZE)  # the block's Ŵₙ rows (w_row), shared by both walks
-    wfill = np.zeros(1, dtype=np.int64)
     eq = math.exp(-ks2)  # e^{−Q} of the transition ratios
     tr_ok = np.empty(LANES, dtype=np.bool_)
     started = np.zeros(LANES, dtype=np.bool_)
@@ -535,7 +513,6 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     n_all = si.shape[0]
     for b in range(0, n_all, LANES):
         m = min(LANES, n_all - b)
-        wfill[0] = 0  # new K per lane: no Ŵₙ rows yet
         any_tr = False
         for l in range(m):  # shadowing, Fresnel coefficients, transition lanes
             r = b + l
@@ -553,7 +530,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 T[TACT + l] = 1.0
                 any_tr = True
         if any_tr:
-            walk_transition(T, m, ks2, spec, dim, rtol * 1e-2, tr_ok, W, wfill)
+            walk_transition(T, m, ks2, spec, dim, rtol * 1e-2, tr_ok)
         any_started = False
         for l in range(m):  # transition factors, lower-medium terms, series lanes
             if not use_fast:
@@ -584,9 +561,16 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             elif pec:
                 a, e_g, att1 = 0.0, 0.0, 0.0
                 g1h = g1v = g2h = g2v = 0j
-            else:
+            elif lower_q2:  # AIEM's phase Re q₂: the general combination (as before, bit for bit)
+                fh = fv = 1.0 - gv if fade else 1.0
+                a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2,
+                                                 fh, fv)  # fmt: skip
+                g1h, g1v = 0.25 * (p1[0] + p2[0]), 0.25 * (p1[3] + p2[3])
+                g2h, g2v = 0.25 * mm[0], 0.25 * mm[3]
+                att1 = math.exp(e_g)
+            else:  # the upper-medium phase (the default "aiem-faded"): closed form
                 f = 0.25 * (1.0 - gv) if fade else 0.25
-                a = q2.real if lower_q2 else c
+                a = c
                 e_g = -ks2 * (a * a + c * c)
                 g1h, g1v, g2h, g2v = lower_back(s2, c, q2, iq, rh, rv, eps, ieps, a, f)
                 att1 = math.exp(e_g)
@@ -596,7 +580,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             )  # fmt: skip
             any_started = any_started or started[l]
         if any_started:
-            walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, lane_ok, W, wfill)
+            walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, lane_ok)
         for l in range(m):  # results; the log-space path where the fast one was not taken
             r = b + l
             shf = lane_shf[l]
@@ -613,7 +597,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             s2 = s * s
             fast, rh, rv, rh_t, rv_t, a, e_k, e_g, p1, p2, mm, J = angle_setup(
                 s, c, K[r], eps, pec, ks2, spec, dim, transition, use_fast, rtol, log_rtol, r0,
-                r08, r08sq, a0, ieps, T, tr_ok, lower_q2, fade, fung92, W, wfill,
+                r08, r08sq, a0, ieps, T, tr_ok, lower_q2, fade, fung92,
             )  # fmt: skip
             lx[0] = math.log(2.0 * c) if c > 0 else -np.inf
             if J == 3:
