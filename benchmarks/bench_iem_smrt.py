@@ -3,7 +3,8 @@ interleaved in one process (issue 22's must-show row).
 
     bash benchmarks/peers/setup.sh      # once: a Python with SMRT 1.7 (and numba)
     PYTHONPATH=src <peers python> benchmarks/bench_iem_smrt.py [--rounds 9 --round-seconds 0.15]
-    → benchmarks/results/iem_smrt.json (and a table on stdout)
+    → benchmarks/results/iem_smrt.json (and a table on stdout; ``--out NAME``: NAME.json, so a
+    trial or loaded-machine run leaves the committed idle-machine file alone)
 
 Case: exponential correlation (SMRT's default), ℓ = 3 cm, 5.3 GHz (kℓ = 3.33), ε = 15 + 2i,
 σ for kσ ∈ {0.1, 0.5, 1.0, 1.5, 2.0, 2.5}, N ∈ {1, 10, 100, 1000} incidence angles in
@@ -32,8 +33,10 @@ fit in ``--round-seconds`` (at least 3) back to back, the contenders' order rota
 to round; a contender's round time is the median of its calls. The ratio SMRT / emscatter is
 taken per round (the two timings seconds apart, the same machine state: this shared 2-core
 machine's speed drifts ×1.5–2 within minutes) and reported as the median over rounds with its
-range. numba's threads: the default (the backscatter kernel splits over threads from
-2 × ``BACK_MIN_CHUNK`` = 4096 angles on, so every size here runs on one thread) and, at a
+range. ``--clock thread`` times this thread's CPU time instead of wall time (a loaded machine:
+it leaves out waiting for a core, not the slowdown of a shared one). numba's threads: the
+default (the backscatter kernel splits over threads from 2 × ``BACK_MIN_CHUNK`` = 4096
+angles on, so every size here runs on one thread) and, at a
 size that splits, ``threads=1`` beside it (SMRT is single-threaded numpy; BLAS threads are set
 to 1). The API's backscatter goes through the IEM's monostatic fast path
 (``iem.bistatic.checked(..., monostatic=True)``); the "solver only" contender is the general
@@ -70,14 +73,18 @@ RTOL = 1e-8
 FUNG92 = dict(complementary="fung92", fresnel="incident", first_order="model", shadowing=False)
 
 
-def _block(fn, seconds: float) -> float:
-    """Median wall time of as many calls of ``fn`` as fit in ``seconds`` (at least 3)."""
+CLOCKS = {"wall": time.perf_counter, "thread": time.thread_time}
+
+
+def _block(fn, seconds: float, clock=time.perf_counter) -> float:
+    """Median time (``clock``) of as many calls of ``fn`` as fit in ``seconds`` of wall time
+    (at least 3)."""
     t = []
     t_end = time.perf_counter() + seconds
     while len(t) < 3 or time.perf_counter() < t_end:
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        t.append(time.perf_counter() - t0)
+        t.append(clock() - t0)
     return statistics.median(t)
 
 
@@ -114,8 +121,25 @@ def main(argv=None) -> dict:
     ap.add_argument("--round-seconds", type=float, default=0.15)
     ap.add_argument("--ks", type=float, nargs="*", default=list(KS))
     ap.add_argument("--sizes", type=int, nargs="*", default=list(SIZES))
-    ap.add_argument("--label", default="iem_smrt")
+    ap.add_argument(
+        "--out",
+        "--label",
+        dest="label",
+        default="iem_smrt",
+        help="result name: benchmarks/results/NAME.json (default iem_smrt, the committed "
+        "idle-machine run; give another name for a loaded or trial run)",
+    )
+    ap.add_argument(
+        "--clock",
+        choices=sorted(CLOCKS),
+        default="wall",
+        help="wall (default: what a user waits) or thread (this thread's CPU time: on a loaded "
+        "machine it leaves out the time spent waiting for a core; every contender runs on "
+        "this thread at these sizes)",
+    )
     args = ap.parse_args(argv)
+    clock = CLOCKS[args.clock]
+    load_start = list(os.getloadavg())  # the machine's own record ("load_average") is the end's
     from smrt.interface.iem_fung92 import IEM_Fung92
 
     import emscatter as em
@@ -170,7 +194,7 @@ def main(argv=None) -> dict:
             for r in range(args.rounds):
                 order = names[r % len(names) :] + names[: r % len(names)]
                 for m in order:
-                    per[m].append(_block(fns[m], args.round_seconds))
+                    per[m].append(_block(fns[m], args.round_seconds, clock))
             ours = fns["emscatter_fung92"]()
             theirs = smrt_conv.diffuse_reflection_matrix(FREQ, 1.0, EPS, mu, mu, math.pi, 2)
             a = np.stack([ours.sigma0[1, 1], ours.sigma0[0, 0]])
@@ -216,10 +240,17 @@ def main(argv=None) -> dict:
     }
     cmd = (f"PYTHONPATH=src <peers python> benchmarks/bench_iem_smrt.py --rounds {args.rounds} "
            f"--round-seconds {args.round_seconds}")  # fmt: skip
+    if args.clock != "wall":
+        cmd += f" --clock {args.clock}"
+    if args.label != "iem_smrt":
+        cmd += f" --out {args.label}"
+    if list(args.ks) != list(KS) or list(args.sizes) != list(SIZES):
+        cmd += " --ks " + " ".join(map(str, args.ks)) + " --sizes " + " ".join(map(str, args.sizes))
     data = {
         "benchmark": "IEM backscatter through the API vs SMRT iem_fung92, converged, interleaved",
         "command": cmd,
         "machine": machine("smrt"),
+        "load_average_start": load_start,
         "case": {
             "frequency_hz": FREQ,
             "ell_m": ELL,
@@ -230,6 +261,7 @@ def main(argv=None) -> dict:
             "rtol": RTOL,
             "emscatter_1992_options": FUNG92,
         },  # fmt: skip
+        "clock": args.clock,
         "rounds": args.rounds,
         "round_seconds": args.round_seconds,
         "rows": rows,

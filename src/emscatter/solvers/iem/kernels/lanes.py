@@ -246,15 +246,16 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
 
 
 # rows of the transition-sum lane state (offsets, as above)
-TQ, TK2, TQN, TS1, TS2, TS4, TT1, TPREV, TACT = range(0, 9 * LANES, LANES)
-T_ROWS = 9
+TK2, TS1, TS2, TS4, TT1, TPREV, TACT = range(0, 7 * LANES, LANES)
+T_ROWS = 7
 
 
 @jit
-def walk_transition(T, m, spec, dim, rtol_t, out_ok):
-    """Linear-space :func:`transition_sums` for lanes ``0 … m−1`` of ``T`` in lockstep (rows
-    ``TQ`` = Q, ``TK2`` = K², ``TACT`` = 1 where wanted): ``S(βQ) = Σ_{n≥1} (βQ)ⁿ/n! Ŵₙ`` for
-    β = 1, 2, 4 end in rows ``TS1, TS2, TS4`` (:func:`transition_ratios` reads them). A lane
+def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
+    """Linear-space :func:`transition_sums` for lanes ``0 … m−1`` of ``T`` in lockstep, one
+    ``Q`` for all (rows ``TK2`` = K², ``TACT`` = 1 where wanted): ``S(βQ) = Σ_{n≥1}
+    (βQ)ⁿ/n! Ŵₙ`` for β = 1, 2, 4 end in rows ``TS1, TS2, TS4`` (:func:`transition_ratios`
+    reads them). ``Qⁿ/n!`` is one number per order for every lane. A lane
     stops when the geometric tail of each of the three series (term ratios non-increasing from
     n = 3 on for these spectra, tested at odd orders) is below ``rtol_t`` of its sum;
     ``out_ok[l]`` False when the sums leave the safe range (the caller then takes the
@@ -263,20 +264,18 @@ def walk_transition(T, m, spec, dim, rtol_t, out_ok):
     live = 0
     for l in range(m):
         out_ok[l] = True
-        T[TQN + l] = 1.0
         T[TS1 + l] = T[TS2 + l] = T[TS4 + l] = 0.0
         T[TPREV + l] = 0.0
         if T[TACT + l] > 0.0:
             live += 1
-    n, p2, p4 = 1.0, 1.0, 1.0
+    n, p2, p4, qn = 1.0, 1.0, 1.0, 1.0
     while live > 0:
         p2 *= 2.0
         p4 *= 4.0
+        qn = qn * (Q / n)
         for l in range(m):
             w[l] = w_lin(n, T[TK2 + l], spec, dim)
         for l in range(m):
-            qn = T[TQN + l] * (T[TQ + l] / n)
-            T[TQN + l] = qn
             t1 = qn * w[l]
             T[TT1 + l] = t1
             act = T[TACT + l] > 0.0
@@ -314,10 +313,10 @@ def walk_transition(T, m, spec, dim, rtol_t, out_ok):
 
 
 @inline
-def transition_ratios(T, l):
-    """``(S(2Q)/S(Q) e^{−Q}, S(4Q)/S(Q) e^{−2Q})`` of lane ``l`` after :func:`walk_transition`."""
+def transition_ratios(T, l, eq):
+    """``(S(2Q)/S(Q) e^{−Q}, S(4Q)/S(Q) e^{−2Q})`` of lane ``l`` after :func:`walk_transition`
+    (``eq = e^{−Q}``)."""
     s1 = T[TS1 + l]
-    eq = math.exp(-T[TQ + l])
     return T[TS2 + l] / s1 * eq, T[TS4 + l] / s1 * eq * eq
 
 
@@ -384,6 +383,42 @@ def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2, fh, fv):
 
 
 @inline
+def lower_back(s2, c, q2, iq, rh, rv, eps, ieps, a, f):
+    """The two lower-medium amplitudes of the fast walk, ``(g₁h, g₁v, g₂h, g₂v)`` =
+    ``f (p₁ + p₂)``, ``f m`` of :func:`lower_setup` (``f`` = ¼, times the fade), in closed
+    form: at exact backscatter (φ = π, θs = θi) the reduced coefficients of
+    :func:`emscatter.solvers.iem.terms._reduced_i`, ``_reduced_s`` are, with ``s² = sin²θ``,
+    ``c = cosθ``, the side "i" (``q = −q₂``, ``α₁ = c + a``) and "s" (``q = q₂``, ``α₁``) terms
+    summed: ``C₁ = −2α₁``, ``C₃ = 2s²(q₂ − c)``, ``C₄ = −2c(α₁c + 2s²)``,
+    ``C₂ + C₅ = 4s²(c − q₂)``; the "s" term at ``q = −q₂``, ``α₂ = c − a``: ``C₁ = −α₂``,
+    ``C₃ = s²(α₂ − 2c)``, ``C₄ = −c(α₂c + 2s²)``, ``C₂ + C₅ = 2s²(c + q₂)`` (``C₂`` and ``C₅``
+    enter :func:`lower_co` only as their sum once its products are expanded:
+    ``hh = q₂⁻¹[(1+R_h)²(C₃ − εC₁) + (1+R_h)(1−R_h)(C₂ + C₅) + (1−R_h)²C₄]``,
+    ``vv = q₂⁻¹[(1+R_v)²(C₁ − C₃/ε) − (1+R_v)(1−R_v)(C₂ + C₅) − (1−R_v)²εC₄]``). The same
+    amplitudes as :func:`lower_setup` to rounding (tests/test_iem_fast.py), two thirds of its
+    arithmetic."""
+    hp, hm = 1.0 + rh, 1.0 - rh
+    vp, vm = 1.0 + rv, 1.0 - rv
+    fi = f * iq
+    ah, bh, ch = fi * hp * hp, fi * hp * hm, fi * hm * hm
+    av, bv, cv = fi * vp * vp, fi * vp * vm, fi * vm * vm * eps
+    a1, a2 = c + a, c - a
+    c1 = -2.0 * a1
+    c3 = 2.0 * s2 * (q2 - c)
+    c4 = -2.0 * c * (a1 * c + 2.0 * s2)
+    c25 = 4.0 * s2 * (c - q2)
+    g1h = ah * (c3 - c1 * eps) + bh * c25 + ch * c4
+    g1v = av * (c1 - c3 * ieps) - bv * c25 - cv * c4
+    c1 = -a2
+    c3 = s2 * (a2 - 2.0 * c)
+    c4 = -c * (a2 * c + 2.0 * s2)
+    c25 = 2.0 * s2 * (c + q2)
+    g2h = ah * (c3 - c1 * eps) + bh * c25 + ch * c4
+    g2v = av * (c1 - c3 * ieps) - bv * c25 - cv * c4
+    return g1h, g1v, g2h, g2v
+
+
+@inline
 def fung92_co(s, c, q2, eps, pec):
     """The 1992 IEM's complementary amplitude in exact backscatter, ``(G_h, G_v)`` (base
     ``cosθ``, no height phase; :func:`emscatter.solvers.iem.terms.fung92_backscatter_terms`)."""
@@ -416,11 +451,11 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
         Q = ks2  # the transition's phase variable (kσ)² (terms.transition_q)
         e2, e4 = 2.0, 4.0
         if fast:
-            T[TQ], T[TK2], T[TACT] = Q, Kr * Kr, 1.0
-            walk_transition(T, 1, spec, dim, rtol * 1e-2, tr_ok)
+            T[TK2], T[TACT] = Kr * Kr, 1.0
+            walk_transition(T, 1, Q, spec, dim, rtol * 1e-2, tr_ok)
             fast = tr_ok[0]
             if fast:
-                e2, e4 = transition_ratios(T, 0)
+                e2, e4 = transition_ratios(T, 0, math.exp(-Q))
         if not fast:
             e2, e4 = log_transition_ratios(Q, Kr, spec, dim, log_rtol)
         rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0)
@@ -466,6 +501,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     S = np.empty(N_ROWS * LANES)
     T = np.empty(T_ROWS * LANES)
     lane_ok = np.empty(LANES, dtype=np.bool_)
+    eq = math.exp(-ks2)  # e^{−Q} of the transition ratios
     tr_ok = np.empty(LANES, dtype=np.bool_)
     started = np.zeros(LANES, dtype=np.bool_)
     lane_shf = np.empty(LANES)
@@ -489,13 +525,12 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             if not use_fast:
                 continue
             lq2[l], liq[l], lrh[l], lrv[l] = fresnel_setup(s, c, eps, pec)
-            if with_tr:  # the transition's Q = (kσ)² (terms.transition_q)
-                T[TQ + l] = ks2
+            if with_tr:  # the transition's Q = (kσ)² (terms.transition_q), one for all lanes
                 T[TK2 + l] = K[r] * K[r]
                 T[TACT + l] = 1.0
                 any_tr = True
         if any_tr:
-            walk_transition(T, m, spec, dim, rtol * 1e-2, tr_ok)
+            walk_transition(T, m, ks2, spec, dim, rtol * 1e-2, tr_ok)
         any_started = False
         for l in range(m):  # transition factors, lower-medium terms, series lanes
             if not use_fast:
@@ -508,7 +543,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             gh = gv = 0.0
             if with_tr:
                 if tr_ok[l]:
-                    e2, e4 = transition_ratios(T, l)
+                    e2, e4 = transition_ratios(T, l, eq)
                 else:  # linear sums out of range (kσ ≳ 9): log-space sums, lane stays fast
                     e2, e4 = log_transition_ratios(ks2, K[r], spec, dim, log_rtol)
                 rh_t, rv_t, gh, gv = transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq,
@@ -526,12 +561,18 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             elif pec:
                 a, e_g, att1 = 0.0, 0.0, 0.0
                 g1h = g1v = g2h = g2v = 0j
-            else:
+            elif lower_q2:  # AIEM's phase Re q₂: the general combination (as before, bit for bit)
                 fh = fv = 1.0 - gv if fade else 1.0
                 a, e_g, p1, p2, mm = lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2,
                                                  fh, fv)  # fmt: skip
                 g1h, g1v = 0.25 * (p1[0] + p2[0]), 0.25 * (p1[3] + p2[3])
                 g2h, g2v = 0.25 * mm[0], 0.25 * mm[3]
+                att1 = math.exp(e_g)
+            else:  # the upper-medium phase (the default "aiem-faded"): closed form
+                f = 0.25 * (1.0 - gv) if fade else 0.25
+                a = c
+                e_g = -ks2 * (a * a + c * c)
+                g1h, g1v, g2h, g2v = lower_back(s2, c, q2, iq, rh, rv, eps, ieps, a, f)
                 att1 = math.exp(e_g)
             started[l] = lane_start(
                 S, l, -4.0 * rh_t, 4.0 * rv_t, g1h, g1v, g2h, g2v, 2.0 * c, c + a, c - a, ek_lin,
