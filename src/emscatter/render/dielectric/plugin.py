@@ -53,6 +53,9 @@ the lobe probability. Tables with a coherent transmission (PO/SPM) draw half the
 wide Beckmann lobe (α = 0.5, a defensive mixture; the pdf is the mixture's): an SPM lobe is the
 roughness spectrum at the Bragg wavenumbers, far wider than its slopes (kσ = 0.13, ℓ = 1 µm: α
 = 0.023 sampled 6 % of the glossy transmission at normal incidence, the mixture all of it).
+Anisotropic tables sample their anisotropic Beckmann lobe (``αx = √(2 s_x)``, ``αy = √(2
+s_y)``, tangent ``+x`` along ``ℓx``; the plugin parameter ``lobe_sampling="isotropic"`` keeps
+``α = √(s_x + s_y)``, :mod:`.sampling`).
 
 Spectral variants: the BTDF is kept per table wavelength (one texture channel each) and
 interpolated linearly to the sampled wavelengths, flat beyond the table's range — the
@@ -85,7 +88,12 @@ from .. import mitsuba as em_mi
 from ..plugin_data import Axis
 from .aniso import AnisoBtdfLookup, check_axes, reduce_albedo
 from .delta import delta_data, refract
-from .sampling import RefractionSampler, inner_transmission_choice, transmission_choice
+from .sampling import (
+    LOBE_SAMPLING,
+    RefractionSampler,
+    inner_transmission_choice,
+    transmission_choice,
+)
 
 __all__ = ["PLUGIN_NAME", "bsdf_dict", "register", "register_dielectric"]
 
@@ -170,14 +178,24 @@ def register(name: str = PLUGIN_NAME) -> None:
         mi.register_bsdf(name, lambda props: _CLASSES[variant](props))
 
 
-def bsdf_dict(reflection, transmission, inner=None, *, coherent: bool = True) -> dict:
+def bsdf_dict(
+    reflection, transmission, inner=None, *, coherent: bool = True, lobe_sampling: str = "auto"
+) -> dict:
     """A ``mi.load_dict`` entry (registers the plugin and the tables); ``coherent``: render the
-    tables' coherent (delta) parts (module docstring)."""
+    tables' coherent (delta) parts (module docstring); ``lobe_sampling``: ``"auto"`` (an
+    anisotropic BTDF samples its anisotropic Beckmann lobe) or ``"isotropic"``
+    (:mod:`.sampling`)."""
     if not isinstance(coherent, bool):
         raise ValueError(f"coherent must be True or False, got {coherent!r}")
+    if lobe_sampling not in LOBE_SAMPLING:
+        raise ValueError(
+            f"lobe_sampling must be one of {', '.join(map(repr, LOBE_SAMPLING))}, "
+            f"got {lobe_sampling!r}"
+        )
     register()
     key = register_dielectric(reflection, transmission, inner)
-    return {"type": PLUGIN_NAME, "tables": key, "coherent": coherent}
+    out = {"type": PLUGIN_NAME, "tables": key, "coherent": coherent}
+    return out if lobe_sampling == "auto" else {**out, "lobe_sampling": lobe_sampling}
 
 
 def _channels(wavelengths, channels: str) -> np.ndarray:
@@ -240,7 +258,8 @@ def _bsdf_class(mi):
             self._eps = float(np.mean(bt.eps))
             self._inv_eps_k = [float(x) for x in 1.0 / np.asarray(bt.eps, dtype=float)]
             self._eta = math.sqrt(self._eps)
-            self._sampler = RefractionSampler(mi, bt, self._eta)  # the refracted normals
+            lobe = str(props.get("lobe_sampling", "auto"))  # .sampling.LOBE_SAMPLING
+            self._sampler = RefractionSampler(mi, bt, self._eta, lobe)  # the refracted normals
             self._alpha = self._sampler.alpha
             lum = RGB_LUMINANCE @ spectrum_to_rgb_weights(bt.wavelengths)
             p_t = transmission_choice(bt, s["theta_r"], s["r_albedo"], lum)
@@ -511,8 +530,10 @@ def _bsdf_class(mi):
             pass
 
         def to_string(self):
+            ax, ay = self._sampler.alpha_xy
+            a = f"αx = {ax:.4g}, αy = {ay:.4g}" if self._sampler.anisotropic else ""
             return (
-                f"EmscatterDielectricBSDF[η = {self._eta:.6g}, α = {self._alpha:.4g}, "
+                f"EmscatterDielectricBSDF[η = {self._eta:.6g}, {a or f'α = {self._alpha:.4g}'}, "
                 f"delta lobes={self._dd is not None}]"
             )
 
