@@ -43,16 +43,19 @@ tables, which have none) renders the glossy lobes only, exactly as before the de
 (the reflection lobes are ``"emscatter"`` plugins with ``coherent=false``: the delta parts
 are this plugin's).
 
-Sampling: reflection vs transmission by their albedos at the viewer's θ (outside: ``R`` of the
-reflection table, ``T`` of the BTDF table, both exact integrals of the interpolants; inside:
-``R_in`` of ``inner`` and ``1 − R_in``), the reflection lobes by the ``"emscatter"`` plugin's
-sampler, the transmission by Beckmann microfacet normals refracted (Walter et al. 2007,
-eqs. 17, 28, 40: ``p(wo) = D(m) cosθm |wo·m| η_o² / (η_i v·m + η_o wo·m)²``) with the table's
-slope variance (``α² = 2s``); ``pdf`` is that density exactly, times the lobe probability.
-Tables with a coherent transmission (PO/SPM) draw half the normals from a wide Beckmann lobe
-(α = 0.5, a defensive mixture; the pdf is the mixture's): an SPM lobe is the roughness
-spectrum at the Bragg wavenumbers, far wider than its slopes (kσ = 0.13, ℓ = 1 µm:
-α = 0.023 sampled 6 % of the glossy transmission at normal incidence, the mixture all of it).
+Sampling (:mod:`.sampling`): reflection vs transmission by their albedos at the viewer's θ
+(outside: ``R`` of the reflection table, ``T`` of the BTDF table, both exact integrals of the
+interpolants; inside: ``R_in`` of ``inner`` and ``1 − R_in``), the reflection lobes by the
+``"emscatter"`` plugin's sampler, the transmission by Beckmann microfacet normals refracted
+(Walter et al. 2007, eqs. 17, 28, 40: ``p(wo) = D(m) cosθm |wo·m| η_o² / (η_i v·m + η_o
+wo·m)²``) with the table's slope variance (``α² = 2s``); ``pdf`` is that density exactly, times
+the lobe probability. Tables with a coherent transmission (PO/SPM) draw half the normals from a
+wide Beckmann lobe (α = 0.5, a defensive mixture; the pdf is the mixture's): an SPM lobe is the
+roughness spectrum at the Bragg wavenumbers, far wider than its slopes (kσ = 0.13, ℓ = 1 µm: α
+= 0.023 sampled 6 % of the glossy transmission at normal incidence, the mixture all of it).
+Anisotropic tables sample their anisotropic Beckmann lobe (``αx = √(2 s_x)``, ``αy = √(2
+s_y)``, tangent ``+x`` along ``ℓx``; the plugin parameter ``lobe_sampling="isotropic"`` keeps
+``α = √(s_x + s_y)``, :mod:`.sampling`).
 
 Spectral variants: the BTDF is kept per table wavelength (one texture channel each) and
 interpolated linearly to the sampled wavelengths, flat beyond the table's range — the
@@ -85,6 +88,12 @@ from .. import mitsuba as em_mi
 from ..plugin_data import Axis
 from .aniso import AnisoBtdfLookup, check_axes, reduce_albedo
 from .delta import delta_data, refract
+from .sampling import (
+    LOBE_SAMPLING,
+    RefractionSampler,
+    inner_transmission_choice,
+    transmission_choice,
+)
 
 __all__ = ["PLUGIN_NAME", "bsdf_dict", "register", "register_dielectric"]
 
@@ -92,7 +101,6 @@ PLUGIN_NAME = "emscatter_dielectric"
 _SETS: dict[str, dict] = {}
 _CLASSES: dict[str, type] = {}
 _COUNTER = itertools.count()
-_ALPHA_WIDE = 0.5  # Beckmann α of the defensive transmission sampler (PO/SPM tables)
 
 
 def _s0(t):
@@ -170,14 +178,24 @@ def register(name: str = PLUGIN_NAME) -> None:
         mi.register_bsdf(name, lambda props: _CLASSES[variant](props))
 
 
-def bsdf_dict(reflection, transmission, inner=None, *, coherent: bool = True) -> dict:
+def bsdf_dict(
+    reflection, transmission, inner=None, *, coherent: bool = True, lobe_sampling: str = "auto"
+) -> dict:
     """A ``mi.load_dict`` entry (registers the plugin and the tables); ``coherent``: render the
-    tables' coherent (delta) parts (module docstring)."""
+    tables' coherent (delta) parts (module docstring); ``lobe_sampling``: ``"auto"`` (an
+    anisotropic BTDF samples its anisotropic Beckmann lobe) or ``"isotropic"``
+    (:mod:`.sampling`)."""
     if not isinstance(coherent, bool):
         raise ValueError(f"coherent must be True or False, got {coherent!r}")
+    if lobe_sampling not in LOBE_SAMPLING:
+        raise ValueError(
+            f"lobe_sampling must be one of {', '.join(map(repr, LOBE_SAMPLING))}, "
+            f"got {lobe_sampling!r}"
+        )
     register()
     key = register_dielectric(reflection, transmission, inner)
-    return {"type": PLUGIN_NAME, "tables": key, "coherent": coherent}
+    out = {"type": PLUGIN_NAME, "tables": key, "coherent": coherent}
+    return out if lobe_sampling == "auto" else {**out, "lobe_sampling": lobe_sampling}
 
 
 def _channels(wavelengths, channels: str) -> np.ndarray:
@@ -240,20 +258,11 @@ def _bsdf_class(mi):
             self._eps = float(np.mean(bt.eps))
             self._inv_eps_k = [float(x) for x in 1.0 / np.asarray(bt.eps, dtype=float)]
             self._eta = math.sqrt(self._eps)
-            sx, sy = bt.metadata["slope_variance"]
-            self._alpha = math.sqrt(sx + sy)  # Beckmann α² = 2s (isotropic: s = (sx + sy)/2)
-            # PO/SPM tables (a coherent part): their glossy lobe is wider than the slopes say
-            # (SPM: the roughness spectrum at the Bragg wavenumbers), so half the refracted
-            # normals come from a wide Beckmann lobe (defensive mixture; GO tables: none)
-            coh = getattr(bt, "coherent", None)
-            has_coh = coh is not None and bool(np.any(coh > 0))
-            self._q_wide = 0.5 if has_coh and self._alpha < _ALPHA_WIDE else 0.0
+            lobe = str(props.get("lobe_sampling", "auto"))  # .sampling.LOBE_SAMPLING
+            self._sampler = RefractionSampler(mi, bt, self._eta, lobe)  # the refracted normals
+            self._alpha = self._sampler.alpha
             lum = RGB_LUMINANCE @ spectrum_to_rgb_weights(bt.wavelengths)
-            t_alb = lum @ (
-                reduce_albedo(bt.albedo()) if self._aniso else bt.incoherent_albedo()
-            )  # what the lobe holds (PO: no delta lobe)
-            r_alb = np.interp(bt.theta_i, s["theta_r"], lum @ s["r_albedo"])
-            p_t = t_alb / np.maximum(t_alb + r_alb, 1e-12)
+            p_t = transmission_choice(bt, s["theta_r"], s["r_albedo"], lum)
             self._pt_out = tex(mi.Texture1f, p_t[:, None])
             self._ax_pt = Axis.of(bt.theta_i)
             glossy_only = {"type": "emscatter", "coherent": False}  # deltas: below
@@ -261,8 +270,8 @@ def _bsdf_class(mi):
             self._inner = None
             if s["inner"] is not None:
                 self._inner = mi.load_dict({**glossy_only, "table": s["inner"]})
-                r_in = np.clip(lum @ s["r_in_albedo"], 0.0, 1.0)
-                self._pt_in = tex(mi.Texture1f, np.clip(1.0 - r_in, 0.02, 1.0)[:, None])
+                p_in = inner_transmission_choice(s["r_in_albedo"], lum)
+                self._pt_in = tex(mi.Texture1f, p_in[:, None])
                 self._ax_in = Axis.of(s["theta_in"])
             comps = [refl, trans] + ([refl] if self._inner is not None else [])
             self._dd = None
@@ -362,23 +371,8 @@ def _bsdf_class(mi):
             return res
 
         def _pdf_t(self, v, wo, active):
-            """Walter et al. 2007 eq. 17 × the Beckmann normal density (module docstring)."""
-            out = v.z > 0
-            n_i = dr.select(out, 1.0, self._eta)
-            n_o = dr.select(out, self._eta, 1.0)
-            m = dr.normalize(-(n_i * v + n_o * wo))
-            m = dr.mulsign(m, m.z)
-            vm, om = dr.dot(v, m), dr.dot(wo, m)
-            ok = active & (vm * om < 0) & (m.z > 1e-7)
-            c2 = dr.square(m.z)
-            a2 = self._alpha**2
-            d = dr.exp(-(1.0 - c2) / (c2 * a2)) / (math.pi * a2 * dr.square(c2))
-            if self._q_wide:  # the defensive wide normals (``__init__``)
-                q, w2 = self._q_wide, _ALPHA_WIDE**2
-                d_w = dr.exp(-(1.0 - c2) / (c2 * w2)) / (math.pi * w2 * dr.square(c2))
-                d = (1.0 - q) * d + q * d_w
-            jac = dr.square(n_o) * dr.abs(om) / dr.maximum(dr.square(n_i * vm + n_o * om), 1e-30)
-            return dr.select(ok, d * m.z * jac, 0.0)
+            """The refracted lobe's density (:class:`.sampling.RefractionSampler`)."""
+            return self._sampler.pdf(v, wo, active)
 
         def _pdf_glossy(self, ctx, si, wo, active=True):
             v = si.wi
@@ -405,25 +399,8 @@ def _bsdf_class(mi):
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
         def _sample_t(self, v, u):
-            """A refracted direction through a Beckmann normal (Walter et al. 2007 eq. 28)."""
-            a2 = self._alpha**2
-            if self._q_wide:  # the defensive wide normals with probability q
-                q = self._q_wide
-                wide = u.x < q
-                u = mi.Point2f(dr.select(wide, u.x / q, (u.x - q) / (1.0 - q)), u.y)
-                a2 = dr.select(wide, _ALPHA_WIDE**2, a2)
-            tan2 = -a2 * dr.log(dr.maximum(1.0 - u.x, 1e-30))
-            c = dr.rsqrt(1.0 + tan2)
-            s = dr.sqrt(dr.maximum(1.0 - c * c, 0.0))
-            sp, cp = dr.sincos(2 * math.pi * u.y)
-            m = mi.Vector3f(cp * s, sp * s, c)
-            out = v.z > 0
-            eta = dr.select(out, self._eta, 1.0 / self._eta)  # n_o / n_i
-            vm = dr.dot(v, m)
-            k = 1.0 - (1.0 - vm * vm) / (eta * eta)
-            ok = (k > 0) & (vm * v.z > 0)
-            wo = m * (vm / eta - dr.mulsign(dr.sqrt(dr.maximum(k, 0.0)), vm)) - v / eta
-            return dr.normalize(wo), ok, eta
+            """A refracted direction (:class:`.sampling.RefractionSampler`)."""
+            return self._sampler.sample(v, u)
 
         def _sample_glossy(self, ctx, si, sample1, sample2, active=True):
             v = si.wi
@@ -553,8 +530,10 @@ def _bsdf_class(mi):
             pass
 
         def to_string(self):
+            ax, ay = self._sampler.alpha_xy
+            a = f"αx = {ax:.4g}, αy = {ay:.4g}" if self._sampler.anisotropic else ""
             return (
-                f"EmscatterDielectricBSDF[η = {self._eta:.6g}, α = {self._alpha:.4g}, "
+                f"EmscatterDielectricBSDF[η = {self._eta:.6g}, {a or f'α = {self._alpha:.4g}'}, "
                 f"delta lobes={self._dd is not None}]"
             )
 
