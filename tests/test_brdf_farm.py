@@ -204,6 +204,43 @@ def test_bad_batch_and_out_dir(kw, message):
         build_tables(_specs()[:1], **kw)
 
 
+def test_out_dir_compress_false_stores_the_arrays_and_reads_back_identical(tmp_path):
+    import zipfile
+
+    from emscatter.brdf.export_npz import read_npz
+
+    specs = _specs(out_of_range="ignore")[:4]
+    serial = build_tables(specs, progress=False)
+    stored, packed = tmp_path / "stored", tmp_path / "packed"
+    stored.mkdir()
+    packed.mkdir()
+    with cf.ProcessPoolExecutor(2) as pool:
+        paths = build_tables(
+            specs, client=pool, out_dir=stored, compress=False, batch=2, progress=False
+        )
+    deflated = build_tables(specs[:1], out_dir=packed, progress=False)[0]  # the default
+    for table, path in zip(serial, paths, strict=True):
+        _same(table, read_npz(path))
+        with zipfile.ZipFile(path) as z:
+            assert {i.compress_type for i in z.infolist()} == {zipfile.ZIP_STORED}
+    with zipfile.ZipFile(deflated) as z:
+        assert zipfile.ZIP_DEFLATED in {i.compress_type for i in z.infolist()}
+    _same(read_npz(deflated), read_npz(paths[0]))  # same values, stored or deflated
+
+
+@pytest.mark.parametrize(
+    "kw, message",
+    [
+        ({"compress": "no"}, "compress must be True or False, got 'no'"),
+        ({"compress": 0}, "compress must be True or False, got 0"),
+        ({"compress": False}, "compress=False applies to the files out_dir receives"),
+    ],
+)
+def test_bad_compress_names_it(kw, message):
+    with pytest.raises(ValueError, match=message):
+        build_tables(_specs(out_of_range="ignore")[:1], progress=False, **kw)
+
+
 def test_out_dir_needs_unique_file_names(tmp_path):
     specs = _specs(out_of_range="ignore")[:2]
     specs[1] = {**specs[1], "name": specs[0]["name"]}
