@@ -81,66 +81,162 @@ def _timed(fn) -> tuple[float, float, object]:
     return time.perf_counter() - t, time.process_time() - c, out
 
 
-def run_workload(name, client, repeat, scale, resolution=None) -> dict:
-    from emscatter.brdf import build_tables
+def thread_report() -> dict:
+    """The thread settings of this process (run in each dask worker with ``client.run``):
+    the cap variables, numba's thread count and layer, the wheels' OpenBLAS thread count,
+    emscatter's default compiled-call threads."""
+    import numba
 
+    from emscatter.kernels import default_threads
+    from emscatter.parallel import _openblas_controls
+
+    names = ("NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+             "MKL_NUM_THREADS")  # fmt: skip
+    try:
+        layer = numba.threading_layer()
+    except ValueError:  # no parallel numba function has run in this process
+        layer = "not initialised"
+    return {
+        "env": {n: os.environ.get(n) for n in names},
+        "numba_threads": numba.get_num_threads(),
+        "numba_threading_layer": layer,
+        "openblas_threads": [int(get()) for get, _ in _openblas_controls()],
+        "emscatter_default_threads": default_threads(),
+    }
+
+
+def profile_one(sp: list[dict], top: int = 8) -> dict:
+    """cProfile of one plain ``build_table`` call of the workload (the plain loop's options):
+    wall and CPU time and the functions with the most own time (the compiled kernels show as
+    their Python entry, e.g. ``po_kernel._series_kernel``; the rest is numpy on one core)."""
+    import cProfile
+    import pstats
+
+    from emscatter.brdf import build_table
+
+    kw = {k: v for k, v in sp[min(5, len(sp) - 1)].items() if k != "name"}
+    build_table(**kw)
+    prof = cProfile.Profile()
+    wall, cpu, _ = _timed(lambda: prof.runcall(build_table, **kw))
+    st = pstats.Stats(prof)
+    total = sum(v[2] for v in st.stats.values()) or 1.0
+    rows = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[:top]
+    return {
+        "wall_s_profiled": wall,
+        "cpu_s_profiled": cpu,
+        "own_time_share": {
+            f"{Path(f).parent.name}/{Path(f).name}:{name}": round(v[2] / total, 3)
+            for (f, _, name), v in rows
+        },
+    }
+
+
+def _plain_loop(sp, out_dir=None, compress=True):
+    """The serial loop a user writes: ``build_table`` per spec with the spec's options (the
+    solvers' default threads), optionally each table written with ``write_npz``."""
+    from emscatter.brdf import build_table
+    from emscatter.brdf.export_npz import write_npz
+
+    out = []
+    for spec in sp:
+        table = build_table(**{k: v for k, v in spec.items() if k != "name"})
+        if out_dir is not None:
+            table = write_npz(table, Path(out_dir) / f"{spec['name']}.npz", compress=compress)
+        out.append(table)
+    return out
+
+
+#: farm variant → (build_tables keywords, the serial side it is compared with)
+VARIANTS = {
+    "farm": ({}, "serial"),
+    "farm_out_dir": ({"out_dir": True}, "serial_out_dir"),
+    "farm_out_dir_stored": ({"out_dir": True, "compress": False}, "serial_out_dir_stored"),
+}
+#: serial side → (out_dir?, compress): the plain loop, in memory or writing the same files
+SERIAL = {
+    "serial": (False, True),
+    "serial_out_dir": (True, True),
+    "serial_out_dir_stored": (True, False),
+}
+
+
+def run_workload(name, client, repeat, scale, resolution=None, profile=False) -> dict:
+    from emscatter.brdf import build_tables
+    from emscatter.brdf.export_npz import read_npz
+
+    load0 = list(os.getloadavg())
     sp = specs(name, scale, resolution)
-    variants = {"farm": {}}
+    variants = dict(VARIANTS)
     if name == "go":
-        variants["farm_batch1"] = {"batch": 1}
-        variants["farm_out_dir"] = {"out_dir": True}
-    build_tables(sp[:4], progress=False)  # warm this process
+        variants["farm_batch1"] = ({"batch": 1}, "serial")
+    _plain_loop(sp[:4])  # warm this process
     build_tables(sp[:8], client=client, progress=False)  # warm the workers
-    serial_t, serial_cpu = [], []
-    times = {v: [] for v in variants}
+    times = {v: [] for v in (*SERIAL, "serial_threads1", *variants)}
+    serial_cpu = []
     identical = True
     with tempfile.TemporaryDirectory(prefix="emscatter-farm-") as tmp:
+
+        def folder(label, r):
+            f = Path(tmp) / f"{label}-{r}"
+            f.mkdir()
+            return f
+
         for r in range(repeat):  # alternated in one process
-            wall, cpu, serial = _timed(lambda: build_tables(sp, progress=False))
-            serial_t.append(wall)
-            serial_cpu.append(cpu / wall)
-            for v, kw in variants.items():
-                kw = dict(kw)
-                if kw.get("out_dir"):
-                    folder = Path(tmp) / f"{v}-{r}"
-                    folder.mkdir()
-                    kw["out_dir"] = folder
+            reference = None
+            for side, (to_dir, compress) in SERIAL.items():
+                where = folder(side, r) if to_dir else None
+                wall, cpu, out = _timed(lambda w=where, c=compress: _plain_loop(sp, w, c))
+                times[side].append(wall)
+                if side == "serial":
+                    serial_cpu.append(cpu / wall)
+                    reference = out
+                else:
+                    identical = identical and _identical(reference, [read_npz(p) for p in out])
+            wall, _, out = _timed(lambda: build_tables(sp, progress=False))  # threads=1
+            times["serial_threads1"].append(wall)
+            identical = identical and _identical(reference, out)
+            for v, (kw, _) in variants.items():
+                kw = {**kw, "out_dir": folder(v, r)} if kw.get("out_dir") else dict(kw)
                 wall, _, farm = _timed(
                     lambda kw=kw: build_tables(sp, client=client, progress=False, **kw)
                 )
                 times[v].append(wall)
                 if "out_dir" in kw:
-                    from emscatter.brdf.export_npz import read_npz
-
                     farm = [read_npz(p) for p in farm]
-                identical = identical and _identical(serial, farm)
-        if "farm_out_dir" in variants:  # the serial side writing the same files
-            times["serial_out_dir"] = []
-            for r in range(repeat):
-                folder = Path(tmp) / f"serial-{r}"
-                folder.mkdir()
-                wall, _, _ = _timed(lambda f=folder: build_tables(sp, out_dir=f, progress=False))
-                times["serial_out_dir"].append(wall)
+                identical = identical and _identical(reference, farm)
     method, _, res, _, _ = WORKLOADS[name]
     res = tuple(resolution) if resolution else res
-    med = statistics.median(serial_t)
+    med = statistics.median(times["serial"])
     row = {
         "what": f"{len(sp)} {method.upper()} tables {res[0]}×{res[1]}, 1 wavelength each, "
-        "threads=1 per table, warm, cache off",
+        "warm, cache off. Serial: the plain loop a user writes (build_table per spec, the "
+        "solvers' default threads, in this process), in memory or writing each table with "
+        "write_npz (deflated / stored); serial_threads1: build_tables(specs) (threads=1). "
+        "Farm: build_tables(specs, client=<2-worker LocalCluster>, threads=1 per worker), "
+        "tables pickled back or written by the workers (out_dir, compress=True/False). "
+        "Each speed-up: median serial side / median farm; farm_out_dir_stored_vs_memory: "
+        "the in-memory plain loop over the farm that also writes the files.",
         "tables": len(sp),
-        "serial_s": serial_t,
         "per_table_serial_ms": 1e3 * med / len(sp),
         "serial_cpu_utilisation": statistics.median(serial_cpu),
         "identical": identical,
+        "load_average_start": load0,
     }
     for v, ts in times.items():
         row[f"{v}_s"] = ts
-    for v in variants:
-        base = times["serial_out_dir"] if v == "farm_out_dir" else serial_t
-        row[f"{v}_speedup"] = statistics.median(base) / statistics.median(times[v])
+    for v, (_, base) in variants.items():
+        row[f"{v}_speedup"] = statistics.median(times[base]) / statistics.median(times[v])
+    row["farm_out_dir_stored_vs_memory_speedup"] = med / statistics.median(
+        times["farm_out_dir_stored"]
+    )
+    row["serial_threads1_over_plain"] = statistics.median(times["serial_threads1"]) / med
+    row["load_average_end"] = list(os.getloadavg())
+    if profile:
+        row["profile_one_table"] = profile_one(sp)
+    shown = [*variants, "farm_out_dir_stored_vs_memory"]
     print(f"{name:4s} {len(sp):3d} tables  serial {med:.2f} s ({row['per_table_serial_ms']:.0f} "
           f"ms/table, CPU ×{row['serial_cpu_utilisation']:.2f})  " + "  ".join(
-              f"{v} ×{row[f'{v}_speedup']:.2f}" for v in variants) + f"  identical {identical}",
+              f"{v} ×{row[f'{v}_speedup']:.2f}" for v in shown) + f"  identical {identical}",
           flush=True)  # fmt: skip
     return row
 
@@ -212,6 +308,11 @@ def main() -> None:
     )
     ap.add_argument("--out", default="brdf_farm", help="results file name (results/NAME.json)")
     ap.add_argument(
+        "--profile",
+        action="store_true",
+        help="add each row a cProfile of one plain build_table call (own-time shares)",
+    )
+    ap.add_argument(
         "--cli",
         action="store_true",
         help="also time the command line: 'emscatter farm brdf' serially and with "
@@ -219,7 +320,7 @@ def main() -> None:
     )
     args = ap.parse_args()
     warnings.simplefilter("ignore")
-    from emscatter.parallel import open_executor
+    from emscatter.parallel import dask_client, open_executor
 
     # the cluster build_tables(client="local") starts (emscatter.parallel): thread caps in the
     # workers' environment, their statistical profiler off, the dashboard on a free port;
@@ -227,10 +328,18 @@ def main() -> None:
     data = {"machine": machine(), "command": command(), "workers": args.workers, "rows": {}}
     client, close = open_executor("local", args.workers, 1)
     try:
+        dc = dask_client(client)
+        info = dc.scheduler_info().get("workers", {})
+        data["threads"] = {
+            "serial_process": thread_report(),
+            "dask_workers": dc.run(thread_report),
+            "dask_worker_nthreads": [int(w.get("nthreads", 0)) for w in info.values()],
+        }
         for name in args.workloads:
             data["rows"][name] = run_workload(
-                name, client, args.repeat, args.scale, args.resolution
+                name, client, args.repeat, args.scale, args.resolution, args.profile
             )
+        data["threads"]["dask_workers_end"] = dc.run(thread_report)
     finally:
         close()
     if args.cli:

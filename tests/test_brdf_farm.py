@@ -289,6 +289,37 @@ def test_local_cluster_dashboard_on_a_free_port_not_8787():
         _same(a, b)
 
 
+def _worker_settings():
+    import os
+
+    import numba
+
+    names = ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "NUMBA_NUM_THREADS",
+             "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")  # fmt: skip
+    return {n: os.environ.get(n) for n in names}, numba.get_num_threads()
+
+
+def test_local_cluster_workers_one_thread_and_glibc_heap_of_a_plain_process():
+    """The "local" cluster's workers start with the thread caps (numba 1 thread) and glibc's
+    heap thresholds set before they start (dask's MALLOC_TRIM_THRESHOLD_=65536 would leave
+    every numpy temporary over 128 kB a fresh mapping: ×1.6 the CPU of a PO table)."""
+    pytest.importorskip("dask.distributed")
+    from emscatter.parallel import WORKER_MALLOC, dask_client, open_executor
+
+    executor, close = open_executor("local", 2, 1)
+    try:
+        got = dask_client(executor).run(_worker_settings)
+    finally:
+        close()
+    assert len(got) == 2
+    for env, numba_threads in got.values():
+        assert numba_threads == 1
+        assert env["MALLOC_MMAP_THRESHOLD_"] == str(WORKER_MALLOC["MALLOC_MMAP_THRESHOLD_"])
+        assert env["MALLOC_TRIM_THRESHOLD_"] == str(WORKER_MALLOC["MALLOC_TRIM_THRESHOLD_"])
+        assert env["NUMBA_NUM_THREADS"] == env["OMP_NUM_THREADS"] == "1"
+        assert env["OPENBLAS_NUM_THREADS"] == env["MKL_NUM_THREADS"] == "1"
+
+
 def test_limited_threads_caps_the_wheels_openblas_and_restores_it():
     """Without threadpoolctl, emscatter.parallel caps the OpenBLAS of numpy's and scipy's
     wheels itself, so a serial run uses the BLAS thread count of a "local" worker
