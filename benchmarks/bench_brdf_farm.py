@@ -3,27 +3,40 @@ LocalCluster, per workload: the tables a farm user builds — materials × wavel
 roughness — with GO (whose kernel is the fastest: small tables, the farm's per-task cost
 shows), PO, IEM and SPM (numpy/compiled builds that run on one core: what a farm is for).
 
-Same work on both sides: the same specs, ``threads=1`` per table (serial: one core; farm: one
-per worker), result cache off (``EMSCATTER_CACHE=off``), warm on both sides (this process and
-the workers first build a few tables of the workload: numba cache loaded, material data read),
-serial and farm alternated ``--repeat`` times in one process; the farm's tables checked
-bit-identical to the serial ones. Each row records the per-table serial time, the serial run's
-CPU utilisation (process CPU time / wall: 1.0 = one core busy; near 2 the serial build already
-uses both cores and no 2-worker farm can reach 2×), the farm's speed-up (median serial /
-median farm) with the default batching (about four tasks per worker) and, for GO, with one
-table per task (``batch=1``, the previous behaviour) and with ``out_dir`` (the workers write
-the ``.npz`` files, the serial side writes the same files).
+The serial side is the plain loop a user writes: ``build_table(**spec)`` per spec, the spec's
+options, the solvers' default threads, in this process (``serial``: tables in memory;
+``serial_out_dir`` / ``serial_out_dir_stored``: each also written with ``write_npz``,
+deflated / stored), plus ``build_tables(specs)`` (``serial_threads1``: one thread a table, the
+farm's per-task setting). The farm: ``build_tables(specs, client=<LocalCluster>)``, one
+single-threaded worker per core, the tables pickled back (``farm``) or written by the workers
+(``farm_out_dir``: deflated, ``farm_out_dir_stored``: ``compress=False``). Result cache off
+(``EMSCATTER_CACHE=off``), warm on both sides (this process and the workers first build a few
+tables of the workload: numba cache loaded, material data read), every side alternated
+``--repeat`` times in one process; every farm's and every serial side's tables checked
+bit-identical to the plain loop's. Each row records the per-table serial time, the plain
+loop's CPU utilisation (process CPU / wall: 1.0 = one core busy), the load average at its start
+and end, and each farm's speed-up over the serial side writing the same files (median /
+median); ``farm_out_dir_stored_vs_memory`` is the in-memory plain loop over the farm that also
+writes the files (the farm does more). On a loaded machine wall times mostly measure the other
+load: ``cpu_per_table_ms`` (this process's CPU; for a farm the workers' plus this process's)
+and ``cpu_projected_speedup`` (serial CPU ÷ (farm CPU ÷ workers): the idle machine's speed-up
+if the serial side keeps one core busy and the farm's cores are all busy) are the
+load-independent view. The JSON's ``threads`` says what each dask worker runs
+with (thread caps, numba's thread count and layer, OpenBLAS threads, glibc heap settings) and
+the same for this process; ``--profile`` adds a cProfile of one plain ``build_table`` call
+(own-time shares: the compiled kernels show as their Python entry, the rest is numpy).
 
     EMSCATTER_CACHE=off PYTHONPATH=src python benchmarks/bench_brdf_farm.py [--repeat 3]
         [--workloads go po iem spm] [--workers 2] [--scale 1.0] [--resolution 90 180]
-        [--out brdf_farm] [--cli]
+        [--out brdf_farm] [--cli] [--profile]
 
 ``--cli`` adds a row for the command line (``emscatter farm brdf`` serially and with
 ``--scheduler local``, each a fresh process: the interpreter's and the cluster's start are in
-the time, as a user waits for them).
+the time, as a user waits for them; run with this script's starting environment, not the
+thread caps dask's nanny leaves in it).
 
 The default tables are small (GO 5 ms, IEM 20 ms of CPU each on the reference machine): the
-farm's fixed costs show. Full-size tables (``--resolution 90 180``: 17.5 MB each in float32)
+farm's fixed costs show. Full-size tables (``--resolution 90 180``: 11.7 MB each in float64)
 are where ``out_dir`` matters — the workers write them instead of pickling them back.
 
 Writes ``benchmarks/results/brdf_farm.json``. The issue's target is ≥ 1.7× for 64 tables on 2
@@ -44,6 +57,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import command, machine, write  # noqa: E402
+
+#: This process's environment at the start (dask's nanny writes its workers' thread caps and
+#: malloc settings into it when a LocalCluster starts; the CLI rows run without them).
+START_ENV = dict(os.environ)
 
 #: workload → (method, tables, (n_theta, n_phi), roughness σ [µm], ℓ [µm])
 WORKLOADS = {
@@ -91,7 +108,7 @@ def thread_report() -> dict:
     from emscatter.parallel import _openblas_controls
 
     names = ("NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-             "MKL_NUM_THREADS")  # fmt: skip
+             "MKL_NUM_THREADS", "MALLOC_TRIM_THRESHOLD_", "MALLOC_MMAP_THRESHOLD_")  # fmt: skip
     try:
         layer = numba.threading_layer()
     except ValueError:  # no parallel numba function has run in this process
@@ -163,6 +180,12 @@ SERIAL = {
 def run_workload(name, client, repeat, scale, resolution=None, profile=False) -> dict:
     from emscatter.brdf import build_tables
     from emscatter.brdf.export_npz import read_npz
+    from emscatter.parallel import dask_client
+
+    dc = dask_client(client)
+
+    def workers_cpu() -> float:  # the dask workers' process CPU time, summed [s]
+        return sum(dc.run(time.process_time).values())
 
     load0 = list(os.getloadavg())
     sp = specs(name, scale, resolution)
@@ -172,6 +195,7 @@ def run_workload(name, client, repeat, scale, resolution=None, profile=False) ->
     _plain_loop(sp[:4])  # warm this process
     build_tables(sp[:8], client=client, progress=False)  # warm the workers
     times = {v: [] for v in (*SERIAL, "serial_threads1", *variants)}
+    cpus = {v: [] for v in times}  # CPU seconds of each run (farm: workers + this process)
     serial_cpu = []
     identical = True
     with tempfile.TemporaryDirectory(prefix="emscatter-farm-") as tmp:
@@ -187,20 +211,24 @@ def run_workload(name, client, repeat, scale, resolution=None, profile=False) ->
                 where = folder(side, r) if to_dir else None
                 wall, cpu, out = _timed(lambda w=where, c=compress: _plain_loop(sp, w, c))
                 times[side].append(wall)
+                cpus[side].append(cpu)
                 if side == "serial":
                     serial_cpu.append(cpu / wall)
                     reference = out
                 else:
                     identical = identical and _identical(reference, [read_npz(p) for p in out])
-            wall, _, out = _timed(lambda: build_tables(sp, progress=False))  # threads=1
+            wall, cpu, out = _timed(lambda: build_tables(sp, progress=False))  # threads=1
             times["serial_threads1"].append(wall)
+            cpus["serial_threads1"].append(cpu)
             identical = identical and _identical(reference, out)
             for v, (kw, _) in variants.items():
                 kw = {**kw, "out_dir": folder(v, r)} if kw.get("out_dir") else dict(kw)
-                wall, _, farm = _timed(
+                w0 = workers_cpu()
+                wall, cpu, farm = _timed(
                     lambda kw=kw: build_tables(sp, client=client, progress=False, **kw)
                 )
                 times[v].append(wall)
+                cpus[v].append(workers_cpu() - w0 + cpu)
                 if "out_dir" in kw:
                     farm = [read_npz(p) for p in farm]
                 identical = identical and _identical(reference, farm)
@@ -230,13 +258,24 @@ def run_workload(name, client, repeat, scale, resolution=None, profile=False) ->
         times["farm_out_dir_stored"]
     )
     row["serial_threads1_over_plain"] = statistics.median(times["serial_threads1"]) / med
+    # CPU per table and what it predicts for an idle machine (wall = CPU ÷ workers for the
+    # farm, = CPU for the serial side): the load-independent view of a loaded machine's run
+    cpu_ms = {v: 1e3 * statistics.median(c) / len(sp) for v, c in cpus.items()}
+    row["cpu_per_table_ms"] = cpu_ms
+    workers = len(dc.scheduler_info().get("workers", {})) if dc is not None else 1
+    row["cpu_projected_speedup"] = {
+        v: cpu_ms[base] / (cpu_ms[v] / workers) for v, (_, base) in variants.items()
+    }
     row["load_average_end"] = list(os.getloadavg())
     if profile:
         row["profile_one_table"] = profile_one(sp)
     shown = [*variants, "farm_out_dir_stored_vs_memory"]
     print(f"{name:4s} {len(sp):3d} tables  serial {med:.2f} s ({row['per_table_serial_ms']:.0f} "
           f"ms/table, CPU ×{row['serial_cpu_utilisation']:.2f})  " + "  ".join(
-              f"{v} ×{row[f'{v}_speedup']:.2f}" for v in shown) + f"  identical {identical}",
+              f"{v} ×{row[f'{v}_speedup']:.2f}" for v in shown) + f"  identical {identical}"
+          + "\n     CPU ms/table " + "  ".join(f"{v} {c:.0f}" for v, c in cpu_ms.items())
+          + "\n     CPU-projected " + "  ".join(
+              f"{v} ×{x:.2f}" for v, x in row["cpu_projected_speedup"].items()),
           flush=True)  # fmt: skip
     return row
 
@@ -261,7 +300,8 @@ def run_cli(workers: int, repeat: int, scale: float, resolution=None) -> dict:
     for w in WAVELENGTHS:
         argv += ["--wavelengths-nm", f"{w * 1e9:g}"]
     tables = len(sigmas) * n_mat * len(WAVELENGTHS)
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
+    env = {**START_ENV, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
+    env.setdefault("EMSCATTER_CACHE", "off")
     times = {"serial": [], "local": []}
     identical = True
     with tempfile.TemporaryDirectory(prefix="emscatter-farm-cli-") as tmp:
@@ -326,12 +366,13 @@ def main() -> None:
     # workers' environment, their statistical profiler off, the dashboard on a free port;
     # EMSCATTER_CACHE=off reaches them through this process's environment
     data = {"machine": machine(), "command": command(), "workers": args.workers, "rows": {}}
+    serial_threads = thread_report()  # before the cluster: as the user's process starts
     client, close = open_executor("local", args.workers, 1)
     try:
         dc = dask_client(client)
         info = dc.scheduler_info().get("workers", {})
         data["threads"] = {
-            "serial_process": thread_report(),
+            "serial_process": serial_threads,
             "dask_workers": dc.run(thread_report),
             "dask_worker_nthreads": [int(w.get("nthreads", 0)) for w in info.values()],
         }
@@ -340,6 +381,7 @@ def main() -> None:
                 name, client, args.repeat, args.scale, args.resolution, args.profile
             )
         data["threads"]["dask_workers_end"] = dc.run(thread_report)
+        data["threads"]["serial_process_end"] = thread_report()
     finally:
         close()
     if args.cli:
