@@ -28,7 +28,7 @@ the same for this process; ``--profile`` adds a cProfile of one plain ``build_ta
 
     EMSCATTER_CACHE=off PYTHONPATH=src python benchmarks/bench_brdf_farm.py [--repeat 3]
         [--workloads go po iem spm] [--workers 2] [--scale 1.0] [--resolution 90 180]
-        [--out brdf_farm] [--cli] [--profile]
+        [--out brdf_farm] [--cli] [--profile] [--dtype float32]
 
 ``--cli`` adds a row for the command line (``emscatter farm brdf`` serially and with
 ``--scheduler local``, each a fresh process: the interpreter's and the cluster's start are in
@@ -73,7 +73,7 @@ MATERIALS = ["Au", "Ag", "Cu", "Al"]
 WAVELENGTHS = (450e-9, 550e-9, 650e-9, 750e-9)
 
 
-def specs(workload: str, scale: float = 1.0, resolution=None) -> list[dict]:
+def specs(workload: str, scale: float = 1.0, resolution=None, dtype="float64") -> list[dict]:
     """The workload's specs: roughness × materials × wavelengths (one wavelength each), the
     first ``tables × scale`` of them (``resolution``: ``(n_theta, n_phi)`` instead)."""
     from emscatter.brdf import table_specs
@@ -83,7 +83,9 @@ def specs(workload: str, scale: float = 1.0, resolution=None) -> list[dict]:
     res = tuple(resolution) if resolution else res
     rough = [GaussianCorrelation(sigma=s * 1e-6, length=ell * 1e-6, dimension=2) for s in sigmas]
     wls = [[w] for w in WAVELENGTHS]
-    sp = table_specs(rough, MATERIALS, wls, method=method, resolution=res, out_of_range="ignore")
+    sp = table_specs(
+        rough, MATERIALS, wls, method=method, resolution=res, out_of_range="ignore", dtype=dtype
+    )
     n = max(4, round(n * scale))
     return (sp * (1 + n // len(sp)))[:n] if n > len(sp) else sp[:n]
 
@@ -177,7 +179,8 @@ SERIAL = {
 }
 
 
-def run_workload(name, client, repeat, scale, resolution=None, profile=False) -> dict:
+def run_workload(name, client, repeat, scale, resolution=None, profile=False,
+                 dtype="float64") -> dict:  # fmt: skip
     from emscatter.brdf import build_tables
     from emscatter.brdf.export_npz import read_npz
     from emscatter.parallel import dask_client
@@ -188,7 +191,7 @@ def run_workload(name, client, repeat, scale, resolution=None, profile=False) ->
         return sum(dc.run(time.process_time).values())
 
     load0 = list(os.getloadavg())
-    sp = specs(name, scale, resolution)
+    sp = specs(name, scale, resolution, dtype)
     variants = dict(VARIANTS)
     if name == "go":
         variants["farm_batch1"] = ({"batch": 1}, "serial")
@@ -236,7 +239,7 @@ def run_workload(name, client, repeat, scale, resolution=None, profile=False) ->
     res = tuple(resolution) if resolution else res
     med = statistics.median(times["serial"])
     row = {
-        "what": f"{len(sp)} {method.upper()} tables {res[0]}×{res[1]}, 1 wavelength each, "
+        "what": f"{len(sp)} {method.upper()} tables {res[0]}×{res[1]} {dtype}, 1 wavelength each, "
         "warm, cache off. Serial: the plain loop a user writes (build_table per spec, the "
         "solvers' default threads, in this process), in memory or writing each table with "
         "write_npz (deflated / stored); serial_threads1: build_tables(specs) (threads=1). "
@@ -348,6 +351,12 @@ def main() -> None:
     )
     ap.add_argument("--out", default="brdf_farm", help="results file name (results/NAME.json)")
     ap.add_argument(
+        "--dtype",
+        default="float64",
+        choices=["float64", "float32"],
+        help="the tables' storage (build_table's dtype=; float32 halves what is written)",
+    )
+    ap.add_argument(
         "--profile",
         action="store_true",
         help="add each row a cProfile of one plain build_table call (own-time shares)",
@@ -378,7 +387,7 @@ def main() -> None:
         }
         for name in args.workloads:
             data["rows"][name] = run_workload(
-                name, client, args.repeat, args.scale, args.resolution, args.profile
+                name, client, args.repeat, args.scale, args.resolution, args.profile, args.dtype
             )
         data["threads"]["dask_workers_end"] = dc.run(thread_report)
         data["threads"]["serial_process_end"] = thread_report()
