@@ -3,27 +3,40 @@ LocalCluster, per workload: the tables a farm user builds — materials × wavel
 roughness — with GO (whose kernel is the fastest: small tables, the farm's per-task cost
 shows), PO, IEM and SPM (numpy/compiled builds that run on one core: what a farm is for).
 
-Same work on both sides: the same specs, ``threads=1`` per table (serial: one core; farm: one
-per worker), result cache off (``EMSCATTER_CACHE=off``), warm on both sides (this process and
-the workers first build a few tables of the workload: numba cache loaded, material data read),
-serial and farm alternated ``--repeat`` times in one process; the farm's tables checked
-bit-identical to the serial ones. Each row records the per-table serial time, the serial run's
-CPU utilisation (process CPU time / wall: 1.0 = one core busy; near 2 the serial build already
-uses both cores and no 2-worker farm can reach 2×), the farm's speed-up (median serial /
-median farm) with the default batching (about four tasks per worker) and, for GO, with one
-table per task (``batch=1``, the previous behaviour) and with ``out_dir`` (the workers write
-the ``.npz`` files, the serial side writes the same files).
+The serial side is the plain loop a user writes: ``build_table(**spec)`` per spec, the spec's
+options, the solvers' default threads, in this process (``serial``: tables in memory;
+``serial_out_dir`` / ``serial_out_dir_stored``: each also written with ``write_npz``,
+deflated / stored), plus ``build_tables(specs)`` (``serial_threads1``: one thread a table, the
+farm's per-task setting). The farm: ``build_tables(specs, client=<LocalCluster>)``, one
+single-threaded worker per core, the tables pickled back (``farm``) or written by the workers
+(``farm_out_dir``: deflated, ``farm_out_dir_stored``: ``compress=False``). Result cache off
+(``EMSCATTER_CACHE=off``), warm on both sides (this process and the workers first build a few
+tables of the workload: numba cache loaded, material data read), every side alternated
+``--repeat`` times in one process; every farm's and every serial side's tables checked
+bit-identical to the plain loop's. Each row records the per-table serial time, the plain
+loop's CPU utilisation (process CPU / wall: 1.0 = one core busy), the load average at its start
+and end, and each farm's speed-up over the serial side writing the same files (median /
+median); ``farm_out_dir_stored_vs_memory`` is the in-memory plain loop over the farm that also
+writes the files (the farm does more). On a loaded machine wall times mostly measure the other
+load: ``cpu_per_table_ms`` (this process's CPU; for a farm the workers' plus this process's)
+and ``cpu_projected_speedup`` (serial CPU ÷ (farm CPU ÷ workers): the idle machine's speed-up
+if the serial side keeps one core busy and the farm's cores are all busy) are the
+load-independent view. The JSON's ``threads`` says what each dask worker runs
+with (thread caps, numba's thread count and layer, OpenBLAS threads, glibc heap settings) and
+the same for this process; ``--profile`` adds a cProfile of one plain ``build_table`` call
+(own-time shares: the compiled kernels show as their Python entry, the rest is numpy).
 
     EMSCATTER_CACHE=off PYTHONPATH=src python benchmarks/bench_brdf_farm.py [--repeat 3]
         [--workloads go po iem spm] [--workers 2] [--scale 1.0] [--resolution 90 180]
-        [--out brdf_farm] [--cli]
+        [--out brdf_farm] [--cli] [--profile] [--dtype float32]
 
 ``--cli`` adds a row for the command line (``emscatter farm brdf`` serially and with
 ``--scheduler local``, each a fresh process: the interpreter's and the cluster's start are in
-the time, as a user waits for them).
+the time, as a user waits for them; run with this script's starting environment, not the
+thread caps dask's nanny leaves in it).
 
 The default tables are small (GO 5 ms, IEM 20 ms of CPU each on the reference machine): the
-farm's fixed costs show. Full-size tables (``--resolution 90 180``: 17.5 MB each in float32)
+farm's fixed costs show. Full-size tables (``--resolution 90 180``: 11.7 MB each in float64)
 are where ``out_dir`` matters — the workers write them instead of pickling them back.
 
 Writes ``benchmarks/results/brdf_farm.json``. The issue's target is ≥ 1.7× for 64 tables on 2
@@ -45,6 +58,10 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import command, machine, write  # noqa: E402
 
+#: This process's environment at the start (dask's nanny writes its workers' thread caps and
+#: malloc settings into it when a LocalCluster starts; the CLI rows run without them).
+START_ENV = dict(os.environ)
+
 #: workload → (method, tables, (n_theta, n_phi), roughness σ [µm], ℓ [µm])
 WORKLOADS = {
     "go": ("go", 64, (30, 60), (0.2, 0.3, 0.4, 0.5), 1.0),
@@ -56,7 +73,7 @@ MATERIALS = ["Au", "Ag", "Cu", "Al"]
 WAVELENGTHS = (450e-9, 550e-9, 650e-9, 750e-9)
 
 
-def specs(workload: str, scale: float = 1.0, resolution=None) -> list[dict]:
+def specs(workload: str, scale: float = 1.0, resolution=None, dtype="float64") -> list[dict]:
     """The workload's specs: roughness × materials × wavelengths (one wavelength each), the
     first ``tables × scale`` of them (``resolution``: ``(n_theta, n_phi)`` instead)."""
     from emscatter.brdf import table_specs
@@ -66,7 +83,9 @@ def specs(workload: str, scale: float = 1.0, resolution=None) -> list[dict]:
     res = tuple(resolution) if resolution else res
     rough = [GaussianCorrelation(sigma=s * 1e-6, length=ell * 1e-6, dimension=2) for s in sigmas]
     wls = [[w] for w in WAVELENGTHS]
-    sp = table_specs(rough, MATERIALS, wls, method=method, resolution=res, out_of_range="ignore")
+    sp = table_specs(
+        rough, MATERIALS, wls, method=method, resolution=res, out_of_range="ignore", dtype=dtype
+    )
     n = max(4, round(n * scale))
     return (sp * (1 + n // len(sp)))[:n] if n > len(sp) else sp[:n]
 
@@ -81,66 +100,185 @@ def _timed(fn) -> tuple[float, float, object]:
     return time.perf_counter() - t, time.process_time() - c, out
 
 
-def run_workload(name, client, repeat, scale, resolution=None) -> dict:
-    from emscatter.brdf import build_tables
+def thread_report() -> dict:
+    """The thread settings of this process (run in each dask worker with ``client.run``):
+    the cap variables, numba's thread count and layer, the wheels' OpenBLAS thread count,
+    emscatter's default compiled-call threads."""
+    import numba
 
-    sp = specs(name, scale, resolution)
-    variants = {"farm": {}}
+    from emscatter.kernels import default_threads
+    from emscatter.parallel import _openblas_controls
+
+    names = ("NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+             "MKL_NUM_THREADS", "MALLOC_TRIM_THRESHOLD_", "MALLOC_MMAP_THRESHOLD_")  # fmt: skip
+    try:
+        layer = numba.threading_layer()
+    except ValueError:  # no parallel numba function has run in this process
+        layer = "not initialised"
+    return {
+        "env": {n: os.environ.get(n) for n in names},
+        "numba_threads": numba.get_num_threads(),
+        "numba_threading_layer": layer,
+        "openblas_threads": [int(get()) for get, _ in _openblas_controls()],
+        "emscatter_default_threads": default_threads(),
+    }
+
+
+def profile_one(sp: list[dict], top: int = 8) -> dict:
+    """cProfile of one plain ``build_table`` call of the workload (the plain loop's options):
+    wall and CPU time and the functions with the most own time (the compiled kernels show as
+    their Python entry, e.g. ``po_kernel._series_kernel``; the rest is numpy on one core)."""
+    import cProfile
+    import pstats
+
+    from emscatter.brdf import build_table
+
+    kw = {k: v for k, v in sp[min(5, len(sp) - 1)].items() if k != "name"}
+    build_table(**kw)
+    prof = cProfile.Profile()
+    wall, cpu, _ = _timed(lambda: prof.runcall(build_table, **kw))
+    st = pstats.Stats(prof)
+    total = sum(v[2] for v in st.stats.values()) or 1.0
+    rows = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[:top]
+    return {
+        "wall_s_profiled": wall,
+        "cpu_s_profiled": cpu,
+        "own_time_share": {
+            f"{Path(f).parent.name}/{Path(f).name}:{name}": round(v[2] / total, 3)
+            for (f, _, name), v in rows
+        },
+    }
+
+
+def _plain_loop(sp, out_dir=None, compress=True):
+    """The serial loop a user writes: ``build_table`` per spec with the spec's options (the
+    solvers' default threads), optionally each table written with ``write_npz``."""
+    from emscatter.brdf import build_table
+    from emscatter.brdf.export_npz import write_npz
+
+    out = []
+    for spec in sp:
+        table = build_table(**{k: v for k, v in spec.items() if k != "name"})
+        if out_dir is not None:
+            table = write_npz(table, Path(out_dir) / f"{spec['name']}.npz", compress=compress)
+        out.append(table)
+    return out
+
+
+#: farm variant → (build_tables keywords, the serial side it is compared with)
+VARIANTS = {
+    "farm": ({}, "serial"),
+    "farm_out_dir": ({"out_dir": True}, "serial_out_dir"),
+    "farm_out_dir_stored": ({"out_dir": True, "compress": False}, "serial_out_dir_stored"),
+}
+#: serial side → (out_dir?, compress): the plain loop, in memory or writing the same files
+SERIAL = {
+    "serial": (False, True),
+    "serial_out_dir": (True, True),
+    "serial_out_dir_stored": (True, False),
+}
+
+
+def run_workload(name, client, repeat, scale, resolution=None, profile=False,
+                 dtype="float64") -> dict:  # fmt: skip
+    from emscatter.brdf import build_tables
+    from emscatter.brdf.export_npz import read_npz
+    from emscatter.parallel import dask_client
+
+    dc = dask_client(client)
+
+    def workers_cpu() -> float:  # the dask workers' process CPU time, summed [s]
+        return sum(dc.run(time.process_time).values())
+
+    load0 = list(os.getloadavg())
+    sp = specs(name, scale, resolution, dtype)
+    variants = dict(VARIANTS)
     if name == "go":
-        variants["farm_batch1"] = {"batch": 1}
-        variants["farm_out_dir"] = {"out_dir": True}
-    build_tables(sp[:4], progress=False)  # warm this process
+        variants["farm_batch1"] = ({"batch": 1}, "serial")
+    _plain_loop(sp[:4])  # warm this process
     build_tables(sp[:8], client=client, progress=False)  # warm the workers
-    serial_t, serial_cpu = [], []
-    times = {v: [] for v in variants}
+    times = {v: [] for v in (*SERIAL, "serial_threads1", *variants)}
+    cpus = {v: [] for v in times}  # CPU seconds of each run (farm: workers + this process)
+    serial_cpu = []
     identical = True
     with tempfile.TemporaryDirectory(prefix="emscatter-farm-") as tmp:
+
+        def folder(label, r):
+            f = Path(tmp) / f"{label}-{r}"
+            f.mkdir()
+            return f
+
         for r in range(repeat):  # alternated in one process
-            wall, cpu, serial = _timed(lambda: build_tables(sp, progress=False))
-            serial_t.append(wall)
-            serial_cpu.append(cpu / wall)
-            for v, kw in variants.items():
-                kw = dict(kw)
-                if kw.get("out_dir"):
-                    folder = Path(tmp) / f"{v}-{r}"
-                    folder.mkdir()
-                    kw["out_dir"] = folder
-                wall, _, farm = _timed(
+            reference = None
+            for side, (to_dir, compress) in SERIAL.items():
+                where = folder(side, r) if to_dir else None
+                wall, cpu, out = _timed(lambda w=where, c=compress: _plain_loop(sp, w, c))
+                times[side].append(wall)
+                cpus[side].append(cpu)
+                if side == "serial":
+                    serial_cpu.append(cpu / wall)
+                    reference = out
+                else:
+                    identical = identical and _identical(reference, [read_npz(p) for p in out])
+            wall, cpu, out = _timed(lambda: build_tables(sp, progress=False))  # threads=1
+            times["serial_threads1"].append(wall)
+            cpus["serial_threads1"].append(cpu)
+            identical = identical and _identical(reference, out)
+            for v, (kw, _) in variants.items():
+                kw = {**kw, "out_dir": folder(v, r)} if kw.get("out_dir") else dict(kw)
+                w0 = workers_cpu()
+                wall, cpu, farm = _timed(
                     lambda kw=kw: build_tables(sp, client=client, progress=False, **kw)
                 )
                 times[v].append(wall)
+                cpus[v].append(workers_cpu() - w0 + cpu)
                 if "out_dir" in kw:
-                    from emscatter.brdf.export_npz import read_npz
-
                     farm = [read_npz(p) for p in farm]
-                identical = identical and _identical(serial, farm)
-        if "farm_out_dir" in variants:  # the serial side writing the same files
-            times["serial_out_dir"] = []
-            for r in range(repeat):
-                folder = Path(tmp) / f"serial-{r}"
-                folder.mkdir()
-                wall, _, _ = _timed(lambda f=folder: build_tables(sp, out_dir=f, progress=False))
-                times["serial_out_dir"].append(wall)
+                identical = identical and _identical(reference, farm)
     method, _, res, _, _ = WORKLOADS[name]
     res = tuple(resolution) if resolution else res
-    med = statistics.median(serial_t)
+    med = statistics.median(times["serial"])
     row = {
-        "what": f"{len(sp)} {method.upper()} tables {res[0]}×{res[1]}, 1 wavelength each, "
-        "threads=1 per table, warm, cache off",
+        "what": f"{len(sp)} {method.upper()} tables {res[0]}×{res[1]} {dtype}, 1 wavelength each, "
+        "warm, cache off. Serial: the plain loop a user writes (build_table per spec, the "
+        "solvers' default threads, in this process), in memory or writing each table with "
+        "write_npz (deflated / stored); serial_threads1: build_tables(specs) (threads=1). "
+        "Farm: build_tables(specs, client=<2-worker LocalCluster>, threads=1 per worker), "
+        "tables pickled back or written by the workers (out_dir, compress=True/False). "
+        "Each speed-up: median serial side / median farm; farm_out_dir_stored_vs_memory: "
+        "the in-memory plain loop over the farm that also writes the files.",
         "tables": len(sp),
-        "serial_s": serial_t,
         "per_table_serial_ms": 1e3 * med / len(sp),
         "serial_cpu_utilisation": statistics.median(serial_cpu),
         "identical": identical,
+        "load_average_start": load0,
     }
     for v, ts in times.items():
         row[f"{v}_s"] = ts
-    for v in variants:
-        base = times["serial_out_dir"] if v == "farm_out_dir" else serial_t
-        row[f"{v}_speedup"] = statistics.median(base) / statistics.median(times[v])
+    for v, (_, base) in variants.items():
+        row[f"{v}_speedup"] = statistics.median(times[base]) / statistics.median(times[v])
+    row["farm_out_dir_stored_vs_memory_speedup"] = med / statistics.median(
+        times["farm_out_dir_stored"]
+    )
+    row["serial_threads1_over_plain"] = statistics.median(times["serial_threads1"]) / med
+    # CPU per table and what it predicts for an idle machine (wall = CPU ÷ workers for the
+    # farm, = CPU for the serial side): the load-independent view of a loaded machine's run
+    cpu_ms = {v: 1e3 * statistics.median(c) / len(sp) for v, c in cpus.items()}
+    row["cpu_per_table_ms"] = cpu_ms
+    workers = len(dc.scheduler_info().get("workers", {})) if dc is not None else 1
+    row["cpu_projected_speedup"] = {
+        v: cpu_ms[base] / (cpu_ms[v] / workers) for v, (_, base) in variants.items()
+    }
+    row["load_average_end"] = list(os.getloadavg())
+    if profile:
+        row["profile_one_table"] = profile_one(sp)
+    shown = [*variants, "farm_out_dir_stored_vs_memory"]
     print(f"{name:4s} {len(sp):3d} tables  serial {med:.2f} s ({row['per_table_serial_ms']:.0f} "
           f"ms/table, CPU ×{row['serial_cpu_utilisation']:.2f})  " + "  ".join(
-              f"{v} ×{row[f'{v}_speedup']:.2f}" for v in variants) + f"  identical {identical}",
+              f"{v} ×{row[f'{v}_speedup']:.2f}" for v in shown) + f"  identical {identical}"
+          + "\n     CPU ms/table " + "  ".join(f"{v} {c:.0f}" for v, c in cpu_ms.items())
+          + "\n     CPU-projected " + "  ".join(
+              f"{v} ×{x:.2f}" for v, x in row["cpu_projected_speedup"].items()),
           flush=True)  # fmt: skip
     return row
 
@@ -165,7 +303,8 @@ def run_cli(workers: int, repeat: int, scale: float, resolution=None) -> dict:
     for w in WAVELENGTHS:
         argv += ["--wavelengths-nm", f"{w * 1e9:g}"]
     tables = len(sigmas) * n_mat * len(WAVELENGTHS)
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
+    env = {**START_ENV, "PYTHONPATH": str(Path(__file__).resolve().parents[1] / "src")}
+    env.setdefault("EMSCATTER_CACHE", "off")
     times = {"serial": [], "local": []}
     identical = True
     with tempfile.TemporaryDirectory(prefix="emscatter-farm-cli-") as tmp:
@@ -212,6 +351,17 @@ def main() -> None:
     )
     ap.add_argument("--out", default="brdf_farm", help="results file name (results/NAME.json)")
     ap.add_argument(
+        "--dtype",
+        default="float64",
+        choices=["float64", "float32"],
+        help="the tables' storage (build_table's dtype=; float32 halves what is written)",
+    )
+    ap.add_argument(
+        "--profile",
+        action="store_true",
+        help="add each row a cProfile of one plain build_table call (own-time shares)",
+    )
+    ap.add_argument(
         "--cli",
         action="store_true",
         help="also time the command line: 'emscatter farm brdf' serially and with "
@@ -219,18 +369,28 @@ def main() -> None:
     )
     args = ap.parse_args()
     warnings.simplefilter("ignore")
-    from emscatter.parallel import open_executor
+    from emscatter.parallel import dask_client, open_executor
 
     # the cluster build_tables(client="local") starts (emscatter.parallel): thread caps in the
     # workers' environment, their statistical profiler off, the dashboard on a free port;
     # EMSCATTER_CACHE=off reaches them through this process's environment
     data = {"machine": machine(), "command": command(), "workers": args.workers, "rows": {}}
+    serial_threads = thread_report()  # before the cluster: as the user's process starts
     client, close = open_executor("local", args.workers, 1)
     try:
+        dc = dask_client(client)
+        info = dc.scheduler_info().get("workers", {})
+        data["threads"] = {
+            "serial_process": serial_threads,
+            "dask_workers": dc.run(thread_report),
+            "dask_worker_nthreads": [int(w.get("nthreads", 0)) for w in info.values()],
+        }
         for name in args.workloads:
             data["rows"][name] = run_workload(
-                name, client, args.repeat, args.scale, args.resolution
+                name, client, args.repeat, args.scale, args.resolution, args.profile, args.dtype
             )
+        data["threads"]["dask_workers_end"] = dc.run(thread_report)
+        data["threads"]["serial_process_end"] = thread_report()
     finally:
         close()
     if args.cli:

@@ -204,6 +204,43 @@ def test_bad_batch_and_out_dir(kw, message):
         build_tables(_specs()[:1], **kw)
 
 
+def test_out_dir_compress_false_stores_the_arrays_and_reads_back_identical(tmp_path):
+    import zipfile
+
+    from emscatter.brdf.export_npz import read_npz
+
+    specs = _specs(out_of_range="ignore")[:4]
+    serial = build_tables(specs, progress=False)
+    stored, packed = tmp_path / "stored", tmp_path / "packed"
+    stored.mkdir()
+    packed.mkdir()
+    with cf.ProcessPoolExecutor(2) as pool:
+        paths = build_tables(
+            specs, client=pool, out_dir=stored, compress=False, batch=2, progress=False
+        )
+    deflated = build_tables(specs[:1], out_dir=packed, progress=False)[0]  # the default
+    for table, path in zip(serial, paths, strict=True):
+        _same(table, read_npz(path))
+        with zipfile.ZipFile(path) as z:
+            assert {i.compress_type for i in z.infolist()} == {zipfile.ZIP_STORED}
+    with zipfile.ZipFile(deflated) as z:
+        assert zipfile.ZIP_DEFLATED in {i.compress_type for i in z.infolist()}
+    _same(read_npz(deflated), read_npz(paths[0]))  # same values, stored or deflated
+
+
+@pytest.mark.parametrize(
+    "kw, message",
+    [
+        ({"compress": "no"}, "compress must be True or False, got 'no'"),
+        ({"compress": 0}, "compress must be True or False, got 0"),
+        ({"compress": False}, "compress=False applies to the files out_dir receives"),
+    ],
+)
+def test_bad_compress_names_it(kw, message):
+    with pytest.raises(ValueError, match=message):
+        build_tables(_specs(out_of_range="ignore")[:1], progress=False, **kw)
+
+
 def test_out_dir_needs_unique_file_names(tmp_path):
     specs = _specs(out_of_range="ignore")[:2]
     specs[1] = {**specs[1], "name": specs[0]["name"]}
@@ -250,6 +287,37 @@ def test_local_cluster_dashboard_on_a_free_port_not_8787():
     assert not [w for w in caught if "8787" in str(w.message)]
     for a, b in zip(serial, parallel, strict=True):
         _same(a, b)
+
+
+def _worker_settings():
+    import os
+
+    import numba
+
+    names = ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "NUMBA_NUM_THREADS",
+             "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")  # fmt: skip
+    return {n: os.environ.get(n) for n in names}, numba.get_num_threads()
+
+
+def test_local_cluster_workers_one_thread_and_glibc_heap_of_a_plain_process():
+    """The "local" cluster's workers start with the thread caps (numba 1 thread) and glibc's
+    heap thresholds set before they start (dask's MALLOC_TRIM_THRESHOLD_=65536 would leave
+    every numpy temporary over 128 kB a fresh mapping: ×1.6 the CPU of a PO table)."""
+    pytest.importorskip("dask.distributed")
+    from emscatter.parallel import WORKER_MALLOC, dask_client, open_executor
+
+    executor, close = open_executor("local", 2, 1)
+    try:
+        got = dask_client(executor).run(_worker_settings)
+    finally:
+        close()
+    assert len(got) == 2
+    for env, numba_threads in got.values():
+        assert numba_threads == 1
+        assert env["MALLOC_MMAP_THRESHOLD_"] == str(WORKER_MALLOC["MALLOC_MMAP_THRESHOLD_"])
+        assert env["MALLOC_TRIM_THRESHOLD_"] == str(WORKER_MALLOC["MALLOC_TRIM_THRESHOLD_"])
+        assert env["NUMBA_NUM_THREADS"] == env["OMP_NUM_THREADS"] == "1"
+        assert env["OPENBLAS_NUM_THREADS"] == env["MKL_NUM_THREADS"] == "1"
 
 
 def test_limited_threads_caps_the_wheels_openblas_and_restores_it():

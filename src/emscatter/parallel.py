@@ -149,6 +149,15 @@ def _openblas_controls() -> list:
     return found
 
 
+#: glibc malloc settings of a ``"local"`` cluster's workers (set before they start: dask's
+#: own ``MALLOC_TRIM_THRESHOLD_=65536`` freezes glibc's mmap threshold at 128 kB, so every
+#: numpy temporary over it is a fresh zeroed mapping, page-faulted in on each use: a PO
+#: 90×180 BRDF table took 610–740 ms of CPU in such a worker against 390–415 ms in a plain
+#: process). These are the limits glibc's dynamic threshold reaches by itself (32 MiB and
+#: twice that); a worker keeps up to 64 MiB of freed heap instead of returning it at once.
+WORKER_MALLOC = {"MALLOC_MMAP_THRESHOLD_": 1 << 25, "MALLOC_TRIM_THRESHOLD_": 1 << 26}
+
+
 def _thread_env(threads: int | None) -> dict:
     t = str(threads or 1)
     return {name: t for name in ("NUMBA_NUM_THREADS", "EMSCATTER_THREADS", "OMP_NUM_THREADS",
@@ -183,8 +192,11 @@ def open_executor(client, n_workers: int | None = None, threads: int | None = 1,
             import dask
 
             # the workers' statistical profiler samples every thread each 10 ms: CPU a farm of
-            # small tasks on few cores does not have (the dashboard's task stream stays)
-            with dask.config.set({"distributed.worker.profile.enabled": False}):
+            # small tasks on few cores does not have (the dashboard's task stream stays); and
+            # glibc's heap as a plain process has it (:data:`WORKER_MALLOC`)
+            with dask.config.set({"distributed.worker.profile.enabled": False, **{
+                f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in WORKER_MALLOC.items()
+            }}):  # fmt: skip
                 cluster = LocalCluster(
                     n_workers=n,
                     threads_per_worker=1,
