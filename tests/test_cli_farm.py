@@ -50,6 +50,18 @@ def test_serial_farm_writes_one_file_per_table_equal_to_build_table(tmp_path, ca
     )  # nm × 1e-9, as emscatter brdf
 
 
+def test_no_compress_writes_stored_npz_with_the_same_table(tmp_path, capsys):
+    import zipfile
+
+    packed, plain = tmp_path / "packed", tmp_path / "plain"
+    assert _farm(packed) == 0 and _farm(plain, "--no-compress") == 0
+    for name in NAMES:
+        with zipfile.ZipFile(plain / f"{name}.npz") as z:  # stored, not deflated
+            assert {i.compress_type for i in z.infolist()} == {zipfile.ZIP_STORED}
+        a, b = read_npz(packed / f"{name}.npz"), read_npz(plain / f"{name}.npz")
+        assert a.values.tobytes() == b.values.tobytes()
+
+
 def test_local_cluster_and_tcp_scheduler_files_identical_to_serial(tmp_path, capsys):
     distributed = pytest.importorskip("dask.distributed")
     serial, local, remote = tmp_path / "serial", tmp_path / "local", tmp_path / "tcp"

@@ -114,6 +114,8 @@ def register(subparsers) -> None:
                    metavar="S", help="how long to try to reach a tcp:// scheduler [s]")  # fmt: skip
     p.add_argument("--skip-existing", action="store_true",
                    help="leave tables whose OUT_DIR/<name>.npz exists (resume a farm)")  # fmt: skip
+    p.add_argument("--no-compress", action="store_true",
+                   help="write the .npz files uncompressed (faster to write)")  # fmt: skip
     p.add_argument("--quiet", action="store_true",
                    help="no progress bar (drawn only when stderr is a terminal)")  # fmt: skip
     p.set_defaults(func=run, _command_name="farm brdf")
@@ -202,6 +204,7 @@ def run(a) -> int:
                 build_tables(
                     [farm_specs[j] for j in todo], client=executor, threads=a.threads,
                     progress=False if a.quiet else None, batch=a.batch, out_dir=out_dir,
+                    compress=not a.no_compress,
                 )  # fmt: skip
             except RuntimeError as exc:  # a worker's table refused its input: the user's error
                 if isinstance(exc.__cause__, ValueError | TypeError):
