@@ -280,19 +280,18 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
             pick_d = active & (sample1 < p_d)
             pick_g = active & ~pick_d
             xi = dr.clip((sample1 - p_d) / dr.maximum(1.0 - p_d, 1e-30), 0.0, 1.0)
-            wo_g, pdf_g = self._sample_glossy(si, xi, sample2, pick_g)
-            ok_g = pick_g & (mi.Frame3f.cos_theta(wo_g) > 0) & (pdf_g > 0)
+            wo_g, pdf_g, ok_g = self._sample_glossy_pdf(ctx, si, xi, sample2, pick_g)
             wo_d = mi.Vector3f(-wi.x, -wi.y, wi.z)
             wo = dr.select(pick_d, wo_d, wo_g)
             light, view = self._light_view(ctx, si, wo)
             val = self._mueller(si, light, view, ok_g) * (
-                mi.Frame3f.cos_theta(wo_g) / dr.maximum((1.0 - p_d) * pdf_g, 1e-30)
+                mi.Frame3f.cos_theta(wo_g) / dr.maximum(pdf_g, 1e-30)
             )
             if self._use_delta:  # delta: the mirror direction, weight M_coh / P(delta)
                 m_d = self._coherent_mueller(si, light, view, pick_d)
                 val = dr.select(pick_d, m_d * (1.0 / dr.maximum(p_d, 1e-12)), val)
             bs.wo = wo
-            bs.pdf = dr.select(pick_d, p_d, (1.0 - p_d) * pdf_g)
+            bs.pdf = dr.select(pick_d, p_d, pdf_g)
             bs.eta = 1.0
             bs.sampled_type = dr.select(pick_d, mi.UInt32(+delta), mi.UInt32(+glossy))
             bs.sampled_component = dr.select(pick_d, mi.UInt32(1), mi.UInt32(0))

@@ -16,7 +16,7 @@ neighbouring nodes' (weights linear in θi, φi), sampled by picking one node wi
 Cells whose reflected direction is below the horizon take the value of the nearest cell whose
 direction is above it, and the ring of cells around the support of ``f_r`` half its neighbours'
 density, so no direction where ``f_r > 0`` has zero density (samples that land below the
-horizon are discarded by the BSDF with weight 0) while compact lobes waste no samples.
+horizon are discarded by the BSDF with weight 0 and pdf 0) while compact lobes waste no samples.
 
 ``dωo = 4 (wi·h) dωh``: the half-vector Jacobian (Walter et al. 2007, eq. 14).
 """
