@@ -26,11 +26,11 @@ What it does (numpy preparation in :mod:`emscatter.render.plugin_data`):
   binary search over their nodes, so nothing is resampled; spectral variants interpolate
   linearly between the table's wavelengths (constant beyond them); RGB variants use the
   table's sRGB conversion.
-* ``sample`` / ``pdf``: a continuous marginal/conditional 2-D distribution over the half-vector
-  square (Mitsuba's ``MarginalContinuous2D1``, interpolated in θi between the table's nodes)
-  built from ``f_r cosθo``; the pdf is exactly that of the samples drawn, and ``sample``
-  returns ``pdf(wo)`` itself (same code path: equal bitwise; 0, with weight 0, below the
-  horizon).
+* ``sample`` / ``pdf``: a piecewise-constant marginal/conditional distribution of half-vectors
+  (alias tables, :mod:`emscatter.render.sampling`; a mixture of the neighbouring incidence
+  nodes' distributions between them) built from ``f_r cosθo``; the pdf is exactly that of the
+  samples drawn, and ``sample`` returns ``pdf(wo)`` itself (same code path: equal bitwise; 0,
+  with weight 0, below the horizon).
 * the coherent part ``R_coh(θi, λ)`` is a second component of the same BSDF
   (``DeltaReflection``, component 1; the glossy table is component 0), sampled with probability
   ``R_coh / (R_coh + albedo)`` — a ``blendbsdf`` of a delta and a glossy lobe is biased.
