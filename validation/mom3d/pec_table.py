@@ -38,6 +38,9 @@ Run: PYTHONPATH=src python validation/mom3d/pec_table.py [--theta-i 20 40] [--k-
      [--k-l …] [--realizations 4] [--length 6] [--client local]
 Rows (and samples) of the cells run are replaced, others kept (run a few cells at a time to
 keep each command short); pec_table.md is rewritten from the whole CSV.
+
+dielectric_table.py imports this metric (``directions``, ``binned``, ``compare``) for its
+dielectric cells.
 """
 
 from __future__ import annotations
