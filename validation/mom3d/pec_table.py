@@ -38,6 +38,9 @@ Run: PYTHONPATH=src python validation/mom3d/pec_table.py [--theta-i 20 40] [--k-
      [--k-l …] [--realizations 4] [--length 6] [--client local]
 Rows (and samples) of the cells run are replaced, others kept (run a few cells at a time to
 keep each command short); pec_table.md is rewritten from the whole CSV.
+
+dielectric_table.py imports this metric (``directions``, ``binned``, ``compare``) for its
+dielectric cells.
 """
 
 from __future__ import annotations
@@ -99,49 +102,69 @@ def cell(ks, kl, tdeg, realizations, length, seed, client, correlation="gaussian
                          length=length, points_per_wavelength=PPW, client=client)  # fmt: skip
     seconds = time.perf_counter() - t0
     per = binned(res.info["sigma0_samples"])  # (n, 2, 2, bins): each realization pooled
-    mom = per.mean(axis=0)
-    se = per.std(axis=0, ddof=1) / math.sqrt(realizations)
-    out = []
     sample = {"correlation": correlation, "theta_i_deg": tdeg, "k_sigma": ks, "k_l": kl,
-              "realizations": realizations, "seed": seed, "length_wavelengths": length,
-              "mom": _g(np.stack([per[:, 0, 0], per[:, 1, 1]], axis=1)),
-              "models": {}, "valid": {}}  # fmt: skip
-    for m, name in MODELS.items():
+              "realizations": realizations, "seed": seed, "length_wavelengths": length}  # fmt: skip
+    base = {"k_sigma": ks, "k_l": kl, "rms_slope": slope, "realizations": realizations,
+            "unknowns": res.info["unknowns"], "seconds": seconds, "theta_i_deg": tdeg,
+            "correlation": correlation, "dimension": 2, "length_wavelengths": length,
+            "energy_min": float(res.info["energy"].min())}  # fmt: skip
+    out = compare(rough, "pec", ti, ts, ps, per, base, sample)
+    best = out[0]["auto"]
+    worst = max(r["error_dB"] for r in out if r["method"] == best)
+    print(f"{correlation} kσ={ks:g} kℓ={kl:g} θi={tdeg:g}°: {seconds:.0f} s, "
+          f"energy ≥ {base['energy_min']:.4f}, best {best} {worst:.2f} dB", flush=True)  # fmt: skip
+    return out, sample
+
+
+def compare(rough, eps, ti, ts, ps, per, base, sample, models=MODELS, auto_row=False):
+    """The table rows of one cell from mom3d's per-realization bins ``per`` ``(n, 2, 2,
+    bins)``: per model of ``models`` and pol the :func:`~emscatter.validation.maps._sigma0_error`
+    row (``base``'s columns plus the error's), ``auto`` the model of smallest error (larger of h
+    and v). Fills ``sample`` with ``mom`` (each realization's co-pol bins), ``models`` (the
+    models' bins) and ``valid`` (their validity criteria at ``eps``). ``auto_row``: also a row
+    ``method="auto"`` (``em.bistatic(method="auto")`` with θi given, as the package ranks at
+    run time; not a candidate for the cell's best) and ``sample["auto"]`` its bins."""
+    mom = per.mean(axis=0)
+    se = per.std(axis=0, ddof=1) / math.sqrt(per.shape[0])
+    sample["mom"] = _g(np.stack([per[:, 0, 0], per[:, 1, 1]], axis=1))
+    sample["models"], sample["valid"] = {}, {}
+    out = []
+    names = dict(models, **({"auto": "auto"} if auto_row else {}))
+    for m, name in names.items():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            s = em.bistatic(rough, "pec", wavelength=1.0, theta_i=ti, theta_s=ts, phi_s=ps,
+            s = em.bistatic(rough, eps, wavelength=1.0, theta_i=ti, theta_s=ts, phi_s=ps,
                             method=name, out_of_range="ignore")  # fmt: skip
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                em.bistatic(rough, "pec", wavelength=1.0, theta_i=ti, theta_s=0.0, phi_s=0.0,
+                em.bistatic(rough, eps, wavelength=1.0, theta_i=ti, theta_s=0.0, phi_s=0.0,
                             method=name, out_of_range="raise")  # fmt: skip
             valid = True
         except (ValueError, Warning):
             valid = False
         approx = binned(s.sigma0)
-        sample["models"][m] = _g(np.stack([approx[0, 0], approx[1, 1]]))
-        sample["valid"][m] = valid
+        bins = _g(np.stack([approx[0, 0], approx[1, 1]]))
+        if m == "auto":
+            sample["auto"] = {"method": s.method, "bins": bins, "valid": valid}
+        else:
+            sample["models"][m] = bins
+            sample["valid"][m] = valid
         for pol, a in (("h", 0), ("v", 1)):
             e = _sigma0_error(mom[a, a], se[a, a], approx[a, a])
+            status = "ok" if e["n_bins"] else "no MoM bin above noise"
+            if m == "auto":
+                status += f" (auto = {s.method})"
             out.append({
-                "k_sigma": ks, "k_l": kl, "rms_slope": slope, "method": m,
-                "pol": pol, "error_dB": e["error_dB"], "max_error_dB": e["max_error_dB"],
-                "n_bins": e["n_bins"], "mom_se_dB": e["se_dB"], "valid": str(valid),
-                "status": "ok" if e["n_bins"] else "no MoM bin above noise",
-                "realizations": realizations, "unknowns": res.info["unknowns"],
-                "seconds": seconds, "theta_i_deg": tdeg, "correlation": correlation,
-                "dimension": 2, "length_wavelengths": length,
-                "energy_min": float(res.info["energy"].min()),
+                **base, "method": m, "pol": pol, "error_dB": e["error_dB"],
+                "max_error_dB": e["max_error_dB"], "n_bins": e["n_bins"],
+                "mom_se_dB": e["se_dB"], "valid": str(valid), "status": status,
             })  # fmt: skip
-    worst = {m: max(r["error_dB"] for r in out if r["method"] == m) for m in MODELS}
+    worst = {m: max(r["error_dB"] for r in out if r["method"] == m) for m in models}
     best = min(worst, key=lambda m: worst[m] if np.isfinite(worst[m]) else np.inf)
     for r in out:
         r["auto"] = best
-    e_min = res.info["energy"].min()
-    print(f"{correlation} kσ={ks:g} kℓ={kl:g} θi={tdeg:g}°: {seconds:.0f} s, energy ≥ {e_min:.4f}, "
-          f"best {best} {worst[best]:.2f} dB", flush=True)  # fmt: skip
-    return out, sample
+    return out
 
 
 def _g(a):
@@ -154,28 +177,30 @@ def _key(d):
     return (corr, float(d["theta_i_deg"]), float(d["k_sigma"]), float(d["k_l"]))
 
 
-def load_samples() -> list[dict]:
-    """The per-realization cells of ``pec_table_samples.json`` (empty when missing)."""
-    if not SAMPLES.exists():
+def load_samples(path: Path = SAMPLES) -> list[dict]:
+    """The per-realization cells of ``path`` (default ``pec_table_samples.json``; empty when
+    missing)."""
+    if not path.exists():
         return []
-    return json.loads(SAMPLES.read_text())["cells"]
+    return json.loads(path.read_text())["cells"]
 
 
-def save_samples(cells: list[dict]) -> None:
-    doc = {"schema": "mom3d_pec_samples/1",
+def save_samples(cells: list[dict], path: Path = SAMPLES, *, schema: str = "mom3d_pec_samples/1",
+                 table: str = "pec_table", key=None) -> None:  # fmt: skip
+    doc = {"schema": schema,
            "about": "per-realization pooled co-pol bins of mom3d (mom[j][pol][bin], pol 0 = h, "
-                    "1 = v) and the models' bins, per cell of pec_table.csv; written by "
-                    "validation/mom3d/pec_table.py",
+                    f"1 = v) and the models' bins, per cell of {table}.csv; written by "
+                    f"validation/mom3d/{table}.py",
            "bins_deg": EDGES.tolist(), "ky_rows": list(KY), "points_per_wavelength": PPW,
-           "cells": sorted(cells, key=_key)}  # fmt: skip
-    with atomic_path(SAMPLES) as tmp:
+           "cells": sorted(cells, key=key or _key)}  # fmt: skip
+    with atomic_path(path) as tmp:
         Path(tmp).write_text(json.dumps(doc, ensure_ascii=False, separators=(",", ":")) + "\n")
 
 
-def _load():
-    if not CSV.exists():
+def _load(path: Path = CSV):
+    if not path.exists():
         return [], {}
-    header, cols, meta = read_csv(CSV)
+    header, cols, meta = read_csv(path)
     n = len(cols[header[0]])
     rows = [{h: cols[h][i] for h in header} for i in range(n)]
     return rows, meta

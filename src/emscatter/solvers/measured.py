@@ -18,14 +18,24 @@ anisotropic) or media of unknown class the lookup returns ``None`` and the crite
 
 **3-D cells** (:func:`measured_errors_3d`): the 3-D method of moments' validation cells
 (validation/mom3d/pec_table.py: 2-D Gaussian PEC surfaces, θi ∈ {20°, 40°}, kσ ∈ {0.1, 0.3,
-1}, kℓ ∈ {3, 7}) measure what the 1-D maps cannot — 2-D surfaces, where polarizations
-couple. Their table, ``data/measured_errors_3d.json`` (written by
+1}, kℓ ∈ {3, 7}; validation/mom3d/dielectric_table.py: ε = 4 + 0.5i, θi ∈ {20°, 40°},
+kσ ∈ {0.1, 0.3}, kℓ = 3) measure what the 1-D maps cannot — 2-D surfaces, where
+polarizations couple. Their table, ``data/measured_errors_3d.json`` (written by
 :func:`emscatter.validation.measured_table_3d.write_measured_3d`), carries per cell and
 candidate the error [dB] and its Monte Carlo standard error (bootstrap over the realizations)
 and per pair of candidates the SE of their difference. The lookup applies to 2-D isotropic
 roughness of the table's correlation and medium class only, at the nearest cell in
 ``(θi, log kσ, log kℓ)`` — every requested θi nearest to the same table θi, none more than
 half a step beyond the ends — and returns None elsewhere (then the 1-D maps apply as before).
+The 3-D maps are per medium: the conductor class as the 1-D maps', and one map per
+permittivity for dielectrics. The 1-D maps give every dielectric the one ε = 3 map of its
+class; the 3-D cells are narrower, since their errors are measured at one ε: a dielectric
+map applies to the surface's ε only within :data:`EPS_FACTOR_3D` of the map's ``|ε|`` (for
+ε = 4 + 0.5i: ``2.0 ≤ |ε| ≤ 8.1``, dry to moist soils, the 1-D map's ε = 3 included) and with
+a loss tangent ``Im ε / Re ε ≤ 1`` (a dielectric, not a conductor-like medium), the map of
+nearest ``log |ε|`` where several qualify. Beyond that range the models' errors move with
+the Fresnel coefficients (SPM's, the IEM's) by more than the cells resolve, and the lookup
+returns None.
 :func:`significant_pick` is the rule the ranking applies to it (no tolerance to calibrate:
 a difference counts only beyond :data:`SIGNIFICANCE` combined standard errors).
 """
@@ -53,6 +63,7 @@ __all__ = [
     "measured_errors_3d",
     "significant_pick",
     "combined_se",
+    "EPS_FACTOR_3D",
 ]
 
 TABLE_PATH = Path(__file__).with_name("data") / "measured_errors.json"
@@ -61,6 +72,8 @@ TOL_DB = 1.0
 TABLE_3D_PATH = Path(__file__).with_name("data") / "measured_errors_3d.json"
 #: A 3-D cell reorders only where a difference exceeds this many combined standard errors.
 SIGNIFICANCE = 2.0
+#: A dielectric 3-D map applies within this factor of its ``|ε|`` (module docstring).
+EPS_FACTOR_3D = 2.0
 
 
 @lru_cache(maxsize=1)
@@ -228,9 +241,11 @@ def measured_errors_3d(roughness, k: float, eps, theta_i, path: str | None = Non
     ti = np.degrees(np.ravel(np.asarray(theta_i, dtype=float)))
     if ti.size == 0 or not np.all(np.isfinite(ti)):
         return None
-    for m in load_table_3d(str(path) if path else None)["maps"]:
-        if m["correlation"] != family or m["medium"] != medium:
-            continue
+    maps = [m for m in load_table_3d(str(path) if path else None)["maps"]
+            if m["correlation"] == family and m["medium"] == medium]  # fmt: skip
+    if medium == "dielectric":
+        maps = _dielectric_maps(maps, eps)
+    for m in maps:
         a = _nearest_linear(np.asarray(m["theta_i_deg"], dtype=float), ti)
         i = _nearest(np.asarray(m["k_sigma"], dtype=float), k * roughness.sigma)
         j = _nearest(np.asarray(m["k_l"], dtype=float), k * roughness.length)
@@ -256,8 +271,27 @@ def measured_errors_3d(roughness, k: float, eps, theta_i, path: str | None = Non
             "cell": (m["theta_i_deg"][a], m["k_sigma"][i], m["k_l"][j]),
             "realizations": None if real is None else real[a][i][j],
             "map": m["tag"],
+            "eps": m.get("eps"),
         }
     return None
+
+
+def _dielectric_maps(maps: list[dict], eps) -> list[dict]:
+    """The one dielectric map that applies to ``eps`` (module docstring), as a list (empty
+    where none does): ``|ε|`` within :data:`EPS_FACTOR_3D` of the map's, loss tangent at
+    most 1, the nearest in ``log |ε|``."""
+    e = complex(np.unique(np.asarray(eps, dtype=complex))[0])
+    if e.imag > e.real:
+        return []
+    scored = []
+    for m in maps:
+        em = m.get("eps")
+        if not isinstance(em, (list, tuple)) or len(em) != 2:
+            continue
+        d = abs(math.log(abs(e) / abs(complex(float(em[0]), float(em[1])))))
+        if d <= math.log(EPS_FACTOR_3D) * (1 + 1e-12):
+            scored.append((d, m))
+    return [min(scored, key=lambda x: x[0])[1]] if scored else []
 
 
 def combined_se(meas: dict, a: str, b: str) -> float:

@@ -1,6 +1,8 @@
 """The 3-D measured-error table that ``method="auto"``'s ranking reads beside the 1-D one
 (:func:`emscatter.solvers.measured.measured_errors_3d`), written from the 3-D method of
-moments' validation cells (validation/mom3d/pec_table.py → ``pec_table_samples.json``).
+moments' validation cells (validation/mom3d/pec_table.py → ``pec_table_samples.json``, perfect
+conductor; validation/mom3d/dielectric_table.py → ``dielectric_table_samples.json``, one map per
+permittivity).
 
 Per cell (θi, kσ, kℓ) and candidate of ``auto``: the σ⁰ error [dB] exactly as
 validation/mom3d/pec_table.csv has it (the larger of h and v of the rms dB difference model −
@@ -28,7 +30,15 @@ import numpy as np
 from ..io import atomic_path
 from .maps import AUTO_TO_MAP, CAP_DB, DYNAMIC_RANGE_DB, _sigma0_error
 
-__all__ = ["N_BOOT", "TAGS", "bootstrap_cell", "measured_maps_3d", "write_measured_3d"]
+__all__ = [
+    "N_BOOT",
+    "SCHEMAS",
+    "TAGS",
+    "bootstrap_cell",
+    "map_tag",
+    "measured_maps_3d",
+    "write_measured_3d",
+]
 
 #: Bootstrap resamples per cell.
 N_BOOT = 2000
@@ -81,22 +91,43 @@ def bootstrap_cell(mom: np.ndarray, models: dict, *, n_boot: int = N_BOOT, seed:
     return {"errors": errors, "se": out_se, "pair_se": pair}
 
 
-#: Map tag per correlation.
+#: Map tag of the perfect conductor per correlation.
 TAGS = {"gaussian": "pec3d", "exponential": "pec3d_exp"}
+#: Sample files :func:`write_measured_3d` reads.
+SCHEMAS = ("mom3d_pec_samples/1", "mom3d_dielectric_samples/1")
+
+
+def _eps_of(cell: dict):
+    """``"pec"`` or ``(Re ε, Im ε)`` of a sample cell (cells without ``eps`` are PEC)."""
+    e = cell.get("eps", "pec")
+    return "pec" if isinstance(e, str) else (float(e[0]), float(e[1]))
+
+
+def map_tag(correlation: str, eps) -> str:
+    """``pec3d`` / ``pec3d_exp`` (:data:`TAGS`), or ``diel3d_eps<re>+<im>i`` (``_exp`` for the
+    exponential) for a dielectric ``(Re ε, Im ε)``."""
+    if eps == "pec":
+        return TAGS[correlation]
+    tail = "" if correlation == "gaussian" else "_exp"
+    return f"diel3d_eps{eps[0]:g}+{eps[1]:g}i{tail}"
 
 
 def measured_maps_3d(cells: list[dict], *, n_boot: int = N_BOOT) -> list[dict]:
-    """The 3-D maps (PEC; one per correlation, cells without one are Gaussian) from the sample
-    cells of pec_table_samples.json: grids ``theta_i_deg × k_sigma × k_l`` and per candidate
-    ``errors`` / ``se`` [dB], per pair ``pair_se`` [dB], and ``realizations`` per cell (None
-    where a cell is missing)."""
+    """The 3-D maps from sample cells (pec_table_samples.json's and
+    dielectric_table_samples.json's): one per correlation (cells without one are Gaussian) and
+    medium — the perfect conductor, and each permittivity ``eps`` of the dielectric cells (a
+    map per ε, as the 1-D maps are per medium) — PEC maps first, then the dielectric ones by ε.
+    Each has grids ``theta_i_deg × k_sigma × k_l`` and per candidate ``errors`` / ``se``
+    [dB], per pair ``pair_se`` [dB], and ``realizations`` per cell (None where a cell is
+    missing)."""
     groups: dict = {}
     for c in cells:
-        groups.setdefault(str(c.get("correlation", "gaussian")), []).append(c)
-    return [_map_3d(corr, groups[corr], n_boot) for corr in TAGS if corr in groups]
+        groups.setdefault((str(c.get("correlation", "gaussian")), _eps_of(c)), []).append(c)
+    order = sorted(groups, key=lambda g: (g[1] != "pec", str(g[1]), list(TAGS).index(g[0])))
+    return [_map_3d(corr, groups[(corr, eps)], n_boot, eps) for corr, eps in order]
 
 
-def _map_3d(correlation: str, cells: list[dict], n_boot: int) -> dict:
+def _map_3d(correlation: str, cells: list[dict], n_boot: int, eps="pec") -> dict:
     inverse = {row: name for name, row in AUTO_TO_MAP.items()}
     ti = sorted({float(c["theta_i_deg"]) for c in cells})
     ks = sorted({float(c["k_sigma"]) for c in cells})
@@ -123,10 +154,10 @@ def _map_3d(correlation: str, cells: list[dict], n_boot: int) -> dict:
         for p, v in got["pair_se"].items():
             pairs[p][i][j][m] = round(v, 3) if math.isfinite(v) else None
     return {
-        "tag": TAGS[correlation],
+        "tag": map_tag(correlation, eps),
         "correlation": correlation,
-        "medium": "conductor",
-        "eps": "pec",
+        "medium": "conductor" if eps == "pec" else "dielectric",
+        "eps": "pec" if eps == "pec" else list(eps),
         "dimension": 2,
         "theta_i_deg": ti,
         "k_sigma": ks,
@@ -139,29 +170,39 @@ def _map_3d(correlation: str, cells: list[dict], n_boot: int) -> dict:
 
 
 def write_measured_3d(samples, path=None, *, n_boot: int = N_BOOT) -> Path:
-    """Write the 3-D table from ``samples`` (the path of a pec_table_samples.json) to
-    ``path`` (default: the one the package reads,
-    :data:`emscatter.solvers.measured.TABLE_3D_PATH`) atomically; clears the loader's cache.
+    """Write the 3-D table from ``samples`` (the path of a pec_table_samples.json or
+    dielectric_table_samples.json, or a list of such paths: their cells together) to ``path``
+    (default: the one the package reads, :data:`emscatter.solvers.measured.TABLE_3D_PATH`)
+    atomically; clears the loader's cache.
 
     Command: ``PYTHONPATH=src python -c "from emscatter.validation.measured_table_3d import
-    write_measured_3d; write_measured_3d('validation/mom3d/pec_table_samples.json')"``."""
+    write_measured_3d; write_measured_3d(['validation/mom3d/pec_table_samples.json',
+    'validation/mom3d/dielectric_table_samples.json'])"``."""
     from ..solvers import measured
 
-    src = Path(samples)
-    if not src.exists():
-        raise FileNotFoundError(f"samples={str(src)!r}: no such file (pec_table.py writes it)")
-    doc_in = json.loads(src.read_text())
-    if doc_in.get("schema") != "mom3d_pec_samples/1":
-        raise ValueError(f"samples={str(src)!r}: schema {doc_in.get('schema')!r}, "
-                         "expected 'mom3d_pec_samples/1'")  # fmt: skip
+    sources = [samples] if isinstance(samples, (str, Path)) else list(samples)
+    if not sources:
+        raise ValueError("samples must name at least one samples file, got an empty list")
+    cells, names = [], []
+    for s in sources:
+        src = Path(s)
+        if not src.exists():
+            raise FileNotFoundError(
+                f"samples={str(src)!r}: no such file (pec_table.py / dielectric_table.py write it)"
+            )
+        doc_in = json.loads(src.read_text())
+        if doc_in.get("schema") not in SCHEMAS:
+            raise ValueError(f"samples={str(src)!r}: schema {doc_in.get('schema')!r}, "
+                             f"expected one of {SCHEMAS}")  # fmt: skip
+        cells += doc_in["cells"]
+        names.append(f"validation/mom3d/{src.name}")
     path = Path(path) if path else measured.TABLE_3D_PATH
     doc = {
         "about": "σ⁰ error [dB] vs the 3-D method of moments (larger of h, v) per cell, with "
         f"its Monte Carlo SE (bootstrap over realizations, B = {n_boot}; pair_se: SE of the "
         "difference of two candidates' errors on the same resamples); written by "
-        "emscatter.validation.measured_table_3d.write_measured_3d from "
-        "validation/mom3d/pec_table_samples.json",
-        "maps": measured_maps_3d(doc_in["cells"], n_boot=n_boot),
+        "emscatter.validation.measured_table_3d.write_measured_3d from " + " and ".join(names),
+        "maps": measured_maps_3d(cells, n_boot=n_boot),
     }
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
