@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from emscatter.kernels._runtime import inline, jit
+from emscatter.solvers.iem.kernels.mono import back_geometry
 from emscatter.solvers.iem.kernels.series import (
     FAST_MAX_ORDER,
     HUGE,
@@ -155,7 +156,7 @@ def _lane_tail(S, l, zrow, xxrow, kmrow, phrow, pvrow, e, rho, w, ks2):
 
 
 @jit
-def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
+def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, WT, nw):
     """Walk lanes ``0 … m−1`` of ``S`` (set up by :func:`lane_start`, ``ACT`` = 1) in lockstep
     from n = 2 until each meets its stopping rule; ``out_ok[l]`` False where the linear-space
     walk was not safe. Sums end in rows ``SH, SV, EH, EV`` (times ``MSQ``: ``S_hh, S_vv`` and
@@ -176,7 +177,9 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
     every fourth order. Not safe (the caller takes the log-space path): a component that
     starts below 1e-140 of the largest is left out and its whole-series bound must be
     negligible (≤ 1e-3 rtol of the sum) at the end; a walk longer than
-    :data:`FAST_MAX_ORDER` or ``max_terms``; sums outside [1e-250, 1e300]."""
+    :data:`FAST_MAX_ORDER` or ``max_terms``; sums outside [1e-250, 1e300]. ``WT``: the
+    Ŵₙ of orders 1 … ``nw`` of these lanes, as :func:`walk_transition` left them (the same
+    numbers: read, not evaluated again)."""
     sks = math.sqrt(ks2)
     w = np.empty(m)
     live = 0
@@ -186,8 +189,13 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
             live += 1
     n = 2.0
     while live > 0:
-        for l in range(m):  # Ŵₙ per lane
-            w[l] = w_lin(n, S[K2F + l], spec, dim)
+        if n <= nw:  # Ŵₙ per lane: the transition walk's, or evaluated
+            o = (int(n) - 1) * LANES
+            for l in range(m):
+                w[l] = WT[o + l]
+        else:
+            for l in range(m):
+                w[l] = w_lin(n, S[K2F + l], spec, dim)
         for l in range(m):  # one order for every lane (frozen lanes add nothing)
             z0, z1, z2 = S[Z0 + l], S[Z1 + l], S[Z2 + l]
             hr = S[H0R + l] * z0 + S[H1R + l] * z1 + S[H2R + l] * z2
@@ -248,10 +256,11 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
 # rows of the transition-sum lane state (offsets, as above)
 TK2, TS1, TS2, TS4, TT1, TPREV, TACT = range(0, 7 * LANES, LANES)
 T_ROWS = 7
+WT_ORDERS = 64  # orders of Ŵₙ the transition walk keeps for the series walk
 
 
 @jit
-def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
+def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok, WT):
     """Linear-space :func:`transition_sums` for lanes ``0 … m−1`` of ``T`` in lockstep, one
     ``Q`` for all (rows ``TK2`` = K², ``TACT`` = 1 where wanted): ``S(βQ) = Σ_{n≥1}
     (βQ)ⁿ/n! Ŵₙ`` for β = 1, 2, 4 end in rows ``TS1, TS2, TS4`` (:func:`transition_ratios`
@@ -259,7 +268,9 @@ def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
     stops when the geometric tail of each of the three series (term ratios non-increasing from
     n = 3 on for these spectra, tested at odd orders) is below ``rtol_t`` of its sum;
     ``out_ok[l]`` False when the sums leave the safe range (the caller then takes the
-    log-space path). One lane (m = 1) is the one-geometry form the log-space path uses."""
+    log-space path). One lane (m = 1) is the one-geometry form the log-space path uses.
+    Returns ``nw``: the Ŵₙ of orders 1 … nw are in ``WT[(n − 1) LANES + l]`` (as many as
+    ``WT`` holds; :func:`walk_lanes` reads them)."""
     w = np.empty(m)
     live = 0
     for l in range(m):
@@ -269,12 +280,19 @@ def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
         if T[TACT + l] > 0.0:
             live += 1
     n, p2, p4, qn = 1.0, 1.0, 1.0, 1.0
+    nw = 0
+    cap = WT.shape[0] // LANES
     while live > 0:
         p2 *= 2.0
         p4 *= 4.0
         qn = qn * (Q / n)
         for l in range(m):
             w[l] = w_lin(n, T[TK2 + l], spec, dim)
+        if nw < cap:
+            o = nw * LANES
+            for l in range(m):
+                WT[o + l] = w[l]
+            nw += 1
         for l in range(m):
             t1 = qn * w[l]
             T[TT1 + l] = t1
@@ -310,6 +328,7 @@ def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
         s1, s4 = T[TS1 + l], T[TS4 + l]
         if not (TINY <= s1 < HUGE and s4 < HUGE):
             out_ok[l] = False
+    return nw
 
 
 @inline
@@ -333,11 +352,41 @@ def fresnel_setup(s, c, eps, pec):
     """``(q₂, 1/q₂, R_h, R_v)`` at incidence θ (PEC: ``R_h = −1, R_v = 1``, ``q₂ = 0``)."""
     if pec:
         return 0j, 0j, -1.0 + 0j, 1.0 + 0j
-    q2 = root(eps - s * s)
-    iq = 1.0 / q2
-    rh = (c - q2) / (c + q2) if c + q2 != 0 else 0j
-    rv = (eps * c - q2) / (eps * c + q2) if eps * c + q2 != 0 else 0j
+    q2 = fast_root(eps - s * s)
+    iq = cdiv(1.0 + 0j, q2)
+    rh = cdiv(c - q2, c + q2)
+    rv = cdiv(eps * c - q2, eps * c + q2)
     return q2, iq, rh, rv
+
+
+@inline
+def fast_root(z):
+    """:func:`.series.root` (√z with Im ≥ 0) in real arithmetic, a few ulp from it and
+    without the complex library call (Kahan's half-angle form, ``|z|`` from ``x² + y²``:
+    no overflow for |z| < 1e150, far beyond any permittivity)."""
+    x, y = z.real, z.imag
+    m = math.sqrt(x * x + y * y)
+    if x >= 0.0:
+        t = math.sqrt(0.5 * (m + x))
+        re, im = t, (0.5 * y / t if t > 0.0 else 0.0)
+    else:
+        t = math.sqrt(0.5 * (m - x))
+        re, im = 0.5 * abs(y) / t, math.copysign(t, y)
+    if im < 0.0:
+        re, im = -re, -im
+    return complex(re, im)
+
+
+@inline
+def cdiv(a, b):
+    """``a / b`` (0 where ``b`` = 0) by ``a b* / |b|²``: one real division (numba's complex
+    division scales and branches: slower); ≤ 2 ulp from it for |b| in [1e-150, 1e150]."""
+    d = b.real * b.real + b.imag * b.imag
+    if d == 0.0:
+        return 0j
+    inv = 1.0 / d
+    return complex((a.real * b.real + a.imag * b.imag) * inv,
+                   (a.imag * b.real - a.real * b.imag) * inv)  # fmt: skip
 
 
 @inline
@@ -452,7 +501,7 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
         e2, e4 = 2.0, 4.0
         if fast:
             T[TK2], T[TACT] = Kr * Kr, 1.0
-            walk_transition(T, 1, Q, spec, dim, rtol * 1e-2, tr_ok)
+            walk_transition(T, 1, Q, spec, dim, rtol * 1e-2, tr_ok, T[:0])
             fast = tr_ok[0]
             if fast:
                 e2, e4 = transition_ratios(T, 0, math.exp(-Q))
@@ -474,7 +523,7 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
 @jit
 def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 max_terms, use_fast, sh_code, sh_slope, psi, out_hh, out_vv, out_e,
-                out_fast, lower_q2, fade, fung92):  # fmt: skip
+                out_fast, lower_q2, fade, fung92, geo):  # fmt: skip
     """Exact-backscatter hh, vv per geometry (``fung92``: the 1992 IEM, Kirchhoff plus one
     complementary component of base ``cosθ``, no n = 1 terms of their own): the linear-space
     walk where it is safe and ``use_fast`` — blocks of :data:`LANES` geometries in lockstep:
@@ -482,7 +531,10 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     :func:`walk_lanes`) — else the log-space :func:`row_series` / :func:`transition_sums`,
     one geometry at a time. Outputs σ⁰_hh, σ⁰_vv, the precision ratio (sum of the envelopes
     over the sum, ≥ 1; :mod:`emscatter.solvers.iem.series`) and ``out_fast[r]``: the fast
-    path was taken."""
+    path was taken. ``geo[0]`` ≠ 0: ``cs`` and ``K`` are outputs, the exact-backscatter
+    geometry from ``si`` and ``geo`` (:func:`.mono.back_geometry`) first."""
+    if geo[0] != 0.0:
+        back_geometry(si, geo, dim, cs, K)
     ks2 = ks * ks
     log_ks2 = math.log(ks2)
     rtol = math.exp(log_rtol)
@@ -511,9 +563,11 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     lrv = np.empty(LANES, dtype=np.complex128)
     with_tr = transition and not pec
     n_all = si.shape[0]
+    WT = np.empty(WT_ORDERS * LANES)  # Ŵₙ of the transition walk, for the series walk
     for b in range(0, n_all, LANES):
         m = min(LANES, n_all - b)
         any_tr = False
+        nw = 0
         for l in range(m):  # shadowing, Fresnel coefficients, transition lanes
             r = b + l
             s, c = si[r], cs[r]
@@ -530,7 +584,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 T[TACT + l] = 1.0
                 any_tr = True
         if any_tr:
-            walk_transition(T, m, ks2, spec, dim, rtol * 1e-2, tr_ok)
+            nw = walk_transition(T, m, ks2, spec, dim, rtol * 1e-2, tr_ok, WT)
         any_started = False
         for l in range(m):  # transition factors, lower-medium terms, series lanes
             if not use_fast:
@@ -580,7 +634,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             )  # fmt: skip
             any_started = any_started or started[l]
         if any_started:
-            walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, lane_ok)
+            walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, lane_ok, WT, nw)
         for l in range(m):  # results; the log-space path where the fast one was not taken
             r = b + l
             shf = lane_shf[l]
