@@ -157,7 +157,6 @@ def back_kernel():
     return _build()[2]
 
 
-
 #: Fewest geometries per thread of the exact-backscatter kernel. One geometry costs
 #: ~0.1–0.5 µs (kσ 0.1–2.5, the 1992 and default models), and handing a chunk to a worker
 #: thread costs tens of µs on an idle machine and up to milliseconds on a loaded one (the

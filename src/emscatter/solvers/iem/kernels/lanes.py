@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from emscatter.kernels._runtime import inline, jit
-from emscatter.solvers.iem.kernels.mono import back_geometry
+from emscatter.solvers.iem.kernels.mono import back_geometry, cdiv, fast_root, fung92_co, lower_back
 from emscatter.solvers.iem.kernels.series import (
     FAST_MAX_ORDER,
     HUGE,
@@ -65,13 +65,12 @@ def _drop_or_walk(S, l, ph, pv, zrow, e, xx, inv2, ks2):
 
 @inline
 def lane_start(S, l, a0h, a0v, a1h, a1v, a2h, a2v, x0, x1, x2, att0, att1, e0, e1, dh, dv,
-               ks2, K2, spec, dim):  # fmt: skip
+               ks2, K2, w1):  # fmt: skip
     """Set up lane ``l`` for :func:`walk_lanes` (its docstring: the terms, the scaling, the
-    range checks) at n = 1 and 2; a PEC passes zero lower-medium amplitudes and ``att1 = 0``.
-    False (lane inactive): the linear-space walk is not safe."""
+    range checks) at n = 1 and 2; a PEC passes zero lower-medium amplitudes and ``att1 = 0``;
+    ``w1`` = Ŵ₁(K). False (lane inactive): the linear-space walk is not safe."""
     S[ACT + l] = 0.0
     sks = math.sqrt(ks2)
-    w1 = w_lin(1.0, K2, spec, dim)
     S[H0R + l], S[H0I + l], S[V0R + l], S[V0I + l] = a0h.real, a0h.imag, a0v.real, a0v.imag
     S[H1R + l], S[H1I + l], S[V1R + l], S[V1I + l] = a1h.real, a1h.imag, a1v.real, a1v.imag
     S[H2R + l], S[H2I + l], S[V2R + l], S[V2I + l] = a2h.real, a2h.imag, a2v.real, a2v.imag
@@ -360,36 +359,6 @@ def fresnel_setup(s, c, eps, pec):
 
 
 @inline
-def fast_root(z):
-    """:func:`.series.root` (√z with Im ≥ 0) in real arithmetic, a few ulp from it and
-    without the complex library call (Kahan's half-angle form, ``|z|`` from ``x² + y²``:
-    no overflow for |z| < 1e150, far beyond any permittivity)."""
-    x, y = z.real, z.imag
-    m = math.sqrt(x * x + y * y)
-    if x >= 0.0:
-        t = math.sqrt(0.5 * (m + x))
-        re, im = t, (0.5 * y / t if t > 0.0 else 0.0)
-    else:
-        t = math.sqrt(0.5 * (m - x))
-        re, im = 0.5 * abs(y) / t, math.copysign(t, y)
-    if im < 0.0:
-        re, im = -re, -im
-    return complex(re, im)
-
-
-@inline
-def cdiv(a, b):
-    """``a / b`` (0 where ``b`` = 0) by ``a b* / |b|²``: one real division (numba's complex
-    division scales and branches: slower); ≤ 2 ulp from it for |b| in [1e-150, 1e150]."""
-    d = b.real * b.real + b.imag * b.imag
-    if d == 0.0:
-        return 0j
-    inv = 1.0 / d
-    return complex((a.real * b.real + a.imag * b.imag) * inv,
-                   (a.imag * b.real - a.real * b.imag) * inv)  # fmt: skip
-
-
-@inline
 def transition_gamma(rh, rv, s2, c, iq, e2, e4, r0, r08, r08sq, a0):
     """``(R_h, R_v, γ_h, γ_v)`` with Wu et al. 2001's transition, from the sum ratios
     ``e₂ = S(2Q)/S(Q) e^{−Q}``, ``e₄ = S(4Q)/S(Q) e^{−2Q}`` at ``Q = (kσ)²``
@@ -429,55 +398,6 @@ def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2, fh, fv):
     p2 = (p2[0] * fh, p2[1], p2[2], p2[3] * fv)
     mm = (mm[0] * fh, mm[1], mm[2], mm[3] * fv)
     return a, -ks2 * (a * a + c * c), p1, p2, mm
-
-
-@inline
-def lower_back(s2, c, q2, iq, rh, rv, eps, ieps, a, f):
-    """The two lower-medium amplitudes of the fast walk, ``(g₁h, g₁v, g₂h, g₂v)`` =
-    ``f (p₁ + p₂)``, ``f m`` of :func:`lower_setup` (``f`` = ¼, times the fade), in closed
-    form: at exact backscatter (φ = π, θs = θi) the reduced coefficients of
-    :func:`emscatter.solvers.iem.terms._reduced_i`, ``_reduced_s`` are, with ``s² = sin²θ``,
-    ``c = cosθ``, the side "i" (``q = −q₂``, ``α₁ = c + a``) and "s" (``q = q₂``, ``α₁``) terms
-    summed: ``C₁ = −2α₁``, ``C₃ = 2s²(q₂ − c)``, ``C₄ = −2c(α₁c + 2s²)``,
-    ``C₂ + C₅ = 4s²(c − q₂)``; the "s" term at ``q = −q₂``, ``α₂ = c − a``: ``C₁ = −α₂``,
-    ``C₃ = s²(α₂ − 2c)``, ``C₄ = −c(α₂c + 2s²)``, ``C₂ + C₅ = 2s²(c + q₂)`` (``C₂`` and ``C₅``
-    enter :func:`lower_co` only as their sum once its products are expanded:
-    ``hh = q₂⁻¹[(1+R_h)²(C₃ − εC₁) + (1+R_h)(1−R_h)(C₂ + C₅) + (1−R_h)²C₄]``,
-    ``vv = q₂⁻¹[(1+R_v)²(C₁ − C₃/ε) − (1+R_v)(1−R_v)(C₂ + C₅) − (1−R_v)²εC₄]``). The same
-    amplitudes as :func:`lower_setup` to rounding (tests/test_iem_fast.py), two thirds of its
-    arithmetic."""
-    hp, hm = 1.0 + rh, 1.0 - rh
-    vp, vm = 1.0 + rv, 1.0 - rv
-    fi = f * iq
-    ah, bh, ch = fi * hp * hp, fi * hp * hm, fi * hm * hm
-    av, bv, cv = fi * vp * vp, fi * vp * vm, fi * vm * vm * eps
-    a1, a2 = c + a, c - a
-    c1 = -2.0 * a1
-    c3 = 2.0 * s2 * (q2 - c)
-    c4 = -2.0 * c * (a1 * c + 2.0 * s2)
-    c25 = 4.0 * s2 * (c - q2)
-    g1h = ah * (c3 - c1 * eps) + bh * c25 + ch * c4
-    g1v = av * (c1 - c3 * ieps) - bv * c25 - cv * c4
-    c1 = -a2
-    c3 = s2 * (a2 - 2.0 * c)
-    c4 = -c * (a2 * c + 2.0 * s2)
-    c25 = 2.0 * s2 * (c + q2)
-    g2h = ah * (c3 - c1 * eps) + bh * c25 + ch * c4
-    g2v = av * (c1 - c3 * ieps) - bv * c25 - cv * c4
-    return g1h, g1v, g2h, g2v
-
-
-@inline
-def fung92_co(s, c, q2, eps, pec):
-    """The 1992 IEM's complementary amplitude in exact backscatter, ``(G_h, G_v)`` (base
-    ``cosθ``, no height phase; :func:`emscatter.solvers.iem.terms.fung92_backscatter_terms`)."""
-    s2 = s * s
-    if pec:
-        return -4.0 * s2 + 0j, 4.0 * s2 + 0j
-    dh = c + q2
-    dv = eps * c + q2
-    gh = -4.0 * s2 * (eps - 1.0) / (dh * dh)
-    return gh, 4.0 * s2 * (eps - 1.0) * (eps * c * c + s2) / (dv * dv)
 
 
 @inline
@@ -564,6 +484,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     with_tr = transition and not pec
     n_all = si.shape[0]
     WT = np.empty(WT_ORDERS * LANES)  # Ŵₙ of the transition walk, for the series walk
+    last_pref, last_exp = math.nan, math.nan
     for b in range(0, n_all, LANES):
         m = min(LANES, n_all - b)
         any_tr = False
@@ -630,7 +551,8 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 att1 = math.exp(e_g)
             started[l] = lane_start(
                 S, l, -4.0 * rh_t, 4.0 * rv_t, g1h, g1v, g2h, g2v, 2.0 * c, c + a, c - a, ek_lin,
-                att1, e_k, e_g, dh, dv, ks2, K[r] * K[r], spec, dim,
+                att1, e_k, e_g, dh, dv, ks2, K[r] * K[r],
+                WT[l] if nw > 0 else w_lin(1.0, K[r] * K[r], spec, dim),  # the same Ŵ₁
             )  # fmt: skip
             any_started = any_started or started[l]
         if any_started:
@@ -639,7 +561,10 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             r = b + l
             shf = lane_shf[l]
             if started[l] and lane_ok[l]:
-                ep = math.exp(pref[r]) * S[MSQ + l] * shf
+                if pref[r] != last_pref:  # e^{pref}: once while it repeats (the monostatic call)
+                    last_pref = pref[r]
+                    last_exp = math.exp(last_pref)
+                ep = last_exp * S[MSQ + l] * shf
                 out_hh[r] = S[SH + l] * ep
                 out_vv[r] = S[SV + l] * ep
                 out_e[r] = max(S[EH + l] / S[SH + l],
