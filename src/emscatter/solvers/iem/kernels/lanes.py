@@ -546,9 +546,8 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             else:  # the upper-medium phase (the default "aiem-faded"): closed form
                 f = 0.25 * (1.0 - gv) if fade else 0.25
                 a = c
-                e_g = -ks2 * (a * a + c * c)
+                e_g, att1 = e_k, ek_lin  # −(kσ)²(a² + cos²θ) with a = cosθ: the Kirchhoff one
                 g1h, g1v, g2h, g2v = lower_back(s2, c, q2, iq, rh, rv, eps, ieps, a, f)
-                att1 = math.exp(e_g)
             started[l] = lane_start(
                 S, l, -4.0 * rh_t, 4.0 * rv_t, g1h, g1v, g2h, g2v, 2.0 * c, c + a, c - a, ek_lin,
                 att1, e_k, e_g, dh, dv, ks2, K[r] * K[r],
