@@ -44,7 +44,9 @@ def monostatic(rough, eps, k, ti, ps, pi_, opt, slope, shadow_mode):
     ``(σ⁰ (2, 2, n) flat, 0, log precision)``, the values of :func:`_backscatter` on
     :meth:`~emscatter.solvers.kirchhoff.common.Geometry.backscatter_chunk` bit for bit (the
     same formulas on the same numbers: ``sinθ, cosθ`` by ``_trig``,
-    ``Δφ = φs − φi``, the lateral ``q`` of ``_lateral_q``), compiled end to end. ``None``
+    ``Δφ = φs − φi``, the lateral ``q`` of ``_lateral_q``), compiled end to end: after
+    ``sinθ`` the kernel computes ``cosθ`` and ``K`` itself (``geo``,
+    :func:`emscatter.solvers.iem.kernels.mono.back_geometry`), one pass over the angles. ``None``
     where this path does not cover the call (numpy kernels, a power-law or measured
     spectrum, an array ε or φi, anisotropic shadowing slopes): the caller takes the general
     one."""
@@ -100,7 +102,9 @@ def monostatic(rough, eps, k, ti, ps, pi_, opt, slope, shadow_mode):
     )  # fmt: skip
     if st:
         raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
-    return sig, 0.0, float(np.max(np.log(out_e)))
+    # the log of the max: the max of the logs (np.log is monotone; the general path takes the
+    # max of its log array) at one logarithm instead of n
+    return sig, 0.0, float(np.log(out_e.max()))
 
 
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):
