@@ -308,3 +308,60 @@ def test_default_configuration_fast_walk_equals_log_space_walk(spec, ks):
                 assert fast[3] == slow[3] == 0 and np.all(fast[4])
                 tol = 1e-10 if rtol < 1e-10 else 2 * rtol
                 assert _rel(fast[0], slow[0]) < tol and _rel(fast[1], slow[1]) < tol, (dim, kl, eps)
+
+
+@pytest.mark.skipif(not iem_jit.enabled(), reason="numba kernels off")
+def test_real_arithmetic_root_and_division_equal_numpy():
+    """``mono.fast_root`` (√z with Im ≥ 0, the branch of ``series.root``: decaying
+    transmitted wave for Im ε ≥ 0) and ``mono.cdiv`` (``a b* / |b|²``), which the Fresnel
+    setup of the backscatter lanes uses instead of the complex library calls, equal numpy's
+    complex sqrt (flipped to Im ≥ 0) and division to a few ulp — over lossless, lossy,
+    metallic (Re z < 0, on the negative real axis with ±0 imaginary part), tiny and huge
+    arguments; and the setup's ``R_h, R_v`` are :func:`emscatter.fresnel.fresnel_cos`'s."""
+    from emscatter.fresnel import fresnel_cos
+    from emscatter.solvers.iem.kernels import lanes, mono
+
+    zs = [complex(x, y) for x in (-1e6, -50.0, -1.0, -1e-9, 0.0, 1e-9, 0.3, 3.0, 80.0, 1e6)
+          for y in (-0.0, 0.0, 1e-12, 2.0, 40.0, 1e5, -3.0)]  # fmt: skip
+    for z in zs:
+        ref = np.sqrt(complex(z))
+        ref = -ref if ref.imag < 0 else ref
+        got = mono.fast_root(z)
+        assert got.imag >= 0.0, z
+        assert abs(got - ref) <= 4e-16 * abs(ref), (z, got, ref)
+        for b in (z, 1.0 + 0j, -2.5 + 7j, 1e-3 - 2e-3j):
+            if b != 0:
+                q = mono.cdiv(z + 1.5j, b)
+                assert abs(q - (z + 1.5j) / b) <= 5e-16 * abs((z + 1.5j) / b), (z, b)
+    assert mono.cdiv(1.0 + 2j, 0j) == 0j  # the setup's "0 where the denominator vanishes"
+    for eps in (3.0 + 0j, 15 + 2j, 80 + 40j, -50 + 3j, 1e5 + 1e6j):
+        for th in np.radians([0.0, 10.0, 45.0, 70.0, 89.0]):
+            s, c = math.sin(th), math.cos(th)
+            _, _, rh, rv = lanes.fresnel_setup(s, c, eps, False)
+            ref_h, ref_v = fresnel_cos(eps, np.array([c]))
+            assert abs(rh - ref_h[0]) <= 2e-15 and abs(rv - ref_v[0]) <= 2e-15, (eps, th)
+
+
+@pytest.mark.skipif(not iem_jit.enabled(), reason="numba kernels off")
+def test_transition_walk_hands_its_spectrum_weights_to_the_series_walk():
+    """``lanes.walk_transition`` keeps Ŵₙ(K) of every order it walked in the table the
+    series walk reads (``WT[(n − 1) LANES + l]``, orders 1 … nw): they are the exponential
+    surface spectrum ``Ŵₙ = n / (2π (n² + K²)^{3/2})`` (``series.w_lin``), so the series walk
+    gets the numbers it would have evaluated; a table with no room keeps none (nw = 0)."""
+    from emscatter.solvers.iem.kernels import lanes
+
+    m = 5
+    K = np.array([0.0, 0.3, 1.7, 6.0, 25.0])
+    T = np.zeros(lanes.T_ROWS * lanes.LANES)
+    T[lanes.TK2 : lanes.TK2 + m] = K * K
+    T[lanes.TACT : lanes.TACT + m] = 1.0
+    ok = np.empty(lanes.LANES, dtype=np.bool_)
+    WT = np.full(lanes.WT_ORDERS * lanes.LANES, np.nan)
+    nw = lanes.walk_transition(T, m, 0.25, iem_jit.EXPONENTIAL, 2, 1e-10, ok, WT)
+    assert 3 <= nw <= lanes.WT_ORDERS and ok[:m].all()
+    for n in range(1, nw + 1):
+        t = n * n + K * K
+        ref = n / (2 * math.pi * t * np.sqrt(t))
+        got = WT[(n - 1) * lanes.LANES : (n - 1) * lanes.LANES + m]
+        np.testing.assert_allclose(got, ref, rtol=1e-15, atol=0)
+    assert lanes.walk_transition(T, m, 0.25, iem_jit.EXPONENTIAL, 2, 1e-10, ok, WT[:0]) == 0

@@ -44,7 +44,9 @@ def monostatic(rough, eps, k, ti, ps, pi_, opt, slope, shadow_mode):
     ``(σ⁰ (2, 2, n) flat, 0, log precision)``, the values of :func:`_backscatter` on
     :meth:`~emscatter.solvers.kirchhoff.common.Geometry.backscatter_chunk` bit for bit (the
     same formulas on the same numbers: ``sinθ, cosθ`` by ``_trig``,
-    ``Δφ = φs − φi``, the lateral ``q`` of ``_lateral_q``), compiled end to end. ``None``
+    ``Δφ = φs − φi``, the lateral ``q`` of ``_lateral_q``), compiled end to end: after
+    ``sinθ`` the kernel computes ``cosθ`` and ``K`` itself (``geo``,
+    :func:`emscatter.solvers.iem.kernels.mono.back_geometry`), one pass over the angles. ``None``
     where this path does not cover the call (numpy kernels, a power-law or measured
     spectrum, an array ε or φi, anisotropic shadowing slopes): the caller takes the general
     one."""
@@ -57,49 +59,52 @@ def monostatic(rough, eps, k, ti, ps, pi_, opt, slope, shadow_mode):
     ti_f = ti.reshape(-1)
     n = ti_f.size
     si = np.sin(ti_f)
-    ci = np.sqrt((1.0 - si) * (1.0 + si))  # kirchhoff.common._trig
     zero = float(pi_) == 0.0
     dphi = ps if (zero and math.copysign(1.0, float(pi_)) > 0) else ps - pi_
     cd, sd = np.cos(dphi), np.sin(dphi)
-    qxp = si * cd - si  # Geometry._lateral_q with θs = θi
-    qyp = si * sd
-    if zero or rough.dimension == 1:
-        qx, qy = qxp, qyp
-    else:
-        cpi, spi = np.cos(pi_), np.sin(pi_)
-        qx, qy = qxp * cpi - qyp * spi, qxp * spi + qyp * cpi
+    rotate = not (zero or rough.dimension == 1)
+    cpi, spi = (np.cos(pi_), np.sin(pi_)) if rotate else (1.0, 0.0)
     if opt.threads > 1 and n >= 2 * iem_jit.BACK_MIN_CHUNK:  # threads: the general wrapper
+        ci = np.sqrt((1.0 - si) * (1.0 + si))  # kirchhoff.common._trig
+        qxp = si * cd - si  # Geometry._lateral_q with θs = θi
+        qyp = si * sd
+        qx, qy = (qxp * cpi - qyp * spi, qxp * spi + qyp * cpi) if rotate else (qxp, qyp)
         loc = Local()
         loc.n, loc.si, loc.ci, loc.ss, loc.cs = n, si, ci, si, ci
         loc.cd, loc.sd, loc.qx, loc.qy, loc.eps, loc.phi_i, loc.phi_s = cd, sd, qx, qy, eps, pi_, ps
         return _compiled(rough, eps, k, loc, opt, slope, shadow_mode, spec)
+    if not n:
+        return np.zeros((2, 2, 0)), 0.0, -np.inf
     kl = k * rough.length  # amplitudes._spectral_args
     if rough.dimension == 2:
         kly = k * rough.length_y
-        K = np.sqrt((qx * kl) ** 2 + (qy * kly) ** 2)
-        pref = np.full(n, math.log(math.pi * kl * kly))
+        pref = math.log(math.pi * kl * kly)
     else:
-        K = np.abs(qx) * kl
-        pref = np.full(n, math.log(0.5 * math.pi * k * rough.length))
-    code, s_slope, psi = 0, 0.0, iem_jit.NO_PSI  # shadowing._back_shadow_args, θs = θi
+        kly = kl
+        pref = math.log(0.5 * math.pi * k * rough.length)
+    code, s_slope, psi = 0, 0.0, 0.0  # shadowing._back_shadow_args, θs = θi
     if shadow_mode == "height-correlated":
         code, s_slope = 2, float(slope[0])
     elif shadow_mode is not None:
-        psi = np.abs(np.mod(ps - pi_ - math.pi + math.pi, 2 * math.pi) - math.pi)
-        code, s_slope, psi = 1, float(slope[0]), np.full(n, float(psi))
+        psi = float(np.abs(np.mod(ps - pi_ - math.pi + math.pi, 2 * math.pi) - math.pi))
+        code, s_slope = 1, float(slope[0])
     sig = np.zeros((2, 2, n))
     out_e = np.ones(n)
     ks = k * rough.sigma
+    # cosθ and K in the kernel (kernels.mono.back_geometry: the numpy numbers bit for bit)
+    geo = np.array((1.0, cd, sd, cpi, spi, float(rotate), kl, kly))
     st = iem_jit.back_kernel()(
-        si, ci, complex(1.0 if pec else eps), pec, ks, K, pref, spec, rough.dimension,
-        opt.fresnel == "transition", math.log(opt.rtol), opt.max_terms, True, code, s_slope,
-        psi, sig[0, 0], sig[1, 1], out_e, np.empty(n, dtype=np.bool_),
-        opt.complementary == "aiem", opt.complementary == "aiem-faded",
-        opt.complementary == "fung92",
+        si, np.empty(n), complex(1.0 if pec else eps), pec, ks, np.empty(n), np.full(n, pref),
+        spec, rough.dimension, opt.fresnel == "transition", math.log(opt.rtol), opt.max_terms,
+        True, code, s_slope, np.full(n, psi) if code == 1 else iem_jit.NO_PSI, sig[0, 0],
+        sig[1, 1], out_e, np.empty(n, dtype=np.bool_), opt.complementary == "aiem",
+        opt.complementary == "aiem-faded", opt.complementary == "fung92", geo,
     )  # fmt: skip
     if st:
         raise RuntimeError(_too_many(opt.rtol, opt.max_terms, opt.max_terms, 2 * math.log(ks)))
-    return sig, 0.0, float(np.max(np.log(out_e))) if n else -np.inf
+    # the log of the max: the max of the logs (np.log is monotone; the general path takes the
+    # max of its log array) at one logarithm instead of n
+    return sig, 0.0, float(np.log(out_e.max()))
 
 
 def _backscatter(rough, eps, k, loc, opt, slope, shadow_mode, log_w):

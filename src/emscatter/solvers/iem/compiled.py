@@ -148,6 +148,7 @@ def flat_n(v, n: int, dtype=float) -> np.ndarray:
 
 
 NO_PSI = np.zeros(1)  # the kernel's ψ argument when the shadowing is not direction-correlated
+NO_GEO = np.zeros(8)  # the kernel's ``geo`` argument when cosθ and K are given
 
 
 def back_kernel():
@@ -213,7 +214,7 @@ def backscatter(
     tail = (bool(lower_q2), bool(fade), bool(fung92))
     if threads <= 1 or n < 2 * BACK_MIN_CHUNK:  # one chunk: a plain call (µs matter here)
         status = [back_kernel(si, cs, e, pec, float(ks), K, pref, int(spec), int(dim), *flags,
-                              psi, out_hh, out_vv, out_e, out_fast, *tail)]  # fmt: skip
+                              psi, out_hh, out_vv, out_e, out_fast, *tail, NO_GEO)]  # fmt: skip
     else:
         status = [0]
 
@@ -221,7 +222,7 @@ def backscatter(
             st = back_kernel(
                 si[a:b], cs[a:b], e, pec, float(ks), K[a:b], pref[a:b], int(spec), int(dim),
                 *flags, psi[a:b] if code == 1 else psi, out_hh[a:b], out_vv[a:b], out_e[a:b],
-                out_fast[a:b], *tail,
+                out_fast[a:b], *tail, NO_GEO,
             )  # fmt: skip
             status.append(st)
 

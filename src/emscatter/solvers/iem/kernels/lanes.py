@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from emscatter.kernels._runtime import inline, jit
+from emscatter.solvers.iem.kernels.mono import back_geometry, cdiv, fast_root, fung92_co, lower_back
 from emscatter.solvers.iem.kernels.series import (
     FAST_MAX_ORDER,
     HUGE,
@@ -64,13 +65,12 @@ def _drop_or_walk(S, l, ph, pv, zrow, e, xx, inv2, ks2):
 
 @inline
 def lane_start(S, l, a0h, a0v, a1h, a1v, a2h, a2v, x0, x1, x2, att0, att1, e0, e1, dh, dv,
-               ks2, K2, spec, dim):  # fmt: skip
+               ks2, K2, w1):  # fmt: skip
     """Set up lane ``l`` for :func:`walk_lanes` (its docstring: the terms, the scaling, the
-    range checks) at n = 1 and 2; a PEC passes zero lower-medium amplitudes and ``att1 = 0``.
-    False (lane inactive): the linear-space walk is not safe."""
+    range checks) at n = 1 and 2; a PEC passes zero lower-medium amplitudes and ``att1 = 0``;
+    ``w1`` = Ŵ₁(K). False (lane inactive): the linear-space walk is not safe."""
     S[ACT + l] = 0.0
     sks = math.sqrt(ks2)
-    w1 = w_lin(1.0, K2, spec, dim)
     S[H0R + l], S[H0I + l], S[V0R + l], S[V0I + l] = a0h.real, a0h.imag, a0v.real, a0v.imag
     S[H1R + l], S[H1I + l], S[V1R + l], S[V1I + l] = a1h.real, a1h.imag, a1v.real, a1v.imag
     S[H2R + l], S[H2I + l], S[V2R + l], S[V2I + l] = a2h.real, a2h.imag, a2v.real, a2v.imag
@@ -155,7 +155,7 @@ def _lane_tail(S, l, zrow, xxrow, kmrow, phrow, pvrow, e, rho, w, ks2):
 
 
 @jit
-def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
+def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok, WT, nw):
     """Walk lanes ``0 … m−1`` of ``S`` (set up by :func:`lane_start`, ``ACT`` = 1) in lockstep
     from n = 2 until each meets its stopping rule; ``out_ok[l]`` False where the linear-space
     walk was not safe. Sums end in rows ``SH, SV, EH, EV`` (times ``MSQ``: ``S_hh, S_vv`` and
@@ -176,7 +176,9 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
     every fourth order. Not safe (the caller takes the log-space path): a component that
     starts below 1e-140 of the largest is left out and its whole-series bound must be
     negligible (≤ 1e-3 rtol of the sum) at the end; a walk longer than
-    :data:`FAST_MAX_ORDER` or ``max_terms``; sums outside [1e-250, 1e300]."""
+    :data:`FAST_MAX_ORDER` or ``max_terms``; sums outside [1e-250, 1e300]. ``WT``: the
+    Ŵₙ of orders 1 … ``nw`` of these lanes, as :func:`walk_transition` left them (the same
+    numbers: read, not evaluated again)."""
     sks = math.sqrt(ks2)
     w = np.empty(m)
     live = 0
@@ -186,8 +188,13 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
             live += 1
     n = 2.0
     while live > 0:
-        for l in range(m):  # Ŵₙ per lane
-            w[l] = w_lin(n, S[K2F + l], spec, dim)
+        if n <= nw:  # Ŵₙ per lane: the transition walk's, or evaluated
+            o = (int(n) - 1) * LANES
+            for l in range(m):
+                w[l] = WT[o + l]
+        else:
+            for l in range(m):
+                w[l] = w_lin(n, S[K2F + l], spec, dim)
         for l in range(m):  # one order for every lane (frozen lanes add nothing)
             z0, z1, z2 = S[Z0 + l], S[Z1 + l], S[Z2 + l]
             hr = S[H0R + l] * z0 + S[H1R + l] * z1 + S[H2R + l] * z2
@@ -248,10 +255,11 @@ def walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, out_ok):
 # rows of the transition-sum lane state (offsets, as above)
 TK2, TS1, TS2, TS4, TT1, TPREV, TACT = range(0, 7 * LANES, LANES)
 T_ROWS = 7
+WT_ORDERS = 64  # orders of Ŵₙ the transition walk keeps for the series walk
 
 
 @jit
-def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
+def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok, WT):
     """Linear-space :func:`transition_sums` for lanes ``0 … m−1`` of ``T`` in lockstep, one
     ``Q`` for all (rows ``TK2`` = K², ``TACT`` = 1 where wanted): ``S(βQ) = Σ_{n≥1}
     (βQ)ⁿ/n! Ŵₙ`` for β = 1, 2, 4 end in rows ``TS1, TS2, TS4`` (:func:`transition_ratios`
@@ -259,7 +267,9 @@ def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
     stops when the geometric tail of each of the three series (term ratios non-increasing from
     n = 3 on for these spectra, tested at odd orders) is below ``rtol_t`` of its sum;
     ``out_ok[l]`` False when the sums leave the safe range (the caller then takes the
-    log-space path). One lane (m = 1) is the one-geometry form the log-space path uses."""
+    log-space path). One lane (m = 1) is the one-geometry form the log-space path uses.
+    Returns ``nw``: the Ŵₙ of orders 1 … nw are in ``WT[(n − 1) LANES + l]`` (as many as
+    ``WT`` holds; :func:`walk_lanes` reads them)."""
     w = np.empty(m)
     live = 0
     for l in range(m):
@@ -269,12 +279,19 @@ def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
         if T[TACT + l] > 0.0:
             live += 1
     n, p2, p4, qn = 1.0, 1.0, 1.0, 1.0
+    nw = 0
+    cap = WT.shape[0] // LANES
     while live > 0:
         p2 *= 2.0
         p4 *= 4.0
         qn = qn * (Q / n)
         for l in range(m):
             w[l] = w_lin(n, T[TK2 + l], spec, dim)
+        if nw < cap:
+            o = nw * LANES
+            for l in range(m):
+                WT[o + l] = w[l]
+            nw += 1
         for l in range(m):
             t1 = qn * w[l]
             T[TT1 + l] = t1
@@ -310,6 +327,7 @@ def walk_transition(T, m, Q, spec, dim, rtol_t, out_ok):
         s1, s4 = T[TS1 + l], T[TS4 + l]
         if not (TINY <= s1 < HUGE and s4 < HUGE):
             out_ok[l] = False
+    return nw
 
 
 @inline
@@ -333,10 +351,10 @@ def fresnel_setup(s, c, eps, pec):
     """``(q₂, 1/q₂, R_h, R_v)`` at incidence θ (PEC: ``R_h = −1, R_v = 1``, ``q₂ = 0``)."""
     if pec:
         return 0j, 0j, -1.0 + 0j, 1.0 + 0j
-    q2 = root(eps - s * s)
-    iq = 1.0 / q2
-    rh = (c - q2) / (c + q2) if c + q2 != 0 else 0j
-    rv = (eps * c - q2) / (eps * c + q2) if eps * c + q2 != 0 else 0j
+    q2 = fast_root(eps - s * s)
+    iq = cdiv(1.0 + 0j, q2)
+    rh = cdiv(c - q2, c + q2)
+    rv = cdiv(eps * c - q2, eps * c + q2)
     return q2, iq, rh, rv
 
 
@@ -383,55 +401,6 @@ def lower_setup(s, c, q2, iq, rh, rv, eps, ieps, ks2, lower_q2, fh, fv):
 
 
 @inline
-def lower_back(s2, c, q2, iq, rh, rv, eps, ieps, a, f):
-    """The two lower-medium amplitudes of the fast walk, ``(g₁h, g₁v, g₂h, g₂v)`` =
-    ``f (p₁ + p₂)``, ``f m`` of :func:`lower_setup` (``f`` = ¼, times the fade), in closed
-    form: at exact backscatter (φ = π, θs = θi) the reduced coefficients of
-    :func:`emscatter.solvers.iem.terms._reduced_i`, ``_reduced_s`` are, with ``s² = sin²θ``,
-    ``c = cosθ``, the side "i" (``q = −q₂``, ``α₁ = c + a``) and "s" (``q = q₂``, ``α₁``) terms
-    summed: ``C₁ = −2α₁``, ``C₃ = 2s²(q₂ − c)``, ``C₄ = −2c(α₁c + 2s²)``,
-    ``C₂ + C₅ = 4s²(c − q₂)``; the "s" term at ``q = −q₂``, ``α₂ = c − a``: ``C₁ = −α₂``,
-    ``C₃ = s²(α₂ − 2c)``, ``C₄ = −c(α₂c + 2s²)``, ``C₂ + C₅ = 2s²(c + q₂)`` (``C₂`` and ``C₅``
-    enter :func:`lower_co` only as their sum once its products are expanded:
-    ``hh = q₂⁻¹[(1+R_h)²(C₃ − εC₁) + (1+R_h)(1−R_h)(C₂ + C₅) + (1−R_h)²C₄]``,
-    ``vv = q₂⁻¹[(1+R_v)²(C₁ − C₃/ε) − (1+R_v)(1−R_v)(C₂ + C₅) − (1−R_v)²εC₄]``). The same
-    amplitudes as :func:`lower_setup` to rounding (tests/test_iem_fast.py), two thirds of its
-    arithmetic."""
-    hp, hm = 1.0 + rh, 1.0 - rh
-    vp, vm = 1.0 + rv, 1.0 - rv
-    fi = f * iq
-    ah, bh, ch = fi * hp * hp, fi * hp * hm, fi * hm * hm
-    av, bv, cv = fi * vp * vp, fi * vp * vm, fi * vm * vm * eps
-    a1, a2 = c + a, c - a
-    c1 = -2.0 * a1
-    c3 = 2.0 * s2 * (q2 - c)
-    c4 = -2.0 * c * (a1 * c + 2.0 * s2)
-    c25 = 4.0 * s2 * (c - q2)
-    g1h = ah * (c3 - c1 * eps) + bh * c25 + ch * c4
-    g1v = av * (c1 - c3 * ieps) - bv * c25 - cv * c4
-    c1 = -a2
-    c3 = s2 * (a2 - 2.0 * c)
-    c4 = -c * (a2 * c + 2.0 * s2)
-    c25 = 2.0 * s2 * (c + q2)
-    g2h = ah * (c3 - c1 * eps) + bh * c25 + ch * c4
-    g2v = av * (c1 - c3 * ieps) - bv * c25 - cv * c4
-    return g1h, g1v, g2h, g2v
-
-
-@inline
-def fung92_co(s, c, q2, eps, pec):
-    """The 1992 IEM's complementary amplitude in exact backscatter, ``(G_h, G_v)`` (base
-    ``cosθ``, no height phase; :func:`emscatter.solvers.iem.terms.fung92_backscatter_terms`)."""
-    s2 = s * s
-    if pec:
-        return -4.0 * s2 + 0j, 4.0 * s2 + 0j
-    dh = c + q2
-    dv = eps * c + q2
-    gh = -4.0 * s2 * (eps - 1.0) / (dh * dh)
-    return gh, 4.0 * s2 * (eps - 1.0) * (eps * c * c + s2) / (dv * dv)
-
-
-@inline
 def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_rtol, r0, r08,
                 r08sq, a0, ieps, T, tr_ok, lower_q2, fade, fung92):  # fmt: skip
     """Per-geometry coefficients of exact backscatter, one geometry at a time (the
@@ -452,7 +421,7 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
         e2, e4 = 2.0, 4.0
         if fast:
             T[TK2], T[TACT] = Kr * Kr, 1.0
-            walk_transition(T, 1, Q, spec, dim, rtol * 1e-2, tr_ok)
+            walk_transition(T, 1, Q, spec, dim, rtol * 1e-2, tr_ok, T[:0])
             fast = tr_ok[0]
             if fast:
                 e2, e4 = transition_ratios(T, 0, math.exp(-Q))
@@ -474,7 +443,7 @@ def angle_setup(s, c, Kr, eps, pec, ks2, spec, dim, transition, fast, rtol, log_
 @jit
 def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 max_terms, use_fast, sh_code, sh_slope, psi, out_hh, out_vv, out_e,
-                out_fast, lower_q2, fade, fung92):  # fmt: skip
+                out_fast, lower_q2, fade, fung92, geo):  # fmt: skip
     """Exact-backscatter hh, vv per geometry (``fung92``: the 1992 IEM, Kirchhoff plus one
     complementary component of base ``cosθ``, no n = 1 terms of their own): the linear-space
     walk where it is safe and ``use_fast`` — blocks of :data:`LANES` geometries in lockstep:
@@ -482,7 +451,10 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     :func:`walk_lanes`) — else the log-space :func:`row_series` / :func:`transition_sums`,
     one geometry at a time. Outputs σ⁰_hh, σ⁰_vv, the precision ratio (sum of the envelopes
     over the sum, ≥ 1; :mod:`emscatter.solvers.iem.series`) and ``out_fast[r]``: the fast
-    path was taken."""
+    path was taken. ``geo[0]`` ≠ 0: ``cs`` and ``K`` are outputs, the exact-backscatter
+    geometry from ``si`` and ``geo`` (:func:`.mono.back_geometry`) first."""
+    if geo[0] != 0.0:
+        back_geometry(si, geo, dim, cs, K)
     ks2 = ks * ks
     log_ks2 = math.log(ks2)
     rtol = math.exp(log_rtol)
@@ -511,9 +483,12 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
     lrv = np.empty(LANES, dtype=np.complex128)
     with_tr = transition and not pec
     n_all = si.shape[0]
+    WT = np.empty(WT_ORDERS * LANES)  # Ŵₙ of the transition walk, for the series walk
+    last_pref, last_exp = math.nan, math.nan
     for b in range(0, n_all, LANES):
         m = min(LANES, n_all - b)
         any_tr = False
+        nw = 0
         for l in range(m):  # shadowing, Fresnel coefficients, transition lanes
             r = b + l
             s, c = si[r], cs[r]
@@ -530,7 +505,7 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
                 T[TACT + l] = 1.0
                 any_tr = True
         if any_tr:
-            walk_transition(T, m, ks2, spec, dim, rtol * 1e-2, tr_ok)
+            nw = walk_transition(T, m, ks2, spec, dim, rtol * 1e-2, tr_ok, WT)
         any_started = False
         for l in range(m):  # transition factors, lower-medium terms, series lanes
             if not use_fast:
@@ -571,21 +546,24 @@ def back_kernel(si, cs, eps, pec, ks, K, pref, spec, dim, transition, log_rtol,
             else:  # the upper-medium phase (the default "aiem-faded"): closed form
                 f = 0.25 * (1.0 - gv) if fade else 0.25
                 a = c
-                e_g = -ks2 * (a * a + c * c)
+                e_g, att1 = e_k, ek_lin  # −(kσ)²(a² + cos²θ) with a = cosθ: the Kirchhoff one
                 g1h, g1v, g2h, g2v = lower_back(s2, c, q2, iq, rh, rv, eps, ieps, a, f)
-                att1 = math.exp(e_g)
             started[l] = lane_start(
                 S, l, -4.0 * rh_t, 4.0 * rv_t, g1h, g1v, g2h, g2v, 2.0 * c, c + a, c - a, ek_lin,
-                att1, e_k, e_g, dh, dv, ks2, K[r] * K[r], spec, dim,
+                att1, e_k, e_g, dh, dv, ks2, K[r] * K[r],
+                WT[l] if nw > 0 else w_lin(1.0, K[r] * K[r], spec, dim),  # the same Ŵ₁
             )  # fmt: skip
             any_started = any_started or started[l]
         if any_started:
-            walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, lane_ok)
+            walk_lanes(S, m, ks2, spec, dim, rtol, max_terms, lane_ok, WT, nw)
         for l in range(m):  # results; the log-space path where the fast one was not taken
             r = b + l
             shf = lane_shf[l]
             if started[l] and lane_ok[l]:
-                ep = math.exp(pref[r]) * S[MSQ + l] * shf
+                if pref[r] != last_pref:  # e^{pref}: once while it repeats (the monostatic call)
+                    last_pref = pref[r]
+                    last_exp = math.exp(last_pref)
+                ep = last_exp * S[MSQ + l] * shf
                 out_hh[r] = S[SH + l] * ep
                 out_vv[r] = S[SV + l] * ep
                 out_e[r] = max(S[EH + l] / S[SH + l],
