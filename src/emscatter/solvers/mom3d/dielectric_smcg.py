@@ -67,7 +67,7 @@ from scipy import sparse
 
 from emscatter.solvers.mom3d.dielectric import media, pair_blocks, self_blocks
 from emscatter.solvers.mom3d.near import WIDTH, near_correction
-from emscatter.solvers.mom3d.smcg import ROW_BLOCK, _check_order, _offsets
+from emscatter.solvers.mom3d.smcg import ROW_BLOCK, _check_order, _offsets, far_grid
 
 __all__ = ["DielectricSmcgOperator", "dielectric_smcg_operator", "radial_series"]
 
@@ -215,7 +215,6 @@ class DielectricSmcgOperator:
 
     def __init__(self, patch, k0: float, eps2: complex, near_radius: float, taylor_order: int,
                  dtype, strong=None):  # fmt: skip
-        ny, nx = patch.shape
         self.patch, self.k0, self.eps2 = patch, float(k0), complex(eps2)
         self.order, self.near_radius = int(taylor_order), float(near_radius)
         self.shape = (4 * patch.n, 4 * patch.n)
@@ -223,13 +222,8 @@ class DielectricSmcgOperator:
         if strong is None:
             strong = _strong(patch, k0, eps2, near_radius, dtype)
         self.strong = strong
-        self.pad = (sfft.next_fast_len(2 * ny - 1), sfft.next_fast_len(2 * nx - 1))
+        self.pad, dd_x, dd_y, rho, far = far_grid(patch, near_radius)
         py, px = self.pad
-        dj = np.fft.fftfreq(py, 1.0 / py).astype(int)  # offsets m − n in grid steps
-        di = np.fft.fftfreq(px, 1.0 / px).astype(int)
-        dd_y, dd_x = np.meshgrid(dj * patch.dy, di * patch.dx, indexing="ij")
-        rho = np.hypot(dd_x, dd_y)
-        far = (rho * rho >= near_radius**2) & (np.abs(dj)[:, None] < ny) & (np.abs(di) < nx)
         radial = _radial(k0, eps2, rho[far], self.order)
         area = patch.dx * patch.dy
         spec = np.zeros((len(_KERNELS), self.order + 1, py, px), dtype=complex)

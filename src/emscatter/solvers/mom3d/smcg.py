@@ -158,6 +158,21 @@ def _strong(patch, k: float, radius: float, dtype) -> sparse.csr_matrix:
     return sparse.csr_matrix((data, indices, indptr), shape=(2 * n, 2 * n))
 
 
+def far_grid(patch, near_radius: float):
+    """The canonical grid of the weak pairs: ``pad`` (the FFT size, ≥ 2n − 1 per axis), the
+    offsets ``dd_x, dd_y`` [m] of pairs ``m − n`` on it (FFT order), their distance ``rho`` [m]
+    and the mask ``far`` of the offsets that are weak pairs (``ρ ≥ r_d``, inside the patch)."""
+    ny, nx = patch.shape
+    pad = (sfft.next_fast_len(2 * ny - 1), sfft.next_fast_len(2 * nx - 1))
+    py, px = pad
+    dj = np.fft.fftfreq(py, 1.0 / py).astype(int)  # offsets m − n in grid steps
+    di = np.fft.fftfreq(px, 1.0 / px).astype(int)
+    dd_y, dd_x = np.meshgrid(dj * patch.dy, di * patch.dx, indexing="ij")
+    rho = np.hypot(dd_x, dd_y)
+    far = (rho * rho >= near_radius**2) & (np.abs(dj)[:, None] < ny) & (np.abs(di) < nx)
+    return pad, dd_x, dd_y, rho, far
+
+
 class SmcgOperator:
     """The MFIE matrix of a :class:`~.operator.Patch` as a product ``op @ v``: strong pairs
     sparse, weak pairs by FFT (module docstring). ``shape``, ``dtype`` (complex128: the
@@ -165,19 +180,13 @@ class SmcgOperator:
 
     def __init__(self, patch, k: float, near_radius: float, taylor_order: int, dtype,
                  strong=None):  # fmt: skip
-        ny, nx = patch.shape
         self.patch, self.k, self.order = patch, k, int(taylor_order)
         self.near_radius = near_radius
         self.shape = (2 * patch.n, 2 * patch.n)
         self.dtype = np.dtype(np.complex128)
         self.strong = _strong(patch, k, near_radius, dtype) if strong is None else strong
-        self.pad = (sfft.next_fast_len(2 * ny - 1), sfft.next_fast_len(2 * nx - 1))
+        self.pad, dd_x, dd_y, rho, far = far_grid(patch, near_radius)
         py, px = self.pad
-        dj = np.fft.fftfreq(py, 1.0 / py).astype(int)  # offsets m − n in grid steps
-        di = np.fft.fftfreq(px, 1.0 / px).astype(int)
-        dd_y, dd_x = np.meshgrid(dj * patch.dy, di * patch.dx, indexing="ij")
-        rho = np.hypot(dd_x, dd_y)
-        far = (rho * rho >= near_radius**2) & (np.abs(dj)[:, None] < ny) & (np.abs(di) < nx)
         g = np.zeros((self.order + 1, py, px), dtype=complex)
         g[:, far] = patch.dx * patch.dy * taylor_kernels(k, rho[far], self.order)
         kern = np.concatenate([g * dd_x, g * dd_y, g])  # (3(P+1), py, px)
