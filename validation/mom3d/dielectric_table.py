@@ -154,13 +154,7 @@ def save(rows, meta) -> None:
             if m == "auto":
                 txt += " → " + str(mine[0]["status"]).split("auto = ")[-1].rstrip(")")
             cells.append(txt)
-        lines.append(
-            f"| {re:g}+{im:g}i | {t:g}° | {ks:g} | {kl:g} | {float(r0['rms_slope']):.2f} | "
-            f"{int(float(r0['realizations']))} | {float(r0['length_wavelengths']):g} | "
-            f"{float(r0['energy_min']):.3f} | {float(r0['seconds']):.0f} | "
-            + " | ".join(cells)
-            + f" | {max(float(r['mom_se_dB']) for r in sub):.2f} |"
-        )
+        lines.append(pt.table_row(f"{re:g}+{im:g}i | {t:g}° | {ks:g} | {kl:g}", sub, cells))
     with atomic_path(MD) as tmp:
         Path(tmp).write_text("\n".join(lines) + "\n")
 

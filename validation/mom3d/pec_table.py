@@ -244,15 +244,23 @@ def save(rows, meta):
             txt = f"{e['h']:.2f} / {e['v']:.2f}"
             txt = f"**{txt}**\\*" if r0["auto"] == m else txt
             cells.append(txt if str(v) == "True" else f"({txt})")
-        lines.append(
-            f"| {corr[:3]} | {t:g}° | {ks:g} | {kl:g} | {float(r0['rms_slope']):.2f} | "
-            f"{int(float(r0['realizations']))} | {float(r0['length_wavelengths']):g} | "
-            f"{float(r0['energy_min']):.3f} | {float(r0['seconds']):.0f} | "
-            + " | ".join(cells)
-            + f" | {max(float(r['mom_se_dB']) for r in sub):.2f} |"
-        )
+        lines.append(table_row(f"{corr[:3]} | {t:g}° | {ks:g} | {kl:g}", sub, cells))
     with atomic_path(MD) as tmp:
         Path(tmp).write_text("\n".join(lines) + "\n")
+
+
+def table_row(lead: str, sub: list, cells: list) -> str:
+    """One markdown row of a cell: ``lead`` (its key columns), the cell's slope, realizations,
+    patch size, energy and seconds (from its first CSV row), the models' ``cells`` and the
+    largest mom3d standard error of its rows ``sub``."""
+    r0 = sub[0]
+    return (
+        f"| {lead} | {float(r0['rms_slope']):.2f} | {int(float(r0['realizations']))} | "
+        f"{float(r0['length_wavelengths']):g} | {float(r0['energy_min']):.3f} | "
+        f"{float(r0['seconds']):.0f} | "
+        + " | ".join(cells)
+        + f" | {max(float(r['mom_se_dB']) for r in sub):.2f} |"
+    )
 
 
 def main(argv=None) -> None:
