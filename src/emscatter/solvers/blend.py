@@ -41,6 +41,10 @@ tolerance. Linear (not dB) blending because σ⁰ integrates linearly: the blend
 reflectivity is the same convex combination of the methods' ones, so a blend of
 energy-conserving answers conserves energy. What is not smoothed: the medium class of the
 measured maps (conductor for ``|ε| ≥ 100`` or Re ε < 0) is a switch in ε.
+The 3-D method of moments' cells (:func:`.measured.measured_errors_3d`) correct
+:func:`~emscatter.solvers.select.rank_methods` (with ``theta_i``) but not these weights yet: they
+are nearest-cell verdicts per θi, and entering the blend would need them interpolated
+continuously in (kσ, kℓ, θi) as the 1-D maps are.
 
 **Backscatter of a dielectric: IEM before PO** (:func:`auto_order`). In backscatter
 (``θs = θi``, ``φs = φi + π``; :func:`emscatter.backscatter` tells the API, which passes
