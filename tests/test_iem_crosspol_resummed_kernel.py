@@ -95,7 +95,7 @@ _BEFORE = [
 @pytest.mark.parametrize("case", _BEFORE)
 def test_kernel_keeps_the_previous_values(case):
     """The faster kernel (cos/sin Fourier form, four series terms per division) gives the
-    previous kernel's σ⁰_hv to 1e-12, on the array path and the one-angle path (the same
+    previous kernel's σ⁰_hv to 1e-12, on the array path and both one-angle paths (the same
     value to the bit)."""
     from emscatter.solvers.iem.kernels import crosspol_resummed as kern
 
@@ -108,3 +108,9 @@ def test_kernel_keeps_the_previous_values(case):
     assert abs(v[0] - before) <= 1e-12 * before
     prep = kern.prepare_one(th, eps, K, kl / K, kly / K, phi, spec, 10, 8)
     assert kern.evaluate_one(prep, th, K, ks / K, kl / K, kly / K, spec) == v[0]
+    # the fused one-angle call (reused scratch): the same double and the same remembered part
+    one, part = kern.value_one(th, eps, K, ks / K, kl / K, kly / K, phi, spec, 10, 8)
+    assert one == v[0]
+    for a, b in zip(part, prep, strict=True):
+        np.testing.assert_array_equal(a, b)
+        assert not a.flags.writeable

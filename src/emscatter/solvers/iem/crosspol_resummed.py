@@ -174,16 +174,18 @@ def _value_one(rough, eps: complex, k: float, theta: float, d: float, n_nodes: i
         code = kern.GAUSSIAN if type(rough) is GaussianCorrelation else kern.EXPONENTIAL
         lx, ly = rough.length, rough.length_y
         key = (code, lx, ly, eps, k, theta, d, n_nodes, n_azimuth)
-        prep = _PREP.get(key)
-        if prep is None:
-            prep = kern.prepare_one(theta, eps, k, lx, ly, d, code, n_nodes, n_azimuth)
+        prep = _PREP.get(key, False)
+        if prep is False:  # (prepare and evaluate in one compiled call: the same double)
+            v, prep = kern.value_one(theta, eps, k, rough.sigma, lx, ly, d, code, n_nodes,
+                                     n_azimuth)  # fmt: skip
             _PREP[key] = prep
             while len(_PREP) > _PREP_SIZE:
                 _PREP.popitem(last=False)
         else:
             _PREP.move_to_end(key)
+            if prep is not None:
+                v = kern.evaluate_one(prep, theta, k, rough.sigma, lx, ly, code)
         if prep is not None:  # (None: no point symmetry, the numpy reference)
-            v = kern.evaluate_one(prep, theta, k, rough.sigma, lx, ly, code)
             if not (math.isfinite(v) and v >= 0):
                 raise FloatingPointError(
                     f"resummed cross-pol not finite/positive at theta={theta!r}"

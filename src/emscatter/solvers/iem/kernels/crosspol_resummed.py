@@ -57,6 +57,7 @@ point symmetry are flagged 0 and computed by the caller's numpy reference.
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
@@ -78,6 +79,7 @@ from emscatter.solvers.spm.kernel_crosspol import (
 __all__ = [
     "backscatter_resummed",
     "prepare_one",
+    "value_one",
     "evaluate_one",
     "GAUSSIAN",
     "EXPONENTIAL",
@@ -249,14 +251,17 @@ def _t_hat_exp_block(qv, cnt, c, inv, nterms, area, out):
 
 
 @jit
-def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx):
+def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g):
     """The σ-independent part of one backscatter angle ``a`` [rad]: for every node ``c`` of
     the rule (the upper half plane where the surface allows), ``W[c]`` the quadrature weight
     times ``Re g₂(p)[g₂*(p) + g₂*(−p)]`` (× 2 on the upper half), ``qv[c] = (|p − k_i⊥|ℓ)²``
     and ``pidx[c]`` the node where ``T̂(k_s⊥ − p)`` is ``T̂`` (the point partner, or its
-    mirror); the node count returned, −1 where the azimuth rule lacks the point symmetry
-    (the caller's numpy). Depends on ε, k, θ, ℓₓ, ℓᵧ, φ and the spectrum's kind, not on σ:
-    the node rule's breaks are ``k``, ``Re√ε k`` and ``1/ℓ`` distances (module docstring)."""
+    mirror); ``g`` complex scratch (``(_MAX_RADIAL_SEGMENTS·s_r.size,
+    _MAX_AZIMUTH_SEGMENTS·s_a.size)``: the kernel at the nodes), the caller's, reused, so that
+    a call neither allocates nor first touches its ~0.3 MB; the node count returned, −1 where
+    the azimuth rule lacks the point symmetry (the caller's numpy). Depends on ε, k, θ, ℓₓ,
+    ℓᵧ, φ and the spectrum's kind, not on σ: the node rule's breaks are ``k``, ``Re√ε k``
+    and ``1/ℓ`` distances (module docstring)."""
     nr_, na_ = s_r.size, s_a.size
     log = spec != GAUSSIAN
     inv_len = 1.0 / min(lx, ly)
@@ -272,7 +277,6 @@ def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx)
     neg = np.empty(psi.size, dtype=np.int64)
     mir = np.empty(psi.size, dtype=np.int64)
     cpsi, spsi = np.empty(psi.size), np.empty(psi.size)
-    g = np.empty((kr.size, psi.size), dtype=np.complex128)
     zc = np.empty(6, dtype=np.complex128)
     gs = np.empty(_FOURIER_SAMPLES, dtype=np.complex128)
     cf = np.empty(2 * _DEGREE, dtype=np.complex128)
@@ -356,12 +360,15 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
     symmetry (the caller's numpy)."""
     size = _MAX_RADIAL_SEGMENTS * s_r.size * _MAX_AZIMUTH_SEGMENTS * s_a.size
     W, qv, tv = np.empty(size), np.empty(size), np.empty(size)
+    g = np.empty((_MAX_RADIAL_SEGMENTS * s_r.size, _MAX_AZIMUTH_SEGMENTS * s_a.size),
+                 dtype=np.complex128)  # fmt: skip
     pidx = np.empty(size, dtype=np.int64)
     coef, cinv = np.empty(N_COEF), np.empty(N_COEF)
     for j in range(start, stop):
         flag[j] = 0
         out[j] = 0.0
-        n = _prepare(theta[j], eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx)
+        n = _prepare(theta[j], eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx,
+                     g)  # fmt: skip
         if n < 0:
             continue
         out[j] = _evaluate(W, qv, pidx, n, theta[j], k, sigma, spec, lx * ly, coef, cinv, tv)
@@ -390,23 +397,85 @@ def backscatter_resummed(theta, eps: complex, k: float, sigma: float, length: fl
     return out, flag.astype(bool)
 
 
+#: Per-thread scratch of the one-angle path (:func:`_buffers`): reused, as :func:`_kernel`
+#: reuses its own across angles (a fresh ~0.8 MB per call, first touched, cost as much as the
+#: node rule; issue 20's second speed pass).
+_LOCAL = threading.local()
+
+
+def _buffers(n_nodes: int, n_azimuth: int):
+    """This thread's ``(s, ds, sa, dsa, W, qv, pidx, g, coef, cinv, tv)`` for the rule
+    ``n_nodes × n_azimuth``: the unit rules and :func:`_one`'s scratch (made once)."""
+    key = (n_nodes, n_azimuth)
+    buf = getattr(_LOCAL, "buf", None)
+    if buf is None or buf[0] != key:
+        s, ds = unit_rule(n_nodes)
+        sa, dsa = unit_rule(n_azimuth)
+        nr, na = _MAX_RADIAL_SEGMENTS * s.size, _MAX_AZIMUTH_SEGMENTS * sa.size
+        size = nr * na
+        buf = (key, (s, ds, sa, dsa, np.empty(size), np.empty(size),
+                     np.empty(size, dtype=np.int64), np.empty((nr, na), dtype=np.complex128),
+                     np.empty(N_COEF), np.empty(N_COEF), np.empty(size)))  # fmt: skip
+        _LOCAL.buf = buf
+    return buf[1]
+
+
+def _series_scratch(n: int):
+    """This thread's ``(coef, cinv, tv)`` for :func:`_evaluate` on ``n`` nodes (``tv`` grown
+    as needed; reused)."""
+    buf = getattr(_LOCAL, "series", None)
+    if buf is None or buf[2].size < n:
+        buf = (np.empty(N_COEF), np.empty(N_COEF), np.empty(max(n, 4096)))
+        _LOCAL.series = buf
+    return buf
+
+
+@jit
+def _one(a, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g, coef,
+         cinv, tv):  # fmt: skip
+    """:func:`_prepare` then :func:`_evaluate` for one angle ``a`` [rad] in one call (as
+    :func:`_kernel` runs them: the same value to the bit): ``(n, σ⁰_hv)``, ``n`` the node count
+    of ``W, qv, pidx`` (−1, value 0, where the rule lacks the point symmetry)."""
+    n = _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g)
+    if n < 0:
+        return n, 0.0
+    return n, _evaluate(W, qv, pidx, n, a, k, sigma, spec, lx * ly, coef, cinv, tv)
+
+
+def _trimmed(W, qv, pidx, n):
+    prep = (W[:n].copy(), qv[:n].copy(), pidx[:n].copy())
+    for a in prep:
+        a.flags.writeable = False
+    return prep
+
+
+def value_one(theta: float, eps: complex, k: float, sigma: float, length: float,
+              length_y: float, phi_i: float, spectrum: int, n_nodes: int,
+              n_azimuth: int):  # fmt: skip
+    """``(σ⁰_hv, prep)`` at one flat backscatter angle ``theta`` [rad] (checked by the
+    caller): :func:`prepare_one` and :func:`evaluate_one` in one compiled call on reused
+    scratch — the same value to the bit —, ``prep`` the σ-independent part to remember (as
+    :func:`prepare_one` returns it), or ``(None, None)`` where the rule lacks the point
+    symmetry (the caller's numpy reference)."""
+    s, ds, sa, dsa, W, qv, pidx, g, coef, cinv, tv = _buffers(n_nodes, n_azimuth)
+    n, v = _one(theta, eps, k, sigma, length, length_y, math.cos(phi_i), math.sin(phi_i),
+                spectrum, s, ds, sa, dsa, W, qv, pidx, g, coef, cinv, tv)  # fmt: skip
+    if n < 0:
+        return None, None
+    return v, _trimmed(W, qv, pidx, n)
+
+
 def prepare_one(theta: float, eps: complex, k: float, length: float, length_y: float,
                 phi_i: float, spectrum: int, n_nodes: int, n_azimuth: int):  # fmt: skip
     """The σ-independent part of one flat backscatter angle ``theta`` [rad] (:func:`_prepare`):
     ``(W, qv, pidx)`` trimmed to the rule's nodes (fresh arrays, read-only), or None where the
     rule lacks the point symmetry (the caller's numpy reference)."""
-    s, ds = unit_rule(n_nodes)
-    sa, dsa = unit_rule(n_azimuth)
-    size = _MAX_RADIAL_SEGMENTS * s.size * _MAX_AZIMUTH_SEGMENTS * sa.size
-    W, qv, pidx = np.empty(size), np.empty(size), np.empty(size, dtype=np.int64)
+    s, ds, sa, dsa, W, qv, pidx, g, _, _, _ = _buffers(n_nodes, n_azimuth)
     n = _prepare(theta, eps, k, length, length_y, math.cos(phi_i), math.sin(phi_i), spectrum,
-                 s, ds, sa, dsa, W, qv, pidx)  # fmt: skip
+                 s, ds, sa, dsa, W, qv, pidx, g)  # fmt: skip
     if n < 0:
         return None
-    prep = (W[:n].copy(), qv[:n].copy(), pidx[:n].copy())
-    for a in prep:
-        a.flags.writeable = False
-    return prep
+    return _trimmed(W, qv, pidx, n)
 
 
 def evaluate_one(
@@ -415,5 +484,6 @@ def evaluate_one(
     """σ⁰_hv [-] at one flat angle ``theta`` [rad] from its :func:`prepare_one` part and the
     surface's ``sigma`` [m]: the same arithmetic as :func:`_kernel` (the same value to the bit)."""
     W, qv, pidx = prep
+    coef, cinv, tv = _series_scratch(W.size)
     return _evaluate(W, qv, pidx, W.size, theta, k, sigma, spectrum, length * length_y,
-                     np.empty(N_COEF), np.empty(N_COEF), np.empty(W.size))  # fmt: skip
+                     coef, cinv, tv)  # fmt: skip
