@@ -251,13 +251,13 @@ def _t_hat_exp_block(qv, cnt, c, inv, nterms, area, out):
 
 
 @jit
-def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g):
+def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g, qa):
     """The σ-independent part of one backscatter angle ``a`` [rad]: for every node ``c`` of
     the rule (the upper half plane where the surface allows), ``W[c]`` the quadrature weight
     times ``Re g₂(p)[g₂*(p) + g₂*(−p)]`` (× 2 on the upper half), ``qv[c] = (|p − k_i⊥|ℓ)²``
     and ``pidx[c]`` the node where ``T̂(k_s⊥ − p)`` is ``T̂`` (the point partner, or its
-    mirror); ``g`` complex scratch (``(_MAX_RADIAL_SEGMENTS·s_r.size,
-    _MAX_AZIMUTH_SEGMENTS·s_a.size)``: the kernel at the nodes), the caller's, reused, so that
+    mirror); ``g`` complex and ``qa`` real scratch (``(_MAX_RADIAL_SEGMENTS·s_r.size,
+    _MAX_AZIMUTH_SEGMENTS·s_a.size)``: the kernel and q at the nodes), the caller's, reused, so that
     a call neither allocates nor first touches its ~0.3 MB; the node count returned, −1 where
     the azimuth rule lacks the point symmetry (the caller's numpy). Depends on ε, k, θ, ℓₓ,
     ℓᵧ, φ and the spectrum's kind, not on σ: the node rule's breaks are ``k``, ``Re√ε k``
@@ -299,12 +299,13 @@ def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx,
         cpsi[ia], spsi[ia] = math.cos(psi[ia]), math.sin(psi[ia])
     first = 0
     if half:  # the surface's quadratic form even under y → −y (to 1e-12)
-        for ir in range(nr):
+        for ir in range(nr):  # q at every node once (the mirror's is its node's: qa[ir, pm])
             for ia in range(na):
                 px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-                q_a = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
-                pm = mir[ia]
-                q_b = _q2(kr[ir] * cpsi[pm] - kis0, kr[ir] * spsi[pm] - kis1, cr, sr, lx, ly)
+                qa[ir, ia] = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
+        for ir in range(nr):
+            for ia in range(na):
+                q_a, q_b = qa[ir, ia], qa[ir, mir[ia]]
                 if not abs(q_a - q_b) <= 1e-12 * abs(q_b):
                     half = False
         if half:
@@ -326,8 +327,11 @@ def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx,
                 d = ga + g[ir, pos]
             c = ir * m + (ia - first)
             W[c] = base * wpsi[ia] * (ga.real * d.real + ga.imag * d.imag)
-            px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-            qv[c] = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
+            if half:  # (its q from the check: the same expression, the same double)
+                qv[c] = qa[ir, ia]
+            else:
+                px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
+                qv[c] = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
             pidx[c] = ir * m + (pos - first)
     return nr * m
 
@@ -362,13 +366,14 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
     W, qv, tv = np.empty(size), np.empty(size), np.empty(size)
     g = np.empty((_MAX_RADIAL_SEGMENTS * s_r.size, _MAX_AZIMUTH_SEGMENTS * s_a.size),
                  dtype=np.complex128)  # fmt: skip
+    qa = np.empty(g.shape)
     pidx = np.empty(size, dtype=np.int64)
     coef, cinv = np.empty(N_COEF), np.empty(N_COEF)
     for j in range(start, stop):
         flag[j] = 0
         out[j] = 0.0
         n = _prepare(theta[j], eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx,
-                     g)  # fmt: skip
+                     g, qa)  # fmt: skip
         if n < 0:
             continue
         out[j] = _evaluate(W, qv, pidx, n, theta[j], k, sigma, spec, lx * ly, coef, cinv, tv)
@@ -404,7 +409,7 @@ _LOCAL = threading.local()
 
 
 def _buffers(n_nodes: int, n_azimuth: int):
-    """This thread's ``(s, ds, sa, dsa, W, qv, pidx, g, coef, cinv, tv)`` for the rule
+    """This thread's ``(s, ds, sa, dsa, W, qv, pidx, g, qa, coef, cinv, tv)`` for the rule
     ``n_nodes × n_azimuth``: the unit rules and :func:`_one`'s scratch (made once)."""
     key = (n_nodes, n_azimuth)
     buf = getattr(_LOCAL, "buf", None)
@@ -415,7 +420,8 @@ def _buffers(n_nodes: int, n_azimuth: int):
         size = nr * na
         buf = (key, (s, ds, sa, dsa, np.empty(size), np.empty(size),
                      np.empty(size, dtype=np.int64), np.empty((nr, na), dtype=np.complex128),
-                     np.empty(N_COEF), np.empty(N_COEF), np.empty(size)))  # fmt: skip
+                     np.empty((nr, na)), np.empty(N_COEF), np.empty(N_COEF),
+                     np.empty(size)))  # fmt: skip
         _LOCAL.buf = buf
     return buf[1]
 
@@ -431,12 +437,12 @@ def _series_scratch(n: int):
 
 
 @jit
-def _one(a, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g, coef,
-         cinv, tv):  # fmt: skip
+def _one(a, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g, qa,
+         coef, cinv, tv):  # fmt: skip
     """:func:`_prepare` then :func:`_evaluate` for one angle ``a`` [rad] in one call (as
     :func:`_kernel` runs them: the same value to the bit): ``(n, σ⁰_hv)``, ``n`` the node count
     of ``W, qv, pidx`` (−1, value 0, where the rule lacks the point symmetry)."""
-    n = _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g)
+    n = _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g, qa)
     if n < 0:
         return n, 0.0
     return n, _evaluate(W, qv, pidx, n, a, k, sigma, spec, lx * ly, coef, cinv, tv)
@@ -457,9 +463,9 @@ def value_one(theta: float, eps: complex, k: float, sigma: float, length: float,
     scratch — the same value to the bit —, ``prep`` the σ-independent part to remember (as
     :func:`prepare_one` returns it), or ``(None, None)`` where the rule lacks the point
     symmetry (the caller's numpy reference)."""
-    s, ds, sa, dsa, W, qv, pidx, g, coef, cinv, tv = _buffers(n_nodes, n_azimuth)
+    s, ds, sa, dsa, W, qv, pidx, g, qa, coef, cinv, tv = _buffers(n_nodes, n_azimuth)
     n, v = _one(theta, eps, k, sigma, length, length_y, math.cos(phi_i), math.sin(phi_i),
-                spectrum, s, ds, sa, dsa, W, qv, pidx, g, coef, cinv, tv)  # fmt: skip
+                spectrum, s, ds, sa, dsa, W, qv, pidx, g, qa, coef, cinv, tv)  # fmt: skip
     if n < 0:
         return None, None
     return v, _trimmed(W, qv, pidx, n)
@@ -470,9 +476,9 @@ def prepare_one(theta: float, eps: complex, k: float, length: float, length_y: f
     """The σ-independent part of one flat backscatter angle ``theta`` [rad] (:func:`_prepare`):
     ``(W, qv, pidx)`` trimmed to the rule's nodes (fresh arrays, read-only), or None where the
     rule lacks the point symmetry (the caller's numpy reference)."""
-    s, ds, sa, dsa, W, qv, pidx, g, _, _, _ = _buffers(n_nodes, n_azimuth)
+    s, ds, sa, dsa, W, qv, pidx, g, qa, _, _, _ = _buffers(n_nodes, n_azimuth)
     n = _prepare(theta, eps, k, length, length_y, math.cos(phi_i), math.sin(phi_i), spectrum,
-                 s, ds, sa, dsa, W, qv, pidx, g)  # fmt: skip
+                 s, ds, sa, dsa, W, qv, pidx, g, qa)  # fmt: skip
     if n < 0:
         return None
     return _trimmed(W, qv, pidx, n)
