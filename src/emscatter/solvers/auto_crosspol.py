@@ -13,8 +13,8 @@ every branch adds the same hv: the resummed second-order cross-pol
 (:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed` — second-order SPM's
 exact kernel over the whole spectral plane with the IEM's Gaussian height series; issue 20:
 against NMM3D at 40° its HV RMSE is 3.24 dB, bias −2.10 dB, where the IEM term below has 5.23 /
-−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: ≈ 0.13 ms of CPU
-per angle, ≈ 0.05 ms for a new σ at a known ε, θ, ℓ), on :data:`RESUMMED_NODES` radial ×
+−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: ≈ 0.12 ms of CPU
+per angle, ≈ 0.045 ms for a new σ at a known ε, θ, ℓ), on :data:`RESUMMED_NODES` radial ×
 :data:`RESUMMED_AZIMUTH_NODES` azimuth nodes per segment. Without numba (or with
 ``EMSCATTER_KERNELS=numpy``) its numpy reference runs, the same values at 35–80 ms per angle
 (each angle once: remembered). So:

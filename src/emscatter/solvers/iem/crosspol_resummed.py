@@ -49,10 +49,11 @@ the horizon for a conductor), Gaussian or exponential 2-D surfaces.
 
 Cost: one σ⁰⁽²²⁾ node set per incidence angle (16 × 16 nodes per segment), the series summed at
 every node. Compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`, the default where
-numba imports; equal to the numpy reference to ≤ 1e-10 relative, seen ≤ 5e-14): mean 0.14 ms
+numba imports; equal to the numpy reference to ≤ 1e-10 relative, seen ≤ 5e-14): ≈ 0.12 ms
 of CPU per angle at the 10 radial × 8 azimuth that ``auto`` uses (issue 20's 162-case 40°
-grid, exponential; loaded 2-core machine; 0.34 ms before the kernel's Fourier form), of which
-≈ 0.05 ms is the height series — all a new σ at a known (ε, θ, ℓ) costs, the rest
+grid, exponential; shared 2-core machine; 0.34 ms before the kernel's Fourier form, 0.15 ms
+before its real form and grouped divisions), of which ≈ 0.045 ms is the height series — all
+a new σ at a known (ε, θ, ℓ) costs, the rest
 remembered (:data:`_PREP`) —, against 100–250 ms for numpy (``EMSCATTER_KERNELS=numpy``).
 ``method="auto"`` adds it in backscatter on every branch
 (:mod:`emscatter.solvers.auto_crosspol`); the IEM solver keeps the published IEM term.
