@@ -93,6 +93,11 @@ def test_one_geometry_fast_path_is_the_array_path(name):
     assert arr[0][0] == arr[0][1] == float(one[0]) > 0
     col = auto_crosspol.supplement(name, rough, eps, K, np.array([[T40]]), T40, math.pi, 0.0)
     assert col[0].shape == (1, 1) and col[0][0, 0] == float(one[0])
+    # 0-d and size-1 arrays mixed, ε as a numpy scalar or a 0-d array: the same value
+    for e in (np.complex128(eps), np.array(eps)):
+        mix = auto_crosspol.supplement(name, rough, e, K, np.array(T40), np.array([T40]),
+                                       np.float64(math.pi), np.zeros((1, 1, 1)))  # fmt: skip
+        assert mix[0].shape == (1, 1, 1) and mix[0].ravel()[0] == float(one[0])
     # off backscatter, the fast path steps aside: nothing added in the plane
     off = auto_crosspol.supplement(name, rough, eps, K, T40, T40 + 0.1, math.pi, 0.0)
     assert off == (None, None)

@@ -72,3 +72,45 @@ def test_numpy_switch_forces_the_reference(monkeypatch):
     monkeypatch.setenv("EMSCATTER_KERNELS", "numpy")
     slow = cr.backscatter_resummed(rough, 3 + 0.1j, K, ANGLES[1], n_nodes=6)
     np.testing.assert_allclose(fast, slow, rtol=1e-10)
+
+
+#: σ⁰_hv of the compiled kernel before issue 20's second speed pass (main at 6b1f311: the
+#: complex Fourier evaluation ``Σ c_m e^{imψ}`` and one division per series term), at auto's
+#: 10 × 8 rule: (spectrum, kσ, kℓₓ, kℓᵧ, φ, ε, θ [deg], σ⁰_hv). The cos/sin form and the
+#: grouped series divisions round differently (seen ≤ 7e-15 relative over issue 20's grid
+#: and a 3780-value box of both spectra): 1e-12 asserted.
+_BEFORE = [
+    ("exp", 0.13, 0.5, 0.5, 0.0, 3.0 + 0j, 40.0, 2.1397002700682094e-06),
+    ("exp", 0.5, 3.0, 3.0, 0.0, 10 + 1j, 40.0, 0.0023108943233742514),
+    ("exp", 1.32, 20.0, 20.0, 0.0, 30 + 3j, 40.0, 0.012048958079825626),
+    ("exp", 2.5, 5.0, 5.0, 0.0, 3 + 1j, 20.0, 0.0226876125444019),
+    ("exp", 1.2, 3.0, 6.0, 0.7, 30 + 3j, 55.0, 0.056582931963945975),  # whole plane
+    ("exp", 0.8, 8.0, 2.0, 0.0, 3 + 1j, 30.0, 0.0008776820444036318),
+    ("gauss", 0.5, 3.0, 3.0, 0.0, 10 + 1j, 40.0, 0.001168263174086834),
+    ("gauss", 1.2, 8.0, 2.0, 0.0, 30 + 3j, 60.0, 8.521217291708849e-07),
+    ("gauss", 2.5, 5.0, 5.0, 1.1, 3 + 1j, 25.0, 0.03333189885997065),
+]
+
+
+@pytest.mark.parametrize("case", _BEFORE)
+def test_kernel_keeps_the_previous_values(case):
+    """The faster kernel (cos/sin Fourier form, four series terms per division) gives the
+    previous kernel's σ⁰_hv to 1e-12, on the array path and both one-angle paths (the same
+    value to the bit)."""
+    from emscatter.solvers.iem.kernels import crosspol_resummed as kern
+
+    name, ks, kl, kly, phi, eps, deg, before = case
+    spec = kern.EXPONENTIAL if name == "exp" else kern.GAUSSIAN
+    th = math.radians(deg)
+    v, done = kern.backscatter_resummed(np.array([th]), eps, K, ks / K, kl / K, kly / K, phi,
+                                        spec, 10, n_azimuth=8)  # fmt: skip
+    assert done[0]
+    assert abs(v[0] - before) <= 1e-12 * before
+    prep = kern.prepare_one(th, eps, K, kl / K, kly / K, phi, spec, 10, 8)
+    assert kern.evaluate_one(prep, th, K, ks / K, kl / K, kly / K, spec) == v[0]
+    # the fused one-angle call (reused scratch): the same double and the same remembered part
+    one, part = kern.value_one(th, eps, K, ks / K, kl / K, kly / K, phi, spec, 10, 8)
+    assert one == v[0]
+    for a, b in zip(part, prep, strict=True):
+        np.testing.assert_array_equal(a, b)
+        assert not a.flags.writeable

@@ -13,8 +13,8 @@ every branch adds the same hv: the resummed second-order cross-pol
 (:func:`emscatter.solvers.iem.crosspol_resummed.backscatter_resummed` — second-order SPM's
 exact kernel over the whole spectral plane with the IEM's Gaussian height series; issue 20:
 against NMM3D at 40° its HV RMSE is 3.24 dB, bias −2.10 dB, where the IEM term below has 5.23 /
-−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: ≈ 0.13 ms of CPU
-per angle, ≈ 0.05 ms for a new σ at a known ε, θ, ℓ), on :data:`RESUMMED_NODES` radial ×
+−4.44), compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`: ≈ 0.12 ms of CPU
+per angle, ≈ 0.045 ms for a new σ at a known ε, θ, ℓ), on :data:`RESUMMED_NODES` radial ×
 :data:`RESUMMED_AZIMUTH_NODES` azimuth nodes per segment. Without numba (or with
 ``EMSCATTER_KERNELS=numpy``) its numpy reference runs, the same values at 35–80 ms per angle
 (each angle once: remembered). So:
@@ -79,10 +79,12 @@ from collections import OrderedDict
 import numpy as np
 
 from ..fresnel import is_pec
+from ..spectra import ExponentialCorrelation, GaussianCorrelation
 
 __all__ = ["backscatter_mask", "supplement", "takes_iem_term", "clear_cache", "IEM_BACKSCATTER"]
 
 _BACK_TOL = 1e-9
+_CLOSED_SPECTRA = (GaussianCorrelation, ExponentialCorrelation)
 _IEM_OPTIONS = frozenset({"crosspol", "crosspol_order", "rms_slope"})  # (its cross-pol's)
 #: The ``name`` under which :func:`supplement` gives the IEM's own backscatter hv (for ``auto``'s
 #: IEM run with ``crosspol=False``: the same term, remembered per angle).
@@ -169,7 +171,6 @@ def backscatter_mask(ti, ts, ps, pi_) -> np.ndarray:
 
 
 def _spm2_ok(rough, eps) -> bool:
-    from ..spectra import ExponentialCorrelation, GaussianCorrelation
     from .measured import medium_class
 
     if type(rough) not in (GaussianCorrelation, ExponentialCorrelation):
@@ -230,13 +231,14 @@ def supplement(name: str, rough, eps, k: float, ti, ts, ps, pi_, *, options=None
 def _scalar_dielectric(rough, eps) -> bool:
     """:func:`_spm2_ok` for one scalar ε without numpy's per-call cost (``medium_class``'s
     rule: a dielectric is ``Re ε ≥ 0`` and ``|ε| < 100``)."""
-    from ..spectra import ExponentialCorrelation, GaussianCorrelation
-
-    if type(rough) not in (GaussianCorrelation, ExponentialCorrelation):
+    if type(rough) not in _CLOSED_SPECTRA:
         return False
-    if isinstance(eps, str) or np.ndim(eps) != 0:
+    if isinstance(eps, complex | float | int):
+        e = complex(eps)
+    elif isinstance(eps, str) or np.ndim(eps) != 0:
         return False
-    e = complex(eps)
+    else:
+        e = complex(eps)
     return not (e.real < 0 or abs(e) >= 100.0)
 
 
@@ -249,15 +251,15 @@ def _one_angle(name: str, rough, eps, k: float, ti, ts, ps, pi_):
         return None
     if rough.dimension != 2 or rough.sigma == 0 or not _scalar_dielectric(rough, eps):
         return None
-    arrs = (ti, ts, ps, pi_)
-    if any(np.size(a) != 1 for a in arrs):
+    arrs = [np.asarray(a) for a in (ti, ts, ps, pi_)]
+    if any(a.size != 1 for a in arrs):
         return None
-    t, t2, p_s, p_i = (float(np.asarray(a).reshape(-1)[0]) for a in arrs)
+    t, t2, p_s, p_i = (float(a) if a.ndim == 0 else float(a.reshape(-1)[0]) for a in arrs)
     if not (abs(t - t2) <= 1e-12 and abs((p_s - p_i) % (2 * math.pi) - math.pi) <= _BACK_TOL):
         return None  # (not backscatter: the array path answers)
     if not (t < 0.5 * math.pi and k * rough.sigma * math.cos(t) <= FADE_KSIGMA_COS):
         return None  # (faded or grazing: the array path)
-    shape = np.broadcast_shapes(*(np.shape(a) for a in arrs))
+    shape = (1,) * max(a.ndim for a in arrs)  # (np.broadcast_shapes of size-1 shapes)
     f = 0.0 if rough.length == rough.length_y else float(np.mod(p_i, 2 * math.pi))
     e = complex(eps)
     key = ("resummed", rough, e, float(k), t, f)

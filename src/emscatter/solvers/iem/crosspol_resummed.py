@@ -49,10 +49,11 @@ the horizon for a conductor), Gaussian or exponential 2-D surfaces.
 
 Cost: one σ⁰⁽²²⁾ node set per incidence angle (16 × 16 nodes per segment), the series summed at
 every node. Compiled (:mod:`emscatter.solvers.iem.kernels.crosspol_resummed`, the default where
-numba imports; equal to the numpy reference to ≤ 1e-10 relative, seen ≤ 5e-14): mean 0.14 ms
+numba imports; equal to the numpy reference to ≤ 1e-10 relative, seen ≤ 5e-14): ≈ 0.12 ms
 of CPU per angle at the 10 radial × 8 azimuth that ``auto`` uses (issue 20's 162-case 40°
-grid, exponential; loaded 2-core machine; 0.34 ms before the kernel's Fourier form), of which
-≈ 0.05 ms is the height series — all a new σ at a known (ε, θ, ℓ) costs, the rest
+grid, exponential; shared 2-core machine; 0.34 ms before the kernel's Fourier form, 0.15 ms
+before its real form and grouped divisions), of which ≈ 0.045 ms is the height series — all
+a new σ at a known (ε, θ, ℓ) costs, the rest
 remembered (:data:`_PREP`) —, against 100–250 ms for numpy (``EMSCATTER_KERNELS=numpy``).
 ``method="auto"`` adds it in backscatter on every branch
 (:mod:`emscatter.solvers.auto_crosspol`); the IEM solver keeps the published IEM term.
@@ -174,16 +175,18 @@ def _value_one(rough, eps: complex, k: float, theta: float, d: float, n_nodes: i
         code = kern.GAUSSIAN if type(rough) is GaussianCorrelation else kern.EXPONENTIAL
         lx, ly = rough.length, rough.length_y
         key = (code, lx, ly, eps, k, theta, d, n_nodes, n_azimuth)
-        prep = _PREP.get(key)
-        if prep is None:
-            prep = kern.prepare_one(theta, eps, k, lx, ly, d, code, n_nodes, n_azimuth)
+        prep = _PREP.get(key, False)
+        if prep is False:  # (prepare and evaluate in one compiled call: the same double)
+            v, prep = kern.value_one(theta, eps, k, rough.sigma, lx, ly, d, code, n_nodes,
+                                     n_azimuth)  # fmt: skip
             _PREP[key] = prep
             while len(_PREP) > _PREP_SIZE:
                 _PREP.popitem(last=False)
         else:
             _PREP.move_to_end(key)
+            if prep is not None:
+                v = kern.evaluate_one(prep, theta, k, rough.sigma, lx, ly, code)
         if prep is not None:  # (None: no point symmetry, the numpy reference)
-            v = kern.evaluate_one(prep, theta, k, rough.sigma, lx, ly, code)
             if not (math.isfinite(v) and v >= 0):
                 raise FloatingPointError(
                     f"resummed cross-pol not finite/positive at theta={theta!r}"

@@ -27,16 +27,20 @@ plane where the surface's quadratic form is even under ``y → −y``). What dif
   series per node (half of them on the upper half plane);
 * exponential: not node by node but every node of the angle at once, terms outer (the node
   loop vectorizes), with one term count ``N`` whose tail is bounded at every node
-  (``fₙ/f₁ ≤ n³``: ``Σ_{n>N} cₙ n³ ≤ 1e-13 c₁``, :func:`_exp_terms`).
+  (``fₙ/f₁ ≤ n³``: ``Σ_{n>N} cₙ n³ ≤ 1e-13 c₁``, :func:`_exp_terms`); four terms share one
+  division (``Σ cⱼ/tⱼ`` over a common denominator, ``tₙ = uₙ√uₙ``: the loop is bound by
+  the divider and the square root; issue 20's second speed pass, values to ≤ 1e-14).
 
 The kernel ``g₂`` per node circle (``|p| = ρ`` fixed) from its Fourier series: every factor of
 ``spm.kernel_crosspol._g_hv`` is a polynomial in ``(cos ψ, sin ψ)`` of degree ≤ 3 (the
 first-order sources of degree 1, their amplitudes of degree 2 — ``ĉ`` times a degree-1 source —,
 the second-order source at ``k_s`` of degree 3: the fields of degree 3, ``(k_s − p) E_z`` of
 1 + 2), so ``g₂(ρ, ψ) = Σ_{|m|≤3} c_m(ρ) e^{imψ}`` exactly; 8 equispaced samples per circle give
-the ``c_m`` (discrete Fourier transform, no aliasing), and each node costs 7 complex products in
-place of the kernel's ~40 (``_fill_g_fourier``; issue 20's speed target: 0.34 → 0.14 ms per
-angle on its 162-case grid, loaded machine).
+the ``c_m`` (discrete Fourier transform, no aliasing), and each node costs, in the real form
+``g₂ = c₀ + Σ_{m=1}^{3} [(c_m + c₋m) cos mψ + i(c_m − c₋m) sin mψ]`` (cos mψ, sin mψ by angle
+addition, once per azimuth), 12 real products in place of the kernel's ~40 complex ones
+(``_fill_g_fourier``; issue 20's speed target: 0.34 → 0.14 ms per angle on its 162-case grid,
+loaded machine; → 0.12 ms with the real form and the grouped series divisions).
 
 Per angle in two parts: :func:`_prepare` (node rule, partners, the kernel products times the
 weights, the nodes' ``(Kℓ)²``: independent of σ) and :func:`_evaluate` (the height series at
@@ -53,6 +57,7 @@ point symmetry are flagged 0 and computed by the caller's numpy reference.
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
@@ -74,6 +79,7 @@ from emscatter.solvers.spm.kernel_crosspol import (
 __all__ = [
     "backscatter_resummed",
     "prepare_one",
+    "value_one",
     "evaluate_one",
     "GAUSSIAN",
     "EXPONENTIAL",
@@ -157,8 +163,9 @@ def _fill_g_fourier(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, z
     ``ρ = |p|`` every factor of ``_g_hv`` is a polynomial in ``(cos ψ, sin ψ)`` — the first-order
     amplitudes of degree 2, the second-order source of degree 3 — so
     ``g(ρ, ψ) = Σ_{|m|≤3} c_m(ρ) e^{imψ}``; ``c_m`` from 8 samples (``cs``, ``sn``: their
-    cos, sin) by the discrete Fourier transform, then 7 complex products per node (``ep[m, ia]
-    = e^{i(m−3)ψ}``) in place of the kernel's ~40."""
+    cos, sin) by the discrete Fourier transform — as ``c₀`` and the real-weighted
+    ``c_m + c₋m``, ``i(c_m − c₋m)`` (module docstring) —, then 12 real products per node
+    (``ep[ia] = (cos ψ, sin ψ, …, cos 3ψ, sin 3ψ)``) in place of the kernel's ~40."""
     K_i, k1z = k * si, k * ci
     k2z = _root(eps * k * k - K_i * K_i)
     rv = (eps * k1z - k2z) / (eps * k1z + k2z)
@@ -169,40 +176,72 @@ def _fill_g_fourier(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, z
     k2zs = _root(eps * k * k - (k * si) ** 2)
     inv_den = 1.0 / (k * ci + k2zs)
     ns = cs.size
-    nm = 2 * _DEGREE + 1
-    for ia in range(first, na):
-        e1 = complex(cpsi[ia], spsi[ia])
-        ep[_DEGREE, ia] = 1.0
-        for m in range(1, _DEGREE + 1):
-            ep[_DEGREE + m, ia] = ep[_DEGREE + m - 1, ia] * e1
-            ep[_DEGREE - m, ia] = ep[_DEGREE + m, ia].conjugate()
+    for ia in range(first, na):  # cos mψ, sin mψ (m = 1 … 3) by angle addition
+        c1, s1 = cpsi[ia], spsi[ia]
+        cm, sm = c1, s1
+        for m in range(_DEGREE):
+            ep[ia, 2 * m], ep[ia, 2 * m + 1] = cm, sm
+            cm, sm = cm * c1 - sm * s1, sm * c1 + cm * s1
     for ir in range(nr):
         rho = kr[ir]
         rad = _radial(eps, k, rho)
         for j in range(ns):
             gs[j] = _g_hv(eps, k, inv_k2, k2zs, inv_den, cphi, sphi, ksv0, ksv1, K_i, zc, rho,
                           rad, cs[j], sn[j], rho * cs[j], rho * sn[j])  # fmt: skip
-        for m in range(nm):  # c_m = (1/ns) Σ_j g_j e^{−i m ψ_j}, m = −3 … 3
-            acc = 0j
+        # c₀ = (1/ns) Σ_j g_j; c_m + c₋m = (2/ns) Σ_j g_j cos mψ_j; i(c_m − c₋m) = (2/ns)
+        # Σ_j g_j sin mψ_j: g = c₀ + Σ_{m=1}^{3} [(c_m + c₋m) cos mψ + i(c_m − c₋m) sin mψ]
+        acc = 0j
+        for j in range(ns):
+            acc += gs[j]
+        c0 = acc / ns
+        for m in range(1, _DEGREE + 1):
+            a, b = 0j, 0j
             for j in range(ns):
-                jm = ((m - _DEGREE) * j) % ns
-                acc += gs[j] * complex(cs[jm], -sn[jm])
-            cf[m] = acc / ns
+                jm = (m * j) % ns
+                a += gs[j] * cs[jm]
+                b += gs[j] * sn[jm]
+            cf[2 * m - 2], cf[2 * m - 1] = a * (2.0 / ns), b * (2.0 / ns)
+        c0r, c0i = c0.real, c0.imag
+        a1r, a1i, b1r, b1i = cf[0].real, cf[0].imag, cf[1].real, cf[1].imag
+        a2r, a2i, b2r, b2i = cf[2].real, cf[2].imag, cf[3].real, cf[3].imag
+        a3r, a3i, b3r, b3i = cf[4].real, cf[4].imag, cf[5].real, cf[5].imag
         for ia in range(first, na):
-            v = cf[0] * ep[0, ia]
-            for m in range(1, nm):
-                v += cf[m] * ep[m, ia]
-            g[ir, ia] = v
+            e = ep[ia]
+            vr = c0r + a1r * e[0] + b1r * e[1] + a2r * e[2] + b2r * e[3] + a3r * e[4] + b3r * e[5]
+            vi = c0i + a1i * e[0] + b1i * e[1] + a2i * e[2] + b2i * e[3] + a3i * e[4] + b3i * e[5]
+            g[ir, ia] = complex(vr, vi)
 
 
 @inline
 def _t_hat_exp_block(qv, cnt, c, inv, nterms, area, out):
     """``out[i] = ℓₓℓᵧ Σ_{n≤nterms} cₙ (1 + qv[i]/n²)^{−3/2}`` for ``i < cnt``: the exponential
     series at a fixed term count (:func:`_exp_terms`), terms outer so that the node loop
-    vectorizes (``sqrt`` and the division are IEEE-exact in SIMD: no fastmath needed)."""
+    vectorizes (``sqrt`` and the division are IEEE-exact in SIMD: no fastmath needed); four
+    (then two) terms over one common denominator, ``Σ cⱼ/tⱼ`` with ``tⱼ = uⱼ√uⱼ``: one
+    division per four terms (``1 ≤ tⱼ``, and the product of four, ``≤ u_max⁶``, overflows
+    only beyond ``Kℓ ~ 1e25``: far outside any rule)."""
     for i in range(cnt):
         out[i] = 0.0
-    for n in range(nterms):
+    n = 0
+    while n + 3 < nterms:  # four terms per division
+        ca, sa, cb, sb = c[n], inv[n], c[n + 1], inv[n + 1]
+        cc, sc, cd, sd = c[n + 2], inv[n + 2], c[n + 3], inv[n + 3]
+        for i in range(cnt):
+            ua, ub = 1.0 + qv[i] * sa, 1.0 + qv[i] * sb
+            uc, ud = 1.0 + qv[i] * sc, 1.0 + qv[i] * sd
+            ta, tb = ua * math.sqrt(ua), ub * math.sqrt(ub)
+            tc, td = uc * math.sqrt(uc), ud * math.sqrt(ud)
+            tab, tcd = ta * tb, tc * td
+            out[i] += ((ca * tb + cb * ta) * tcd + (cc * td + cd * tc) * tab) / (tab * tcd)
+        n += 4
+    while n + 1 < nterms:  # two terms per division: cₐ/tₐ + c_b/t_b = (cₐ t_b + c_b tₐ)/(tₐ t_b)
+        ca, sa, cb, sb = c[n], inv[n], c[n + 1], inv[n + 1]
+        for i in range(cnt):
+            ua, ub = 1.0 + qv[i] * sa, 1.0 + qv[i] * sb
+            ta, tb = ua * math.sqrt(ua), ub * math.sqrt(ub)
+            out[i] += (ca * tb + cb * ta) / (ta * tb)
+        n += 2
+    if n < nterms:
         cn, sn = c[n], inv[n]
         for i in range(cnt):
             u = 1.0 + qv[i] * sn
@@ -212,14 +251,17 @@ def _t_hat_exp_block(qv, cnt, c, inv, nterms, area, out):
 
 
 @jit
-def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx):
+def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g, qa):
     """The σ-independent part of one backscatter angle ``a`` [rad]: for every node ``c`` of
     the rule (the upper half plane where the surface allows), ``W[c]`` the quadrature weight
     times ``Re g₂(p)[g₂*(p) + g₂*(−p)]`` (× 2 on the upper half), ``qv[c] = (|p − k_i⊥|ℓ)²``
     and ``pidx[c]`` the node where ``T̂(k_s⊥ − p)`` is ``T̂`` (the point partner, or its
-    mirror); the node count returned, −1 where the azimuth rule lacks the point symmetry
-    (the caller's numpy). Depends on ε, k, θ, ℓₓ, ℓᵧ, φ and the spectrum's kind, not on σ:
-    the node rule's breaks are ``k``, ``Re√ε k`` and ``1/ℓ`` distances (module docstring)."""
+    mirror); ``g`` complex and ``qa`` real scratch (``(_MAX_RADIAL_SEGMENTS·s_r.size,
+    _MAX_AZIMUTH_SEGMENTS·s_a.size)``: the kernel and q at the nodes), the caller's, reused, so that
+    a call neither allocates nor first touches its ~0.3 MB; the node count returned, −1 where
+    the azimuth rule lacks the point symmetry (the caller's numpy). Depends on ε, k, θ, ℓₓ,
+    ℓᵧ, φ and the spectrum's kind, not on σ: the node rule's breaks are ``k``, ``Re√ε k``
+    and ``1/ℓ`` distances (module docstring)."""
     nr_, na_ = s_r.size, s_a.size
     log = spec != GAUSSIAN
     inv_len = 1.0 / min(lx, ly)
@@ -235,11 +277,10 @@ def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx)
     neg = np.empty(psi.size, dtype=np.int64)
     mir = np.empty(psi.size, dtype=np.int64)
     cpsi, spsi = np.empty(psi.size), np.empty(psi.size)
-    g = np.empty((kr.size, psi.size), dtype=np.complex128)
     zc = np.empty(6, dtype=np.complex128)
     gs = np.empty(_FOURIER_SAMPLES, dtype=np.complex128)
-    cf = np.empty(2 * _DEGREE + 1, dtype=np.complex128)
-    ep = np.empty((2 * _DEGREE + 1, psi.size), dtype=np.complex128)
+    cf = np.empty(2 * _DEGREE, dtype=np.complex128)
+    ep = np.empty((psi.size, 2 * _DEGREE))
     cs = np.empty(_FOURIER_SAMPLES)
     sn = np.empty(_FOURIER_SAMPLES)
     for j in range(_FOURIER_SAMPLES):
@@ -258,12 +299,13 @@ def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx)
         cpsi[ia], spsi[ia] = math.cos(psi[ia]), math.sin(psi[ia])
     first = 0
     if half:  # the surface's quadratic form even under y → −y (to 1e-12)
-        for ir in range(nr):
+        for ir in range(nr):  # q at every node once (the mirror's is its node's: qa[ir, pm])
             for ia in range(na):
                 px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-                q_a = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
-                pm = mir[ia]
-                q_b = _q2(kr[ir] * cpsi[pm] - kis0, kr[ir] * spsi[pm] - kis1, cr, sr, lx, ly)
+                qa[ir, ia] = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
+        for ir in range(nr):
+            for ia in range(na):
+                q_a, q_b = qa[ir, ia], qa[ir, mir[ia]]
                 if not abs(q_a - q_b) <= 1e-12 * abs(q_b):
                     half = False
         if half:
@@ -285,8 +327,11 @@ def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx)
                 d = ga + g[ir, pos]
             c = ir * m + (ia - first)
             W[c] = base * wpsi[ia] * (ga.real * d.real + ga.imag * d.imag)
-            px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
-            qv[c] = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
+            if half:  # (its q from the check: the same expression, the same double)
+                qv[c] = qa[ir, ia]
+            else:
+                px, py = kr[ir] * cpsi[ia], kr[ir] * spsi[ia]
+                qv[c] = _q2(px - kis0, py - kis1, cr, sr, lx, ly)
             pidx[c] = ir * m + (pos - first)
     return nr * m
 
@@ -319,12 +364,16 @@ def _kernel(theta, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, st
     symmetry (the caller's numpy)."""
     size = _MAX_RADIAL_SEGMENTS * s_r.size * _MAX_AZIMUTH_SEGMENTS * s_a.size
     W, qv, tv = np.empty(size), np.empty(size), np.empty(size)
+    g = np.empty((_MAX_RADIAL_SEGMENTS * s_r.size, _MAX_AZIMUTH_SEGMENTS * s_a.size),
+                 dtype=np.complex128)  # fmt: skip
+    qa = np.empty(g.shape)
     pidx = np.empty(size, dtype=np.int64)
     coef, cinv = np.empty(N_COEF), np.empty(N_COEF)
     for j in range(start, stop):
         flag[j] = 0
         out[j] = 0.0
-        n = _prepare(theta[j], eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx)
+        n = _prepare(theta[j], eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx,
+                     g, qa)  # fmt: skip
         if n < 0:
             continue
         out[j] = _evaluate(W, qv, pidx, n, theta[j], k, sigma, spec, lx * ly, coef, cinv, tv)
@@ -353,23 +402,86 @@ def backscatter_resummed(theta, eps: complex, k: float, sigma: float, length: fl
     return out, flag.astype(bool)
 
 
+#: Per-thread scratch of the one-angle path (:func:`_buffers`): reused, as :func:`_kernel`
+#: reuses its own across angles (a fresh ~0.8 MB per call, first touched, cost as much as the
+#: node rule; issue 20's second speed pass).
+_LOCAL = threading.local()
+
+
+def _buffers(n_nodes: int, n_azimuth: int):
+    """This thread's ``(s, ds, sa, dsa, W, qv, pidx, g, qa, coef, cinv, tv)`` for the rule
+    ``n_nodes × n_azimuth``: the unit rules and :func:`_one`'s scratch (made once)."""
+    key = (n_nodes, n_azimuth)
+    buf = getattr(_LOCAL, "buf", None)
+    if buf is None or buf[0] != key:
+        s, ds = unit_rule(n_nodes)
+        sa, dsa = unit_rule(n_azimuth)
+        nr, na = _MAX_RADIAL_SEGMENTS * s.size, _MAX_AZIMUTH_SEGMENTS * sa.size
+        size = nr * na
+        buf = (key, (s, ds, sa, dsa, np.empty(size), np.empty(size),
+                     np.empty(size, dtype=np.int64), np.empty((nr, na), dtype=np.complex128),
+                     np.empty((nr, na)), np.empty(N_COEF), np.empty(N_COEF),
+                     np.empty(size)))  # fmt: skip
+        _LOCAL.buf = buf
+    return buf[1]
+
+
+def _series_scratch(n: int):
+    """This thread's ``(coef, cinv, tv)`` for :func:`_evaluate` on ``n`` nodes (``tv`` grown
+    as needed; reused)."""
+    buf = getattr(_LOCAL, "series", None)
+    if buf is None or buf[2].size < n:
+        buf = (np.empty(N_COEF), np.empty(N_COEF), np.empty(max(n, 4096)))
+        _LOCAL.series = buf
+    return buf
+
+
+@jit
+def _one(a, eps, k, sigma, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g, qa,
+         coef, cinv, tv):  # fmt: skip
+    """:func:`_prepare` then :func:`_evaluate` for one angle ``a`` [rad] in one call (as
+    :func:`_kernel` runs them: the same value to the bit): ``(n, σ⁰_hv)``, ``n`` the node count
+    of ``W, qv, pidx`` (−1, value 0, where the rule lacks the point symmetry)."""
+    n = _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx, g, qa)
+    if n < 0:
+        return n, 0.0
+    return n, _evaluate(W, qv, pidx, n, a, k, sigma, spec, lx * ly, coef, cinv, tv)
+
+
+def _trimmed(W, qv, pidx, n):
+    prep = (W[:n].copy(), qv[:n].copy(), pidx[:n].copy())
+    for a in prep:
+        a.flags.writeable = False
+    return prep
+
+
+def value_one(theta: float, eps: complex, k: float, sigma: float, length: float,
+              length_y: float, phi_i: float, spectrum: int, n_nodes: int,
+              n_azimuth: int):  # fmt: skip
+    """``(σ⁰_hv, prep)`` at one flat backscatter angle ``theta`` [rad] (checked by the
+    caller): :func:`prepare_one` and :func:`evaluate_one` in one compiled call on reused
+    scratch — the same value to the bit —, ``prep`` the σ-independent part to remember (as
+    :func:`prepare_one` returns it), or ``(None, None)`` where the rule lacks the point
+    symmetry (the caller's numpy reference)."""
+    s, ds, sa, dsa, W, qv, pidx, g, qa, coef, cinv, tv = _buffers(n_nodes, n_azimuth)
+    n, v = _one(theta, eps, k, sigma, length, length_y, math.cos(phi_i), math.sin(phi_i),
+                spectrum, s, ds, sa, dsa, W, qv, pidx, g, qa, coef, cinv, tv)  # fmt: skip
+    if n < 0:
+        return None, None
+    return v, _trimmed(W, qv, pidx, n)
+
+
 def prepare_one(theta: float, eps: complex, k: float, length: float, length_y: float,
                 phi_i: float, spectrum: int, n_nodes: int, n_azimuth: int):  # fmt: skip
     """The σ-independent part of one flat backscatter angle ``theta`` [rad] (:func:`_prepare`):
     ``(W, qv, pidx)`` trimmed to the rule's nodes (fresh arrays, read-only), or None where the
     rule lacks the point symmetry (the caller's numpy reference)."""
-    s, ds = unit_rule(n_nodes)
-    sa, dsa = unit_rule(n_azimuth)
-    size = _MAX_RADIAL_SEGMENTS * s.size * _MAX_AZIMUTH_SEGMENTS * sa.size
-    W, qv, pidx = np.empty(size), np.empty(size), np.empty(size, dtype=np.int64)
+    s, ds, sa, dsa, W, qv, pidx, g, qa, _, _, _ = _buffers(n_nodes, n_azimuth)
     n = _prepare(theta, eps, k, length, length_y, math.cos(phi_i), math.sin(phi_i), spectrum,
-                 s, ds, sa, dsa, W, qv, pidx)  # fmt: skip
+                 s, ds, sa, dsa, W, qv, pidx, g, qa)  # fmt: skip
     if n < 0:
         return None
-    prep = (W[:n].copy(), qv[:n].copy(), pidx[:n].copy())
-    for a in prep:
-        a.flags.writeable = False
-    return prep
+    return _trimmed(W, qv, pidx, n)
 
 
 def evaluate_one(
@@ -378,5 +490,6 @@ def evaluate_one(
     """σ⁰_hv [-] at one flat angle ``theta`` [rad] from its :func:`prepare_one` part and the
     surface's ``sigma`` [m]: the same arithmetic as :func:`_kernel` (the same value to the bit)."""
     W, qv, pidx = prep
+    coef, cinv, tv = _series_scratch(W.size)
     return _evaluate(W, qv, pidx, W.size, theta, k, sigma, spectrum, length * length_y,
-                     np.empty(N_COEF), np.empty(N_COEF), np.empty(W.size))  # fmt: skip
+                     coef, cinv, tv)  # fmt: skip
