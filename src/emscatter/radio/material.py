@@ -243,6 +243,11 @@ class EmscatterRadioMaterial(RadioMaterialBase):
         return self._transmission
 
     @property
+    def transmission_face(self) -> str:
+        """The slab faces' model of the diffuse transmission (``transmission_face=``)."""
+        return self._face
+
+    @property
     def surface(self):
         return self._surface
 
