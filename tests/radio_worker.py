@@ -1050,6 +1050,15 @@ def check_roughen_diffuse_transmission():
         out["bad"] = None
     except ValueError as exc:
         out["bad"] = str(exc)
+    handle = radio.roughen(sc, transmission="diffuse", transmission_face="po")
+    out["faces"] = {name: m.transmission_face for name, m in handle.materials.items()}
+    radio.flatten(sc)
+    for kw in ({"transmission_face": "po"}, {"transmission": "diffuse", "transmission_face": "x"}):
+        try:
+            radio.roughen(sc, **kw)
+            out.setdefault("bad_faces", []).append(None)
+        except ValueError as exc:
+            out.setdefault("bad_faces", []).append(str(exc))
     return out
 
 

@@ -173,6 +173,27 @@ def test_roughen_with_diffuse_transmission_where_a_slab_can_carry_it():
     )
     assert "transmission must be one of ('coherent', 'diffuse')" in s["bad"]
     assert "'lambertian'" in s["bad"]
+    # transmission_face reaches every material made; refused where nothing would use it
+    assert s["faces"] and set(s["faces"].values()) == {"po"}
+    coherent_po, unknown = s["bad_faces"]
+    assert "transmission_face='po' applies to transmission='diffuse' only" in coherent_po
+    assert "face must be one of ('auto', 'go', 'spm', 'po', 'iem'), got face='x'" in unknown
+
+
+def test_cli_transmission_face_needs_diffuse_transmission_and_a_known_model():
+    src = str(HERE.parent / "src")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")])}
+    base = [sys.executable, "-m", "emscatter.cli", "radio", "--transmission-face"]
+    p = subprocess.run(base + ["po"], capture_output=True, text=True, env=env, timeout=300)
+    assert p.returncode == 2, p.stderr
+    assert "--transmission-face applies only with --diffuse-transmission" in p.stderr
+    p = subprocess.run(
+        base + ["glass", "--diffuse-transmission"], capture_output=True, text=True, env=env,
+        timeout=300,
+    )  # fmt: skip
+    assert p.returncode == 2, p.stderr
+    assert "--transmission-face must be one of auto, go, spm, po, iem, got 'glass'" in p.stderr
+    assert "Traceback" not in p.stderr
 
 
 def test_cli_diffuse_transmission_is_for_scenes():

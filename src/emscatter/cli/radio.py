@@ -6,8 +6,10 @@ as ``simple_street_canyon``, or a Mitsuba/Sionna ``*.xml`` file), "any scene rou
 own materials against emscatter's rough equivalents (:func:`emscatter.radio.roughen`), radio
 maps of rough − flat as PNG and CSV per frequency (``--xpd-map``: also cross-polar
 discrimination per cell, flat and rough, and its median and quartiles against frequency,
-:mod:`emscatter.radio.xpd_map`). Every argument, the media named, the bands
-and the output folder are checked before a ray is traced.
+:mod:`emscatter.radio.xpd_map`; ``--diffuse-transmission``: the rough slabs' diffuse
+transmission too, with ``--transmission-face`` the faces' model; either flag selects this mode).
+Every argument, the media named, the bands and the output folder are checked before a ray is
+traced.
 
 ``--height-map FILE`` (with ``--detrend``, ``--unit``, ``--segments``, ``--tail`` as for
 ``emscatter brdf`` and ``curves``, and ``--map-model measured|fit``) takes a medium's roughness
@@ -267,6 +269,16 @@ def register(subparsers) -> None:
             "into the back hemisphere (radio maps only: Sionna's PathSolver cannot carry it)"
         ),
     )
+    r.add_argument(
+        "--transmission-face",
+        default="auto",
+        metavar="MODEL",
+        help=(
+            "with --diffuse-transmission: the slab faces' model, auto (GO where it holds, else "
+            "the first of SPM, PO, IEM valid from both sides), go, spm, po or iem "
+            "(emscatter.radio.slab_faces.FACES)"
+        ),
+    )
     r.add_argument("--quick", action="store_true", help="few rays, coarse maps and tables")
     r.add_argument(
         "--quiet",
@@ -288,6 +300,20 @@ def run(a) -> int:
         return _run(a)
 
 
+def _check_transmission_face(a) -> None:
+    """``--transmission-face``: one of the slab faces' models, and only with
+    ``--diffuse-transmission`` (ValueError naming the option otherwise)."""
+    from ..radio.slab_faces import FACES
+
+    if a.transmission_face not in FACES:
+        raise ValueError(
+            f"--transmission-face must be one of {', '.join(FACES)}, got {a.transmission_face!r}"
+        )
+    reject_unless(
+        a, a.diffuse_transmission, ("--transmission-face",), "only with --diffuse-transmission"
+    )
+
+
 def _run(a) -> int:
     from pathlib import Path
 
@@ -295,6 +321,7 @@ def _run(a) -> int:
     if a.plate and a.height_map:
         raise ValueError("--height-map applies to scenes, not to --plate")
     a.map_spec = _map_spec(a)  # the map read and its band checked before anything else
+    _check_transmission_face(a)
     for flag, on in (("--xpd-map", a.xpd_map), ("--diffuse-transmission", a.diffuse_transmission)):
         if on and (a.plate or a.builtin_json is not None):
             raise ValueError(
@@ -319,7 +346,7 @@ def _run(a) -> int:
             print(f"  {p}")
         return 0
     if (a.medium or a.tx is not None or a.rx or a.height_map or a.xpd_map
-            or a.scene not in (*SCENES, "all")):  # fmt: skip
+            or a.diffuse_transmission or a.scene not in (*SCENES, "all")):  # fmt: skip
         return run_any_scene(a)
     if a.cell_size is None:
         a.cell_size = 0.1
@@ -504,6 +531,7 @@ def run_any_scene(a) -> int:
             sc, common, mapping=mapping, extrapolate=a.extrapolate, table_options=opts,
             frequencies=freqs, xpd=bool(a.rx), texture_direction=_texture_directions(a),
             xpd_map=a.xpd_map, transmission="diffuse" if a.diffuse_transmission else "coherent",
+            transmission_face=a.transmission_face,
             paths={"samples_per_src": samples, "max_depth": depth} if a.rx else False,
             radio_map={"center": (*((lo[:2] + hi[:2]) / 2), a.map_height),
                        "orientation": (0.0, 0.0, 0.0), "size": tuple(size),

@@ -43,8 +43,6 @@ objects (no phase between polarizations: build a Mueller table with ``method="go
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..brdf.colour import RGB_LUMINANCE, spectrum_to_rgb_weights
@@ -121,26 +119,6 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
         n2 = dr.square(h.x) + dr.square(h.y)
         return dr.select(n2 > 1e-14, h * dr.rsqrt(dr.maximum(n2, 1e-30)), mi.Vector3f(1, 0, 0))
 
-    def azimuth(w):
-        phi = dr.atan2(w.y, w.x)
-        return dr.select(phi < 0, phi + 2 * math.pi, phi)  # [0, 2π)
-
-    def periodic(x, axis):
-        """``(i0, t)`` of azimuth ``x`` ∈ [0, 2π) on a periodic axis (node ``size`` = node 0
-        at +2π), as the unpolarized plugin: uniform formula or a binary search."""
-        n = axis.size
-        if axis.uniform:  # start 0, step 2π/n (plugin_data makes other axes non-uniform)
-            a = x * (1.0 / axis.step)
-            a0f = dr.floor(a)
-            return dr.minimum(mi.UInt32(a0f), n - 1), dr.clip(a - a0f, 0.0, 1.0)
-        pts = list(axis.points)
-        nodes = mi.Float(pts + [pts[0] + 2 * math.pi])
-        xw = dr.select(x < pts[0], x + 2 * math.pi, x)
-        i1 = dr.binary_search(1, n, lambda i: dr.gather(mi.Float, nodes, i) <= xw)
-        i0 = i1 - 1
-        a0, a1 = dr.gather(mi.Float, nodes, i0), dr.gather(mi.Float, nodes, i1)
-        return i0, dr.clip((xw - a0) / (a1 - a0), 0.0, 1.0)
-
     class EmscatterPolarizedBSDF(base):
         def __init__(self, props):
             base.__init__(self, props)
@@ -201,31 +179,6 @@ def polarized_class(mi, base, position, elevation, prepared_mueller):
                 m, k_in, h_axis(k_in), mi.mueller.stokes_basis(k_in),
                 view, h_axis(view), mi.mueller.stokes_basis(view),
             )  # fmt: skip
-
-        def _coords(self, light, view):
-            """Per grid axis ``(i0, i1, t)`` with ``light`` as the table's incident
-            direction: (θi, θo, Δφ) for isotropic tables, (φi, θi, θo, φo) otherwise (the
-            unpolarized plugin's layout, ``_corners``)."""
-            d = self._data
-            ti, to = elevation(light), elevation(view)
-
-            def clamped(x, axis):
-                x = position(x, axis)
-                i0 = dr.minimum(mi.UInt32(x), max(axis.size - 2, 0))
-                return i0, dr.minimum(i0 + 1, axis.size - 1), x - mi.Float(i0)
-
-            if d.isotropic:
-                dphi = dr.abs(dr.atan2(view.y, view.x) - dr.atan2(light.y, light.x))
-                dphi = dr.select(dphi > math.pi, 2 * math.pi - dphi, dphi)
-                return [clamped(ti, d.theta_i), clamped(to, d.theta_o), clamped(dphi, d.phi)]
-            a0, ta = periodic(azimuth(light), d.phi_i)
-            b0, tb = periodic(azimuth(view), d.phi)  # φo: the repeated column at 2π
-            return [
-                (a0, (a0 + 1) % d.phi_i.size, ta),
-                clamped(ti, d.theta_i),
-                clamped(to, d.theta_o),
-                (b0, b0 + 1, tb),
-            ]
 
         def _channel_picks(self, si):
             """Per spectrum slot: ``[(channel, weight), ...]`` (two table wavelengths around

@@ -53,6 +53,7 @@ import numpy as np
 from ... import materials
 from ...spectra import GaussianCorrelation, Roughness
 from ..indoor import ROUGHNESS as _INDOOR_ROUGHNESS
+from ..slab_faces import check_face
 from ..tables import check_surface
 from ..texture import check_direction, check_textured_surface
 
@@ -394,6 +395,7 @@ def roughen(
     prefix: str = "rough-",
     texture_direction=None,
     transmission: str = "coherent",
+    transmission_face: str = "auto",
 ) -> Roughened:
     """Every object of the Sionna ``scene`` gets its emscatter equivalent (module docstring);
     returns the :class:`Roughened` handle (``flatten()`` undoes it).
@@ -412,7 +414,10 @@ def roughen(
     ``"diffuse"`` (:class:`~emscatter.radio.material.EmscatterRadioMaterial`'s diffuse
     transmission through rough slabs, carried by RadioMapSolver only): it applies to the
     isotropic rough slabs; flat objects, half-spaces (no thickness) and textured walls keep the
-    coherent slab, and ``rows()`` names each object's model (``"transmission"``)."""
+    coherent slab, and ``rows()`` names each object's model (``"transmission"``).
+    ``transmission_face``: the slab faces' model of the diffuse transmission, one of
+    :data:`emscatter.radio.slab_faces.FACES` (default ``"auto"``; with
+    ``transmission="coherent"`` only ``"auto"`` is accepted: nothing would use another)."""
     from ..material import EmscatterRadioMaterial
 
     if isinstance(texture_direction, dict):
@@ -453,6 +458,12 @@ def roughen(
         raise ValueError(f"prefix must be a non-empty string, got {prefix!r}")
     if transmission not in TRANSMISSIONS:
         raise ValueError(f"transmission must be one of {TRANSMISSIONS}, got {transmission!r}")
+    face = check_face(transmission_face)
+    if face != "auto" and transmission != "diffuse":
+        raise ValueError(
+            f"transmission_face={face!r} applies to transmission='diffuse' only, got "
+            f"transmission={transmission!r}"
+        )
     old = _HANDLES.get(scene)
     if old is not None and old.active:
         old.flatten()
@@ -472,6 +483,7 @@ def roughen(
                 if a.surface is None or a.surface.is_isotropic
                 else direction_of(a),
                 transmission=_transmission_for(a, transmission),
+                transmission_face=face,
             )
     originals = {}
     for a in assignments:

@@ -67,7 +67,13 @@ from scipy import sparse
 
 from emscatter.solvers.mom3d.dielectric import media, pair_blocks, self_blocks
 from emscatter.solvers.mom3d.near import WIDTH, near_correction
-from emscatter.solvers.mom3d.smcg import ROW_BLOCK, _check_order, _offsets, far_grid
+from emscatter.solvers.mom3d.smcg import (
+    ROW_BLOCK,
+    NearFarProduct,
+    _check_order,
+    _offsets,
+    far_grid,
+)
 
 __all__ = ["DielectricSmcgOperator", "dielectric_smcg_operator", "radial_series"]
 
@@ -208,7 +214,7 @@ def _strong(patch, k0: float, eps2: complex, radius: float, dtype) -> sparse.csr
     return sparse.csr_matrix((data, indices, indptr), shape=(4 * n, 4 * n))
 
 
-class DielectricSmcgOperator:
+class DielectricSmcgOperator(NearFarProduct):
     """The Müller matrix of a :class:`~.operator.Patch` as a product ``op @ v`` (module
     docstring): ``shape`` ``(4N, 4N)``, ``dtype`` complex128 (the iteration's precision; the
     strong entries are stored in ``strong.dtype``), ``nbytes``."""
@@ -277,14 +283,6 @@ class DielectricSmcgOperator:
         zp = np.stack([self.zc**q for q in range(npow)])
         hx, hy, hc, ex, ey, ec = np.einsum("ojn,jn->on", back.reshape(6, npow, n), zp)
         return np.concatenate([-(hx + fy * hc), -(hy - fx * hc), -(ex + fy * ec), -(ey - fx * ec)])
-
-    def matvec(self, v) -> np.ndarray:
-        v = np.asarray(v, dtype=np.complex128).ravel()
-        near = self.strong @ v.astype(self.strong.dtype)
-        return near.astype(np.complex128) + self.far(v)
-
-    def __matmul__(self, v):
-        return self.matvec(v)
 
 
 def dielectric_smcg_operator(patch, k0: float, eps2, *, near_radius: float,

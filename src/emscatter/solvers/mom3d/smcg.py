@@ -57,8 +57,8 @@ from scipy import sparse
 from emscatter.conventions import check_positive, fmt
 from emscatter.solvers.mom3d.near import WIDTH, near_correction
 
-__all__ = ["MAX_PTP_OVER_RD", "SmcgOperator", "resolve_near_radius", "smcg_operator",
-           "taylor_kernels"]  # fmt: skip
+__all__ = ["MAX_PTP_OVER_RD", "NearFarProduct", "SmcgOperator", "resolve_near_radius",
+           "smcg_operator", "taylor_kernels"]  # fmt: skip
 
 #: The Taylor series in ``Z²/ρ²`` converges for ``|Z| < ρ``: SMCG needs the patch's
 #: peak-to-valley height below this fraction of ``r_d`` (``(Z/ρ)² < 0.64`` on every weak pair).
@@ -173,7 +173,22 @@ def far_grid(patch, near_radius: float):
     return pad, dd_x, dd_y, rho, far
 
 
-class SmcgOperator:
+class NearFarProduct:
+    """``op @ v = strong @ v + far(v)`` (complex128 in and out; the strong sparse matrix is
+    applied in its own ``strong.dtype``): the product protocol of the SMCG operators (the PEC
+    MFIE's :class:`SmcgOperator`, the dielectric :class:`~.dielectric_smcg.DielectricSmcgOperator`),
+    which set ``strong`` and define ``far``."""
+
+    def matvec(self, v) -> np.ndarray:
+        v = np.asarray(v, dtype=np.complex128).ravel()
+        near = self.strong @ v.astype(self.strong.dtype)
+        return near.astype(np.complex128) + self.far(v)
+
+    def __matmul__(self, v):
+        return self.matvec(v)
+
+
+class SmcgOperator(NearFarProduct):
     """The MFIE matrix of a :class:`~.operator.Patch` as a product ``op @ v``: strong pairs
     sparse, weak pairs by FFT (module docstring). ``shape``, ``dtype`` (complex128: the
     iteration's precision; the sparse entries are stored in ``strong.dtype``), ``nbytes``."""
@@ -239,14 +254,6 @@ class SmcgOperator:
         zp = np.stack([self.zc**q for q in range(2 * p + 2)])
         ox, oy, oc = np.einsum("sjn,jn->sn", back, zp)
         return np.concatenate([-(ox + pch.fy * oc), -(oy - pch.fx * oc)])
-
-    def matvec(self, v) -> np.ndarray:
-        v = np.asarray(v, dtype=np.complex128).ravel()
-        near = self.strong @ v.astype(self.strong.dtype)
-        return near.astype(np.complex128) + self.far(v)
-
-    def __matmul__(self, v):
-        return self.matvec(v)
 
 
 def resolve_near_radius(near_radius, heights: np.ndarray, k: float, default: float) -> float:

@@ -307,26 +307,34 @@ def _fill_g(g, eps, k, si, ci, sq_eps, inv_k2, cphi, sphi, ksv0, ksv1, zc, kr, n
                               rho * spsi[ia])  # fmt: skip
 
 
+@inline
+def _rule_constants(spec, lx, ly, eps):
+    """The backscatter node rule's constants: ``(log, 1/ℓ_min, extent, √ε, cos Δφ, sin Δφ)``
+    — a log-graded radial rule for spectra other than the Gaussian, the radial extent
+    (12/ℓ Gaussian, 400/ℓ otherwise), ``Δφ = φs − φi = π`` (as ``sigma0_22`` has it)."""
+    inv_len = 1.0 / min(lx, ly)
+    extent = (12.0 if spec == GAUSSIAN else 400.0) * inv_len
+    return spec != GAUSSIAN, inv_len, extent, np.sqrt(eps), math.cos(math.pi), math.sin(math.pi)
+
+
+@inline
+def _rule_scratch(nr_, na_):
+    """Scratch of :func:`_node_rules` and the partners for ``nr_`` radial and ``na_`` azimuth
+    nodes per segment: ``(pts, br, kr, wr, psi, wpsi, neg, mir, cos ψ, sin ψ)``."""
+    psi = np.empty(_MAX_AZIMUTH_SEGMENTS * na_)
+    return (np.empty(16), np.empty(18), np.empty(_MAX_RADIAL_SEGMENTS * nr_),
+            np.empty(_MAX_RADIAL_SEGMENTS * nr_), psi, np.empty(psi.size),
+            np.empty(psi.size, dtype=np.int64), np.empty(psi.size, dtype=np.int64),
+            np.empty(psi.size), np.empty(psi.size))  # fmt: skip
+
+
 @jit
 def _hv_kernel(theta, eps, k, sigma4, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, start, stop,
                out, flag):  # fmt: skip
     """σ⁰⁽²²⁾_hv into ``out[j]`` for ``theta[start:stop]`` [rad]; ``flag[j]`` 1 where computed,
     0 where the azimuth rule lacks the point symmetry (the caller's numpy fallback)."""
-    nr_, na_ = s_r.size, s_a.size
-    log = spec != GAUSSIAN
-    inv_len = 1.0 / min(lx, ly)
-    extent = (12.0 if spec == GAUSSIAN else 400.0) * inv_len
-    sq_eps = np.sqrt(eps)
-    cphi, sphi = math.cos(math.pi), math.sin(math.pi)  # φs − φi = π, as sigma0_22 has it
-    pts = np.empty(16)
-    br = np.empty(18)
-    kr = np.empty(_MAX_RADIAL_SEGMENTS * nr_)
-    wr = np.empty(_MAX_RADIAL_SEGMENTS * nr_)
-    psi = np.empty(_MAX_AZIMUTH_SEGMENTS * na_)
-    wpsi = np.empty(_MAX_AZIMUTH_SEGMENTS * na_)
-    neg = np.empty(psi.size, dtype=np.int64)
-    mir = np.empty(psi.size, dtype=np.int64)
-    cpsi, spsi = np.empty(psi.size), np.empty(psi.size)
+    log, inv_len, extent, sq_eps, cphi, sphi = _rule_constants(spec, lx, ly, eps)
+    pts, br, kr, wr, psi, wpsi, neg, mir, cpsi, spsi = _rule_scratch(s_r.size, s_a.size)
     g = np.empty((kr.size, psi.size), dtype=np.complex128)
     wt = np.empty((kr.size, psi.size))
     zc = np.empty(6, dtype=np.complex128)

@@ -72,6 +72,8 @@ from emscatter.solvers.spm.kernel_crosspol import (
     _q2,
     _radial,
     _root,
+    _rule_constants,
+    _rule_scratch,
     _zeroth,
     unit_rule,
 )
@@ -262,21 +264,8 @@ def _prepare(a, eps, k, lx, ly, cr, sr, spec, s_r, ds_r, s_a, ds_a, W, qv, pidx,
     the azimuth rule lacks the point symmetry (the caller's numpy). Depends on ε, k, θ, ℓₓ,
     ℓᵧ, φ and the spectrum's kind, not on σ: the node rule's breaks are ``k``, ``Re√ε k``
     and ``1/ℓ`` distances (module docstring)."""
-    nr_, na_ = s_r.size, s_a.size
-    log = spec != GAUSSIAN
-    inv_len = 1.0 / min(lx, ly)
-    extent = (12.0 if spec == GAUSSIAN else 400.0) * inv_len
-    sq_eps = np.sqrt(eps)
-    cphi, sphi = math.cos(math.pi), math.sin(math.pi)  # φs − φi = π, as sigma0_22 has it
-    pts = np.empty(16)
-    br = np.empty(18)
-    kr = np.empty(_MAX_RADIAL_SEGMENTS * nr_)
-    wr = np.empty(_MAX_RADIAL_SEGMENTS * nr_)
-    psi = np.empty(_MAX_AZIMUTH_SEGMENTS * na_)
-    wpsi = np.empty(_MAX_AZIMUTH_SEGMENTS * na_)
-    neg = np.empty(psi.size, dtype=np.int64)
-    mir = np.empty(psi.size, dtype=np.int64)
-    cpsi, spsi = np.empty(psi.size), np.empty(psi.size)
+    log, inv_len, extent, sq_eps, cphi, sphi = _rule_constants(spec, lx, ly, eps)
+    pts, br, kr, wr, psi, wpsi, neg, mir, cpsi, spsi = _rule_scratch(s_r.size, s_a.size)
     zc = np.empty(6, dtype=np.complex128)
     gs = np.empty(_FOURIER_SAMPLES, dtype=np.complex128)
     cf = np.empty(2 * _DEGREE, dtype=np.complex128)
