@@ -446,3 +446,23 @@ def test_auto_sigma0_moves_little_between_angles_half_a_degree_apart(ks, kl, eps
         own = np.maximum(own, np.abs(np.diff(_db(s.sigma0[[0, 1], [0, 1]]), axis=1)))
     jump = np.abs(np.diff(auto, axis=1))
     assert np.all(jump[lobe] <= own[lobe] + MAX_JUMP_DB)
+
+
+def test_the_api_cache_keys_on_theta_only_where_the_3d_layer_applies():
+    """Outside the 3-D layer the roughness-only entry answers whatever the angles (the same
+    scalar weights); inside, each set of angles has its entry (arrays, fresh each call)."""
+    dispatch.clear_cache()
+    out = GaussianCorrelation(0.3 / K, 40 / K)  # beyond the cells' kℓ
+    a = dispatch.blend_weights(out, K, eps="pec", theta_i=np.radians([20.0, 30.0]))
+    b = dispatch.blend_weights(out, K, eps="pec", theta_i=np.radians(35.0))
+    assert a == b == dispatch.blend_weights(out, K, eps="pec")
+    inside = GaussianCorrelation(0.3 / K, 3 / K)
+    ti = np.radians([5.0, 30.0])
+    first = dispatch.blend_weights(inside, K, eps="pec", theta_i=ti)
+    again = dispatch.blend_weights(inside, K, eps="pec", theta_i=ti)
+    assert first["weights"] is not again["weights"]
+    for n, w in first["weights"].items():
+        np.testing.assert_array_equal(w, again["weights"][n])
+        assert np.shape(w) == ti.shape
+    plain = dispatch.blend_weights(inside, K, eps="pec", theta_i=np.radians([5.0, 60.0]))
+    assert plain == dispatch.blend_weights(inside, K, eps="pec")  # both angles outside 10°–50°
