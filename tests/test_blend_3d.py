@@ -287,19 +287,23 @@ def test_scalar_and_array_theta_agree_per_angle(monostatic):
         np.testing.assert_allclose(res.sigma0[(..., *idx)], one.sigma0, rtol=1e-9)
 
 
-def test_the_api_reports_per_angle_weights_and_runs_their_union():
-    rough = GaussianCorrelation(0.3 / K, 7 / K)
-    ti = np.radians([5.0, 30.0, 60.0])
+def test_the_api_reports_per_angle_weights_and_runs_their_union(table):
+    """SPM alone by the criteria (kσ = 0.1), the cells measure the IEM significantly better:
+    the IEM at 30°, SPM outside the θi box; both run, each σ⁰ weighted per angle."""
+    table({"spm": 3.0, "iem": 0.5}, {"spm": 0.3, "iem": 0.3}, {"spm|iem": 0.2})
+    rough = GaussianCorrelation(0.1 / K, 3 / K)
+    ti = np.radians([5.0, 30.0, 45.0, 60.0])
     res = em.backscatter(rough, "pec", wavelength=1.0, theta_i=ti, out_of_range="ignore")
     weights = res.info["blend"]["weights"]
     assert set(res.method.split("+")) == set(weights) == set(res.info["by_method"])
+    assert weights["iem"] == pytest.approx([0.0, 1.0, 0.5, 0.0])
     for w in weights.values():
         assert np.shape(w) == ti.shape
     np.testing.assert_allclose(sum(weights.values()), 1.0, rtol=1e-12)
-    # at 5° and 60° (outside 10°–50°) the 1-D blend; at 30° the 3-D layer
+    # at 5° and 60° (outside 10°–50°) the 1-D blend
     old = blend.blend_weights(rough, K, eps="pec", monostatic=True)["weights"]
     for n in weights:
-        assert weights[n][[0, 2]] == pytest.approx([old.get(n, 0.0)] * 2, abs=1e-12)
+        assert weights[n][[0, 3]] == pytest.approx([old.get(n, 0.0)] * 2, abs=1e-12)
     parts = {n: em.backscatter(rough, "pec", wavelength=1.0, theta_i=ti, method=n,
                                out_of_range="ignore").sigma0 for n in weights}  # fmt: skip
     co = sum(weights[n] * parts[n][[0, 1], [0, 1]] for n in weights)
