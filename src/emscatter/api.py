@@ -73,7 +73,7 @@ def _bistatic_one(
     :mod:`emscatter.solvers.auto_crosspol` added to a closed-form branch."""
     ti, ts, ps, pi_ = angles
     if method == "auto":
-        blend = blend_weights(rough, k, eps=eps, monostatic=monostatic)
+        blend = blend_weights(rough, k, eps=eps, monostatic=monostatic, theta_i=ti)
         if len(blend["weights"]) > 1:
             return _bistatic_blend(
                 rough, eps, k, angles, blend, out_of_range, options, monostatic, depth
@@ -163,7 +163,15 @@ def _bistatic_blend(rough, eps, k, angles, blend, out_of_range, options, monosta
     limit (within a factor :data:`~emscatter.solvers.blend.BLEND_FACTOR`) or a measured
     tolerance (:mod:`emscatter.solvers.blend`); they run with ``out_of_range="ignore"``
     (no warning, no blanking, no raise for a method the caller did not get alone) and their
-    reports are kept in ``info["validity"]["by_method"]``."""
+    reports are kept in ``info["validity"]["by_method"]``.
+
+    Where the 3-D cells' layer is active (Gaussian 2-D surfaces in their box,
+    :mod:`emscatter.solvers.blend`) the weights depend on θi: each is then an array of θi's
+    shape (broadcastable to σ⁰'s angle shape, as θi is) and the sum is taken per angle; the
+    methods run are those with a weight > 0 at some angle (0 elsewhere: their σ⁰ does not
+    enter there, NaN included), ``pick`` the heaviest summed over the distinct angles, and
+    ``info["blend"]["weights"]`` holds the arrays (``info["blend"]["measured_3d"]`` the
+    interpolated cells)."""
     weights = blend["weights"]
     pick = blend.get("pick", next(iter(weights)))
     parts = []
@@ -173,10 +181,10 @@ def _bistatic_blend(rough, eps, k, angles, blend, out_of_range, options, monosta
             rough, eps, k, angles, name, policy, options, monostatic, depth + 1, True
         )
         parts.append((name, res))
-    sigma0 = sum(weights[n] * res.sigma0 for n, res in parts)
+    sigma0 = sum(_weighted(weights[n], res.sigma0) for n, res in parts)
 
     def coherent():
-        return sum(weights[n] * np.asarray(res.coherent) for n, res in parts)
+        return sum(_weighted(weights[n], np.asarray(res.coherent)) for n, res in parts)
 
     reports = dict((n, res.info["validity"]) for n, res in parts)
     report = {**reports[pick], "method": pick, "by_method": reports}
@@ -200,6 +208,15 @@ def _bistatic_blend(rough, eps, k, angles, blend, out_of_range, options, monosta
         dimension=rough.dimension,
         info=info,
     )
+
+
+def _weighted(w, values):
+    """``w · values``: a scalar weight, or per angle (an array broadcasting against the
+    trailing axes of ``values``) with 0 where the weight is 0 (a method out of the blend at
+    that angle adds nothing, not even a NaN)."""
+    if np.ndim(w) == 0:
+        return w * values
+    return np.where(w > 0, w * values, 0.0)
 
 
 def _bistatic_groups(

@@ -30,7 +30,7 @@ import numpy as np
 from emscatter import solvers
 from emscatter.conventions import broadcast_view, fmt
 from emscatter.fresnel import is_pec
-from emscatter.solvers import blend, select
+from emscatter.solvers import blend, measured, select
 from emscatter.solvers.validity import with_angle_total
 from emscatter.spectra import Roughness, check_roughness
 
@@ -308,23 +308,49 @@ def rank_methods(roughness, k: float, *, eps=None, theta_i=None, methods=None):
     return [(n, reports[n]) for n in (first, *rest)]
 
 
-def blend_weights(roughness, k: float, *, eps=None, monostatic: bool = False) -> dict:
+def blend_weights(roughness, k: float, *, eps=None, monostatic: bool = False, theta_i=None) -> dict:
     """:func:`emscatter.solvers.blend.blend_weights` (``auto``'s methods and their continuous
     weights; ``monostatic``: for backscatter, where a dielectric's order puts the IEM before
-    PO), cached on ``(roughness, k, eps, monostatic)``; a fresh dict each call. The methods'
-    validity reports come from :func:`validity_report` (cached: the method that then runs
-    does not check its validity again)."""
+    PO), cached; a fresh dict each call. The methods' validity reports come from
+    :func:`validity_report` (cached: the method that then runs does not check its validity
+    again).
+
+    ``theta_i`` [rad] (any shape, optional): the incidence angles, for the 3-D cells' layer.
+    The cache keys on the roughness alone — ``(roughness, k, eps, monostatic)`` — and keeps
+    with the weights the θi interval where a 3-D map can apply
+    (:func:`emscatter.solvers.measured.support_3d`); where the angles lie outside it (or no
+    3-D map applies: the common case) the roughness-only weights are returned (scalars),
+    with no look at the angles beyond that test. Only inside it is the entry keyed on θi too
+    (weights then arrays of θi's shape)."""
     parts = ("blend", roughness, float(k), _key_of(eps), bool(monostatic))
     key = None if _UNCACHEABLE in parts else parts
+
+    def report(name):  # the reports the chosen methods' runs then find cached
+        return validity_report(name, roughness, k, eps=eps)
+
     hit = _recall(key)
     if hit is None:
-
-        def report(name):  # the reports the chosen methods' runs then find cached
-            return validity_report(name, roughness, k, eps=eps)
-
-        hit = blend.blend_weights(roughness, k, eps=eps, monostatic=monostatic, report=report)
+        weights = blend.blend_weights(roughness, k, eps=eps, monostatic=monostatic, report=report)
+        hit = (weights, measured.support_3d(roughness, k, eps))
         _remember(key, hit)
-    return {**hit, "weights": dict(hit["weights"])}
+    weights, support = hit
+    if support is not None and theta_i is not None and _inside(theta_i, support):
+        parts3 = (*parts, _key_of(np.asarray(theta_i, dtype=float)))
+        key3 = None if _UNCACHEABLE in parts3 else parts3
+        weights = _recall(key3)
+        if weights is None:
+            weights = blend.blend_weights(
+                roughness, k, eps=eps, monostatic=monostatic, report=report, theta_i=theta_i
+            )
+            _remember(key3, weights)
+    return {**weights, "weights": dict(weights["weights"])}
+
+
+def _inside(theta_i, support) -> bool:
+    """Whether some angle of ``theta_i`` [rad] lies in the open interval ``support`` [deg]."""
+    ti = np.degrees(np.asarray(theta_i, dtype=float))
+    lo, hi = support
+    return bool(np.any((ti > lo) & (ti < hi)))
 
 
 def angles_deg(theta_i, mask, *, limit: int = 8) -> str:

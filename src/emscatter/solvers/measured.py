@@ -38,6 +38,20 @@ the Fresnel coefficients (SPM's, the IEM's) by more than the cells resolve, and 
 returns None.
 :func:`significant_pick` is the rule the ranking applies to it (no tolerance to calibrate:
 a difference counts only beyond :data:`SIGNIFICANCE` combined standard errors).
+
+**3-D cells, interpolated** (:func:`interpolated_errors_3d`, for ``auto``'s continuous blend,
+:mod:`.blend`): the same map (same applicability: correlation, medium class, ε range, 2-D
+isotropic), but the errors, their SEs and the pair SEs interpolated trilinearly — linear in
+θi [deg], in log kσ and in log kℓ — over the eight surrounding cells that have a value
+(renormalized over those), with an availability that falls linearly from 1 at the outermost
+cell centres to 0 half a step beyond, on each axis (the step: the map's smallest one on that
+axis). A single-value axis (the dielectric map's kℓ = 3) has no step of its own: it takes the
+smallest step of that axis over the table's maps (log(7/3) = 0.85 in log kℓ from the PEC map,
+so kℓ = 3 fades to 0 at kℓ = 3 × (7/3)^{±½} = 2.0 and 4.6), else :data:`SINGLE_STEP_LOG` (log
+axes) or :data:`SINGLE_STEP_DEG` (θi). The availability is continuous in (θi, kσ, kℓ) and
+0 wherever :func:`measured_errors_3d` finds no cell in the roughness (it reaches a little
+further on a single-value axis: the nearest-cell lookup stops at ±0.15 in log there).
+:func:`support_3d` is the θi interval where it can be positive, for a cheap test.
 """
 
 from __future__ import annotations
@@ -64,6 +78,8 @@ __all__ = [
     "significant_pick",
     "combined_se",
     "EPS_FACTOR_3D",
+    "interpolated_errors_3d",
+    "support_3d",
 ]
 
 TABLE_PATH = Path(__file__).with_name("data") / "measured_errors.json"
@@ -74,6 +90,10 @@ TABLE_3D_PATH = Path(__file__).with_name("data") / "measured_errors_3d.json"
 SIGNIFICANCE = 2.0
 #: A dielectric 3-D map applies within this factor of its ``|ε|`` (module docstring).
 EPS_FACTOR_3D = 2.0
+#: Step [log] of a single-value log axis when no map of the table has two values on it.
+SINGLE_STEP_LOG = 0.3
+#: Step [deg] of a single-value θi axis when no map of the table has two values on it.
+SINGLE_STEP_DEG = 20.0
 
 
 @lru_cache(maxsize=1)
@@ -327,3 +347,144 @@ def significant_pick(meas: dict, first: str, candidates) -> str | None:
         if math.isfinite(s) and e0 - e > SIGNIFICANCE * s and material and e < best_err:
             best, best_err = n, e
     return best
+
+
+# ----------------------------------------------------------------- 3-D cells, interpolated
+def _map_3d_of(roughness, k: float, eps, path=None) -> dict | None:
+    """The 3-D map that applies to this roughness and medium (as :func:`measured_errors_3d`
+    chooses it, θi aside), or None."""
+    family, medium = _family(roughness), medium_class(eps)
+    if family is None or medium is None or roughness.dimension != 2:
+        return None
+    maps = [m for m in load_table_3d(str(path) if path else None)["maps"]
+            if m["correlation"] == family and m["medium"] == medium]  # fmt: skip
+    if medium == "dielectric":
+        maps = _dielectric_maps(maps, eps)
+    return maps[0] if maps else None
+
+
+def _steps_3d(m: dict, path=None) -> tuple[float, float, float]:
+    """``(θi step [deg], log kσ step, log kℓ step)`` of map ``m``: its smallest step on each
+    axis; a single-value axis takes the smallest over the table's maps (module docstring)."""
+    maps = load_table_3d(str(path) if path else None)["maps"]
+    out = []
+    for key, log, default in (("theta_i_deg", False, SINGLE_STEP_DEG),
+                              ("k_sigma", True, SINGLE_STEP_LOG),
+                              ("k_l", True, SINGLE_STEP_LOG)):  # fmt: skip
+        steps = []
+        for mm in [m] if len(m[key]) > 1 else maps:
+            g = np.asarray(mm[key], dtype=float)
+            if g.size > 1:
+                steps.append(float(np.min(np.diff(np.log(g) if log else g))))
+        out.append(min(steps) if steps else default)
+    return out[0], out[1], out[2]
+
+
+def _brackets(grid, x, step: float):
+    """``(i0, i1, t, fade)`` arrays over ``x`` (already in the axis' scale: log or linear):
+    ``x`` lies a fraction ``t`` from ``grid[i0]`` to ``grid[i1]`` (clamped at the ends);
+    ``fade`` is 1 inside ``[grid[0], grid[-1]]``, falling linearly to 0 half a ``step``
+    beyond either end."""
+    g = np.asarray(grid, dtype=float)
+    x = np.asarray(x, dtype=float)
+    if g.size == 1:
+        i0 = i1 = np.zeros(x.shape, dtype=int)
+        t = np.zeros(x.shape)
+    else:
+        i1 = np.clip(np.searchsorted(g, x), 1, g.size - 1)
+        i0 = i1 - 1
+        t = np.clip((x - g[i0]) / (g[i1] - g[i0]), 0.0, 1.0)
+    out = np.maximum(np.maximum(g[0] - x, x - g[-1]), 0.0)
+    return i0, i1, t, np.clip(1.0 - out / (step / 2), 0.0, 1.0)
+
+
+def _grid(values) -> np.ndarray:
+    """A nested list with None as a float array with nan."""
+    return np.array(
+        [[[math.nan if v is None else float(v) for v in row] for row in sl] for sl in values]
+    )
+
+
+def support_3d(roughness, k: float, eps, path=None) -> tuple[float, float] | None:
+    """The open interval ``(lo, hi)`` of θi [deg] where :func:`interpolated_errors_3d` can
+    have a positive availability for this roughness, ``k`` [rad/m] and medium; None where no
+    3-D map applies or the roughness lies beyond its fade in kσ or kℓ (module docstring)."""
+    m = _map_3d_of(roughness, k, eps, path)
+    if m is None:
+        return None
+    st, ss, sl = _steps_3d(m, path)
+    fs = _brackets(np.log(m["k_sigma"]), math.log(k * roughness.sigma), ss)[3]
+    fl = _brackets(np.log(m["k_l"]), math.log(k * roughness.length), sl)[3]
+    if float(fs * fl) <= 0.0:
+        return None
+    ti = m["theta_i_deg"]
+    return float(ti[0]) - st / 2, float(ti[-1]) + st / 2
+
+
+def interpolated_errors_3d(roughness, k: float, eps, theta_i, path=None) -> dict | None:
+    """The 3-D cells' errors interpolated for a continuous blend (module docstring), at
+    incidence ``theta_i`` [rad] (any shape), ``k`` [rad/m]: ``{"theta_i_deg": (U,) the
+    distinct angles [deg], "inverse": the index (θi's shape) taking them back to
+    ``theta_i``, "errors", "se", "availability": {method: (U,)}, "pair_se": {(a, b): (U,)}
+    (both orders), "map", "eps"}``. Errors and SEs [dB] are the trilinear interpolation
+    (θi linear, log kσ, log kℓ) over the surrounding cells that have a value (nan where none
+    has); ``availability`` their interpolation weight times the fades on the three axes.
+    None where no 3-D map applies or the availability is 0 at every angle. ``path``: another
+    table (default :data:`TABLE_3D_PATH`)."""
+    if theta_i is None:
+        return None
+    ti = np.degrees(np.asarray(theta_i, dtype=float))
+    if ti.size == 0 or not np.all(np.isfinite(ti)):
+        return None
+    m = _map_3d_of(roughness, k, eps, path)
+    if m is None:
+        return None
+    st, ss, sl = _steps_3d(m, path)
+    i0, i1, t, fs = (np.ravel(a)[0] for a in _brackets(
+        np.log(m["k_sigma"]), math.log(k * roughness.sigma), ss))  # fmt: skip
+    j0, j1, u, fl = (np.ravel(a)[0] for a in _brackets(
+        np.log(m["k_l"]), math.log(k * roughness.length), sl))  # fmt: skip
+    if fs * fl <= 0.0:
+        return None
+    uniq, inverse = np.unique(ti, return_inverse=True)
+    a0, a1, r, fa = _brackets(m["theta_i_deg"], uniq, st)
+    fade = fa * (fs * fl)
+    if not np.any(fade > 0.0):
+        return None
+    # the eight corners: (θ index (U,), kσ index, kℓ index, weight (U,))
+    corners = [(a, i, j, wa * wi * wj)
+               for a, wa in ((a0, 1.0 - r), (a1, r))
+               for i, wi in ((i0, 1.0 - t), (i1, t))
+               for j, wj in ((j0, 1.0 - u), (j1, u))]  # fmt: skip
+
+    def interp(values):
+        g = _grid(values)
+        val = np.stack([g[a, i, j] for a, i, j, _ in corners])  # (8, U)
+        w = np.stack([np.broadcast_to(w, uniq.shape) for *_, w in corners])
+        have = np.isfinite(val) & (w > 0)
+        weight = np.where(have, w, 0.0).sum(axis=0)
+        total = np.where(have, w * np.where(have, val, 0.0), 0.0).sum(axis=0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(weight > 0, total / np.where(weight > 0, weight, 1.0), np.nan), weight
+
+    errors, avail, se, pairs = {}, {}, {}, {}
+    for name, values in m["errors"].items():
+        errors[name], weight = interp(values)
+        avail[name] = fade * weight
+    for name, values in m["se"].items():
+        se[name] = interp(values)[0]
+    for key, values in m.get("pair_se", {}).items():
+        x, y = key.split("|")
+        pairs[(x, y)] = pairs[(y, x)] = interp(values)[0]
+    if not any(np.any(a > 0) for a in avail.values()):
+        return None
+    return {
+        "theta_i_deg": uniq,
+        "inverse": inverse.reshape(ti.shape),
+        "errors": errors,
+        "se": se,
+        "pair_se": pairs,
+        "availability": avail,
+        "map": m["tag"],
+        "eps": m.get("eps"),
+    }
