@@ -224,7 +224,8 @@ def save_samples(cells: list[dict], path: Path = SAMPLES, *, schema: str = "mom3
     doc = {"schema": schema,
            "about": "per-realization pooled co-pol bins of mom3d (mom[j][pol][bin], pol 0 = h, "
                     f"1 = v) and the models' bins, per cell of {table}.csv; written by "
-                    f"validation/mom3d/{table}.py",
+                    f"validation/mom3d/{table}.py; points_per_wavelength: the grid of the "
+                    "cells without their own",
            "bins_deg": EDGES.tolist(), "ky_rows": list(KY), "points_per_wavelength": PPW,
            "cells": sorted(cells, key=key or _key)}  # fmt: skip
     with atomic_path(path) as tmp:
