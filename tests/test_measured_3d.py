@@ -13,7 +13,7 @@ import pytest
 
 from emscatter.io import read_csv
 from emscatter.solvers import measured, select
-from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation
+from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 from emscatter.validation.measured_table_3d import bootstrap_cell, write_measured_3d
 
 K = 2 * math.pi
@@ -89,17 +89,17 @@ def test_samples_errors_agree_with_the_csv():
     header, cols, _ = read_csv(CSV)
     csv = {}
     for i in range(len(cols[header[0]])):
-        key = (float(cols["theta_i_deg"][i]), float(cols["k_sigma"][i]), float(cols["k_l"][i]),
-               cols["method"][i])  # fmt: skip
+        key = (cols["correlation"][i], float(cols["theta_i_deg"][i]), float(cols["k_sigma"][i]),
+               float(cols["k_l"][i]), cols["method"][i])  # fmt: skip
         csv[key] = max(csv.get(key, -math.inf), float(cols["error_dB"][i]))
     cells = json.loads(SAMPLES.read_text())["cells"]
-    assert len(cells) == 12
+    assert sum(c.get("correlation", "gaussian") == "gaussian" for c in cells) == 12
     inverse = {"spm1": "spm", "po": "po", "go": "go", "iem": "iem"}
     for c in cells:
         models = {inverse[m]: v for m, v in c["models"].items()}
         got = bootstrap_cell(np.asarray(c["mom"]), models, n_boot=50)
         for row, name in inverse.items():
-            key = (c["theta_i_deg"], c["k_sigma"], c["k_l"], row)
+            key = (c.get("correlation", "gaussian"), c["theta_i_deg"], c["k_sigma"], c["k_l"], row)
             assert got["errors"][name] == pytest.approx(csv[key], abs=1e-6)
 
 
@@ -128,7 +128,7 @@ def test_shipped_table_loads_and_the_lookup_applies_where_it_measured():
     [
         (GaussianCorrelation(0.3 / K, 3 / K, dimension=1), "pec", 40),  # a profile: 1-D maps
         (GaussianCorrelation(0.3 / K, 3 / K), 20.0, 40),  # a dielectric far from ε = 4 + 0.5i
-        (ExponentialCorrelation(0.3 / K, 3 / K), "pec", 40),  # another correlation
+        (PowerLawCorrelation(0.3 / K, 3 / K, hurst=0.8), "pec", 40),  # another correlation
         (GaussianCorrelation(0.3 / K, 3 / K), "pec", None),  # no incidence given
         (GaussianCorrelation(0.3 / K, 3 / K), "pec", [20, 40]),  # spans two slices
         (GaussianCorrelation(0.3 / K, 3 / K), "pec", 60),  # beyond half a step of 40°
@@ -271,3 +271,19 @@ def test_lookup_takes_a_table_by_path(table):
     assert measured.combined_se(got, "iem", "spm") == 0.05
     assert measured.significant_pick(got, "spm", NAMES) == "iem"
     assert measured.significant_pick(got, "iem", NAMES) is None
+
+
+def test_shipped_table_has_the_exponential_cells_and_the_lookup_finds_them():
+    """The exponential PEC cells (pec_table.py, band-limited at K_c = 2k) make their own map,
+    ``pec3d_exp``: an exponential surface near them is looked up there, never in the Gaussian
+    map, and a Gaussian one never in it."""
+    measured.load_table_3d.cache_clear()
+    got = measured.measured_errors_3d(ExponentialCorrelation(0.11 / K, 3.2 / K), K, "pec",
+                                      math.radians(22))  # fmt: skip
+    assert got["map"] == "pec3d_exp" and got["cell"] == (20.0, 0.1, 3.0)
+    assert got["realizations"] >= 4 and set(got["errors"]) == set(NAMES)
+    assert all(math.isfinite(e) and e >= 0 for e in got["errors"].values())
+    gauss = measured.measured_errors_3d(GaussianCorrelation(0.11 / K, 3.2 / K), K, "pec",
+                                        math.radians(22))  # fmt: skip
+    assert gauss["map"] == "pec3d"
+    assert gauss["errors"] != got["errors"]

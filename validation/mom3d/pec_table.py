@@ -1,14 +1,31 @@
 """The 3-D PEC method of moments against SPM, PO, GO and the IEM over kσ × kℓ × θi: a small
 validation table in the format of the 1-D validity maps (issue 19).
 
-Perfect conductor of ``--correlation`` ``gaussian`` (default) or ``exponential`` (not in the
-stored table: at 8 points/λ its energy per realization is 0.93 at kσ = 0.3, kℓ = 3 and 0.65 at
-kσ = 1 — the exponential's fine-scale roughness needs a denser grid than this dense solver
-holds at 6λ), kσ ∈ ``--k-sigma`` (default 0.1 0.3 1), kℓ ∈ ``--k-l`` (3 7),
-θi ∈ ``--theta-i`` (20° 40°); per cell ``--realizations`` surfaces (default 4, seeds
-``SeedSequence(seed).spawn``) on a ``--length`` λ square patch (default 6) at 8 points/λ
-through ``emscatter.solvers.mom3d.bistatic`` (``--client local`` runs the realizations on a
-dask LocalCluster, bit-identical).
+Perfect conductor of ``--correlation`` ``gaussian`` (default) or ``exponential``, kσ ∈
+``--k-sigma`` (default 0.1 0.3 1), kℓ ∈ ``--k-l`` (3 7), θi ∈ ``--theta-i`` (20° 40°); per
+cell ``--realizations`` surfaces (default 4, seeds ``SeedSequence(seed).spawn``) on a
+``--length`` λ square patch (default 6) through ``emscatter.solvers.mom3d.bistatic``
+(``--client local`` runs the realizations on a dask LocalCluster, bit-identical), on the grid
+of :data:`GRIDS` for the correlation (``--ppw``, ``--cutoff`` override it; the metadata's
+``grids`` records each correlation's):
+
+* Gaussian: 8 points/λ, the exact surface (circulant embedding).
+* Exponential: its spectrum decays only as K⁻³, so each finer grid samples a rougher surface
+  and the MFIE does not converge (energy per realization 0.93 → 0.90 from 8 to 16 points/λ at
+  kσ = 0.3, kℓ = 3; exponential_convergence.md). Its cells use the band-limited surface of
+  ``spectral_cutoff`` = 2k (:mod:`emscatter.solvers.mom3d.truncated`: the spectrum zeroed
+  above K_c = 2k, rms height σ_c = σ·(1 − 1/√(1 + (2kℓ)²))^½, 0.913σ at kℓ = 3, 0.964σ at
+  kℓ = 7) at 12 points/λ. The convergence study's 4 realizations met the 1 % energy law from
+  10 points/λ on (bins within 0.07 dB of 12 points/λ), but 32 realizations of the kσ = 0.3,
+  kℓ = 3, θi = 40° cell at 10 points/λ (``--ppw 10 --realizations 32``, not stored) reached
+  down to 0.988: 12 points/λ (SMCG, 5184 nodes;
+  bins within 0.09 dB of 16 points/λ) is the stored grid. The models are evaluated on the
+  untruncated exponential: exact for first-order SPM (its Bragg wavenumbers, ≤ 1.52k in
+  these bins, are below K_c, where the cut spectrum is the exponential's), an approximation
+  for the others (they depend on σ too: at kσ = 0.3, kℓ = 3 an exponential of σ_c instead of
+  σ moves PO by 0.8 dB, the IEM by 1.0 dB, GO by 2.6 dB). kσ = 1 is not stored: one
+  realization at θi = 40° has energy 0.952 (kℓ = 3) and 0.970 (kℓ = 7) at 10 points/λ,
+  0.969 and 0.978 at 16 points/λ — short of the 1 % law on any grid this machine holds.
 
 Metric (as the 1-D maps', ``emscatter.validation.maps``): σ⁰ co-pol (hh → ``pol=h``,
 vv → ``v``) in 10° bins of signed θs ∈ [−60°, 60°] in the plane of incidence (θs < 0: the
@@ -29,13 +46,15 @@ per-realization energy ratio of the cell, 1 for a PEC). Schema ``mom3d_pec_table
 Per-realization data (``pec_table_samples.json``, schema ``mom3d_pec_samples/1``): per cell
 each realization's pooled co-pol bins of mom3d (``info["sigma0_samples"]`` through the same
 row mean and bin means: ``mom[j][pol][bin]``, pol 0 = h, 1 = v) and the models' bins
-(``models[m][pol][bin]``) with their validity, so that the error's Monte Carlo uncertainty
-can be bootstrapped over the realizations
+(``models[m][pol][bin]``) with their validity, and the cell's ``points_per_wavelength`` (and
+for a cut spectrum ``spectral_cutoff_k`` = K_c/k and ``surface_sigma_over_sigma`` = σ_c/σ),
+so that the error's Monte Carlo uncertainty can be bootstrapped over the realizations
 (:func:`emscatter.validation.measured_table_3d.write_measured_3d` writes auto's 3-D table
 from it).
 
 Run: PYTHONPATH=src python validation/mom3d/pec_table.py [--theta-i 20 40] [--k-sigma …]
-     [--k-l …] [--realizations 4] [--length 6] [--client local]
+     [--k-l …] [--realizations 4] [--length 6] [--correlation exponential] [--ppw …]
+     [--cutoff …] [--client local]
 Rows (and samples) of the cells run are replaced, others kept (run a few cells at a time to
 keep each command short); pec_table.md is rewritten from the whole CSV.
 
@@ -64,7 +83,14 @@ HERE = Path(__file__).resolve().parent
 CSV, MD = HERE / "pec_table.csv", HERE / "pec_table.md"
 SAMPLES = HERE / "pec_table_samples.json"
 K = 2 * math.pi  # λ = 1 m
-PPW = 8.0
+PPW = 8.0  # the Gaussian cells' grid (and dielectric_table.py's, inside the medium)
+#: Grid per correlation: points per wavelength and spectral cutoff K_c / k (None: the exact
+#: surface of generate_surface). The exponential's spectrum (K⁻³) is cut at K_c = 2k and the
+#: grid refined until the cut surface converges (exponential_convergence.md).
+GRIDS = {
+    "gaussian": {"points_per_wavelength": PPW, "spectral_cutoff_k": None},
+    "exponential": {"points_per_wavelength": 12.0, "spectral_cutoff_k": 2.0},
+}
 MODELS = {"spm1": "spm", "po": "po", "go": "go", "iem": "iem"}
 KY = (-0.14, 0.0, 0.14)
 SIGNED = np.arange(-60.0, 61.0, 2.0)
@@ -91,7 +117,9 @@ def binned(sig):
     return _bin_means(SIGNED, sig.mean(axis=-2), EDGES)
 
 
-def cell(ks, kl, tdeg, realizations, length, seed, client, correlation="gaussian"):
+def cell(ks, kl, tdeg, realizations, length, seed, client, correlation="gaussian", grid=None):
+    grid = dict(GRIDS[correlation], **(grid or {}))
+    ppw, cut = grid["points_per_wavelength"], grid["spectral_cutoff_k"]
     rough = CORRELATIONS[correlation](ks / K, kl / K)
     # rms slope per axis: √2 σ/ℓ (Gaussian); unbounded for the exponential (nan)
     slope = math.sqrt(2) * ks / kl if correlation == "gaussian" else math.nan
@@ -99,11 +127,16 @@ def cell(ks, kl, tdeg, realizations, length, seed, client, correlation="gaussian
     ts, ps = directions()
     t0 = time.perf_counter()
     res = mom3d.bistatic(rough, "pec", K, ti, ts, ps, realizations=realizations, seed=seed,
-                         length=length, points_per_wavelength=PPW, client=client)  # fmt: skip
+                         length=length, points_per_wavelength=ppw, client=client,
+                         spectral_cutoff=None if cut is None else cut * K)  # fmt: skip
     seconds = time.perf_counter() - t0
     per = binned(res.info["sigma0_samples"])  # (n, 2, 2, bins): each realization pooled
     sample = {"correlation": correlation, "theta_i_deg": tdeg, "k_sigma": ks, "k_l": kl,
-              "realizations": realizations, "seed": seed, "length_wavelengths": length}  # fmt: skip
+              "realizations": realizations, "seed": seed, "length_wavelengths": length,
+              "points_per_wavelength": ppw}  # fmt: skip
+    if cut is not None:
+        sample["spectral_cutoff_k"] = cut
+        sample["surface_sigma_over_sigma"] = math.sqrt(res.info["surface_variance"]) / rough.sigma
     base = {"k_sigma": ks, "k_l": kl, "rms_slope": slope, "realizations": realizations,
             "unknowns": res.info["unknowns"], "seconds": seconds, "theta_i_deg": tdeg,
             "correlation": correlation, "dimension": 2, "length_wavelengths": length,
@@ -111,7 +144,8 @@ def cell(ks, kl, tdeg, realizations, length, seed, client, correlation="gaussian
     out = compare(rough, "pec", ti, ts, ps, per, base, sample)
     best = out[0]["auto"]
     worst = max(r["error_dB"] for r in out if r["method"] == best)
-    print(f"{correlation} kσ={ks:g} kℓ={kl:g} θi={tdeg:g}°: {seconds:.0f} s, "
+    print(f"{correlation} kσ={ks:g} kℓ={kl:g} θi={tdeg:g}° ({ppw:g}/λ, K_c/k={cut}): "
+          f"{seconds:.0f} s, "
           f"energy ≥ {base['energy_min']:.4f}, best {best} {worst:.2f} dB", flush=True)  # fmt: skip
     return out, sample
 
@@ -190,7 +224,8 @@ def save_samples(cells: list[dict], path: Path = SAMPLES, *, schema: str = "mom3
     doc = {"schema": schema,
            "about": "per-realization pooled co-pol bins of mom3d (mom[j][pol][bin], pol 0 = h, "
                     f"1 = v) and the models' bins, per cell of {table}.csv; written by "
-                    f"validation/mom3d/{table}.py",
+                    f"validation/mom3d/{table}.py; points_per_wavelength: the grid of the "
+                    "cells without their own",
            "bins_deg": EDGES.tolist(), "ky_rows": list(KY), "points_per_wavelength": PPW,
            "cells": sorted(cells, key=key or _key)}  # fmt: skip
     with atomic_path(path) as tmp:
@@ -272,17 +307,38 @@ def main(argv=None) -> None:
     ap.add_argument("--length", type=float, default=6.0)
     ap.add_argument("--seed", type=int, default=19)
     ap.add_argument("--correlation", choices=sorted(CORRELATIONS), default="gaussian")
+    ap.add_argument(
+        "--ppw",
+        type=float,
+        default=None,
+        help="points per wavelength (default: GRIDS of the correlation)",
+    )
+    ap.add_argument(
+        "--cutoff",
+        type=float,
+        default=None,
+        help="spectral cutoff K_c/k (default: GRIDS of the correlation; 0: none)",
+    )
     ap.add_argument("--client", default=None, help="None (serial) or 'local' / 'tcp://…'")
     args = ap.parse_args(argv)
-    rows = _load()[0]
+    grid = {}
+    if args.ppw is not None:
+        grid["points_per_wavelength"] = args.ppw
+    if args.cutoff is not None:
+        grid["spectral_cutoff_k"] = args.cutoff or None
+    rows, old = _load()
     meta = {"points_per_wavelength": PPW, "seed": args.seed, "emscatter": em.__version__,
-            "models": MODELS, "ky_rows": KY, "bins_deg": EDGES.tolist()}  # fmt: skip
+            "models": MODELS, "ky_rows": KY, "bins_deg": EDGES.tolist(),
+            "grids": {c: GRIDS[c] for c in sorted({str(r["correlation"]) for r in rows})},
+            }  # fmt: skip
+    meta["grids"].update(old.get("grids", {}))
+    meta["grids"][args.correlation] = dict(GRIDS[args.correlation], **grid)
     samples = load_samples()
     for tdeg in args.theta_i:
         for ks in args.k_sigma:
             for kl in args.k_l:
                 new, sample = cell(ks, kl, tdeg, args.realizations, args.length, args.seed,
-                                   args.client, args.correlation)  # fmt: skip
+                                   args.client, args.correlation, grid)  # fmt: skip
                 rows = [r for r in rows if _key(r) != _key(sample)] + new
                 samples = [c for c in samples if _key(c) != _key(sample)] + [sample]
                 save_samples(samples)  # after each cell: a stopped run keeps what it made

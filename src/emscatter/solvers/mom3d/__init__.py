@@ -18,6 +18,7 @@ module                     what it holds
 :mod:`.incident`           the tapered wave as a Gaussian plane-wave spectrum, its exact power
 :mod:`.farfield`           far-field amplitudes, polarization vectors, hemisphere quadrature
 :mod:`.gridsum`            fast far-field sums on the grid (Taylor in height, gridding NUFFT)
+:mod:`.truncated`          band-limited surfaces (``spectral_cutoff``): spectrum zeroed > K_c
 =========================  ===============================================================
 
 Not registered as a solver yet; call

@@ -50,6 +50,7 @@ from emscatter.solvers.mom3d.smcg import (
     resolve_near_radius,
     smcg_operator,
 )
+from emscatter.solvers.mom3d.truncated import check_cutoff, cutoff_variance, truncated_heights
 
 __all__ = ["bistatic", "matrix_bytes", "solve_realization"]
 
@@ -212,14 +213,17 @@ def _realization(job: dict, ss: np.random.SeedSequence) -> dict:
     from emscatter.surfaces.generate import generate_surface
 
     n_side, spacing, k, eps = job["n_side"], job["spacing"], job["k"], job["eps"]
-    surf = generate_surface(job["roughness"], (n_side, n_side), spacing,
-                            rng=np.random.default_rng(ss))  # fmt: skip
+    gen = np.random.default_rng(ss)
+    if job.get("cutoff") is None:
+        heights = generate_surface(job["roughness"], (n_side, n_side), spacing, rng=gen).heights
+    else:
+        heights = truncated_heights(job["roughness"], n_side, spacing, job["cutoff"], gen)
     args = (job["theta_i"], job["theta_s"], job["phi_s"], job["phi_i"])
     if is_pec(eps):
-        out = solve_realization(surf.heights, spacing, k, *args, **job["options"], **job["fast"])
+        out = solve_realization(heights, spacing, k, *args, **job["options"], **job["fast"])
         out["reflectivity"] = np.ones(2)
     else:
-        out = solve_dielectric_realization(surf.heights, spacing, k, eps, *args,
+        out = solve_dielectric_realization(heights, spacing, k, eps, *args,
                                            **job["options"], **job["fast"])  # fmt: skip
         out["energy"] = out["reflectivity"] + out["transmissivity"]
     res = {key: out[key] for key in RESULT_KEYS}
@@ -298,6 +302,7 @@ def bistatic(
     accel: str = "auto",
     near_radius: float | None = None,
     taylor_order: int = TAYLOR_ORDER,
+    spectral_cutoff: float | None = None,
     client=None,
     threads: int | None = 1,
     n_workers: int | None = None,
@@ -330,6 +335,12 @@ def bistatic(
         :data:`~.dielectric_model.DIELECTRIC_SMCG_MIN_NODES` for a dielectric); see
         :func:`solve_realization` and
         :func:`~.dielectric_model.solve_dielectric_realization`.
+    spectral_cutoff : None (default: the surfaces of
+        :func:`~emscatter.surfaces.generate.generate_surface`, exact circulant embedding) or
+        ``K_c`` [rad/m], at most the grid's Nyquist ``π/Δx``: each surface band-limited to
+        ``|K| ≤ K_c`` by periodic spectral synthesis (:mod:`.truncated`), variance
+        ``info["surface_variance"]`` = the target's minus the removed tail (for a spectrum
+        that decays as a power, the exponential's, so that the MFIE converges with the grid).
     client : where the realizations run (:mod:`.montecarlo`): None (serially, here),
         ``"local"`` (a dask LocalCluster of ``n_workers`` single-threaded processes, closed at
         the end), a scheduler address ``"tcp://host:port"``, a dask.distributed ``Client`` or
@@ -365,12 +376,14 @@ def bistatic(
     n_workers = check_n_workers(n_workers)
     check_client(client)
     spacing = lam / points_per_wavelength
+    cutoff = check_cutoff(spectral_cutoff, spacing)
     seeds = np.random.SeedSequence(seed).spawn(realizations)  # realization j: seeds[j]
     job = {
         "roughness": roughness, "n_side": n_side, "spacing": spacing, "k": k, "eps": eps,
         "theta_i": ti, "theta_s": ts_b.ravel(), "phi_s": ps_b.ravel(), "phi_i": pi_,
         "options": {"taper_g": taper_g, "tol": tol, "max_iter": max_iter},
         "fast": {"accel": mode, "near_radius": near_radius, "taylor_order": taylor_order},
+        "cutoff": cutoff,
     }  # fmt: skip
     with task("mom3d realizations", realizations, progress, unit="realization") as bar:
         results = run_realizations(_realization, job, seeds, client=client, threads=threads,
@@ -421,6 +434,12 @@ def bistatic(
             "taper_g": out["taper_g"],
             "realizations": n,
             "accel": mode,
+            "spectral_cutoff": cutoff,
+            "surface_variance": (
+                roughness.sigma**2
+                if cutoff is None
+                else cutoff_variance(roughness, n_side, spacing, cutoff)
+            ),
             "bytes_per_worker": int(need * MEMORY_OVERHEAD),
         },
     )
