@@ -120,8 +120,11 @@ def test_shipped_table_has_the_dielectric_map_and_is_what_the_writer_makes(tmp_p
     made = write_measured_3d([PEC_SAMPLES, SAMPLES], tmp_path / "t.json")
     assert made.read_text() == measured.TABLE_3D_PATH.read_text()
     maps = json.loads(made.read_text())["maps"]
-    assert [m["medium"] for m in maps] == ["conductor", "dielectric"]
-    m = maps[1]
+    # the PEC maps (Gaussian, exponential) then the dielectric one
+    assert [(m["medium"], m["correlation"]) for m in maps] == [
+        ("conductor", "gaussian"), ("conductor", "exponential"), ("dielectric", "gaussian")
+    ]  # fmt: skip
+    m = maps[2]
     assert m["tag"] == "diel3d_eps4+0.5i" and m["eps"] == [4.0, 0.5]
     assert m["correlation"] == "gaussian" and m["dimension"] == 2
     shape = (len(m["theta_i_deg"]), len(m["k_sigma"]), len(m["k_l"]))
