@@ -17,10 +17,12 @@ validation/validity_maps/README.md). Outside the box, for other spectra (power l
 anisotropic) or media of unknown class the lookup returns ``None`` and the criteria decide.
 
 **3-D cells** (:func:`measured_errors_3d`): the 3-D method of moments' validation cells
-(validation/mom3d/pec_table.py: 2-D Gaussian PEC surfaces, θi ∈ {20°, 40°}, kσ ∈ {0.1, 0.3,
-1}, kℓ ∈ {3, 7}; validation/mom3d/dielectric_table.py: ε = 4 + 0.5i, θi ∈ {20°, 40°},
-kσ ∈ {0.1, 0.3}, kℓ = 3) measure what the 1-D maps cannot — 2-D surfaces, where
-polarizations couple. Their table, ``data/measured_errors_3d.json`` (written by
+(validation/mom3d/pec_table.py: 2-D PEC surfaces, Gaussian θi ∈ {20°, 40°}, kσ ∈ {0.1, 0.3,
+1}, kℓ ∈ {3, 7}; exponential band-limited at K_c = 2k on 12 points/λ, θi ∈ {20°, 40°},
+kσ ∈ {0.1, 0.3}, kℓ ∈ {3, 7}, map ``pec3d_exp``; validation/mom3d/dielectric_table.py:
+ε = 4 + 0.5i, θi ∈ {20°, 40°}, kσ ∈ {0.1, 0.3, 1}, kℓ = 3) measure what the 1-D maps
+cannot — 2-D surfaces, where polarizations couple. Their table,
+``data/measured_errors_3d.json`` (written by
 :func:`emscatter.validation.measured_table_3d.write_measured_3d`), carries per cell and
 candidate the error [dB] and its Monte Carlo standard error (bootstrap over the realizations)
 and per pair of candidates the SE of their difference. The lookup applies to 2-D isotropic
