@@ -5,7 +5,6 @@ absent → the old weights bit for bit, per-angle weights in the API, and the ha
 
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
@@ -17,6 +16,7 @@ import emscatter as em
 from emscatter import method_resolution as dispatch
 from emscatter.solvers import blend, measured
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
+from synthetic_table_3d import write_table
 
 K = 2 * math.pi
 NAMES = ("spm", "go", "po", "iem")
@@ -41,20 +41,7 @@ def table(tmp_path, monkeypatch):
         if errors is None:
             path = tmp_path / "missing.json"
         else:
-            shape = (2, 3, 2)
-
-            def grid(v):
-                return np.full(shape, v, dtype=object).tolist()
-
-            doc = {"maps": [{
-                "tag": "synthetic", "correlation": "gaussian", "medium": "conductor",
-                "theta_i_deg": [20.0, 40.0], "k_sigma": [0.1, 0.3, 1.0], "k_l": [3.0, 7.0],
-                "realizations": grid(16),
-                "errors": {n: grid(errors.get(n)) for n in NAMES},
-                "se": {n: grid((se or {}).get(n)) for n in NAMES},
-                "pair_se": {p: grid(v) for p, v in (pair_se or {}).items()},
-            }]}  # fmt: skip
-            path.write_text(json.dumps(doc))
+            write_table(path, errors, se, pair_se)
         monkeypatch.setattr(measured, "TABLE_3D_PATH", path)
         measured.load_table_3d.cache_clear()
         dispatch.clear_cache()

@@ -15,6 +15,7 @@ from emscatter.io import read_csv
 from emscatter.solvers import measured, select
 from emscatter.spectra import ExponentialCorrelation, GaussianCorrelation, PowerLawCorrelation
 from emscatter.validation.measured_table_3d import bootstrap_cell, write_measured_3d
+from synthetic_table_3d import write_table
 
 K = 2 * math.pi
 ROOT = Path(__file__).resolve().parents[1]
@@ -33,20 +34,7 @@ def table(tmp_path, monkeypatch):
             kl=(3.0, 7.0)):  # fmt: skip
         path = tmp_path / "m3d.json"
         if errors is not None:
-            shape = (len(theta), len(ks), len(kl))
-
-            def grid(v):
-                return np.full(shape, v, dtype=object).tolist()
-
-            doc = {"maps": [{
-                "tag": "synthetic", "correlation": "gaussian", "medium": "conductor",
-                "theta_i_deg": list(theta), "k_sigma": list(ks), "k_l": list(kl),
-                "realizations": grid(16),
-                "errors": {n: grid(errors.get(n)) for n in NAMES},
-                "se": {n: grid((se or {}).get(n)) for n in NAMES},
-                "pair_se": {p: grid(v) for p, v in (pair_se or {}).items()},
-            }]}  # fmt: skip
-            path.write_text(json.dumps(doc))
+            write_table(path, errors, se, pair_se, theta=theta, ks=ks, kl=kl)
         else:
             path = tmp_path / "missing.json"
         monkeypatch.setattr(measured, "TABLE_3D_PATH", path)
